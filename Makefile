@@ -1,0 +1,34 @@
+# robotplan: `make demo` runs the main job on built-in defaults, `make test` the test suite.
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+DEMO   := demo
+
+.PHONY: setup test test-slow lint demo bench clean
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml
+	python3 -m venv $(VENV)
+	$(PY) -m pip install -q --disable-pip-version-check -e '.[test]'
+	touch $(STAMP)
+
+test: setup
+	$(PY) -m pytest
+
+test-slow: setup
+	$(PY) -m pytest -m slow
+
+lint: setup
+	$(VENV)/bin/ruff check robotplan tests
+
+demo: setup
+	$(VENV)/bin/robotplan check tasks/*.yaml
+	$(VENV)/bin/robotplan render tasks/*.yaml --out $(DEMO) --overwrite
+	@echo "pictures of the scene SDFs are in $(DEMO)/"
+
+bench: setup
+	$(VENV)/bin/robotplan bench sdf --json
+
+clean:
+	rm -rf $(VENV) $(DEMO) .pytest_cache .ruff_cache

@@ -1,0 +1,12 @@
+"""robotplan: manipulation planning with functionals of signed-distance fields.
+
+The planner follows Driess et al., "Learning Models as Functionals of Signed-Distance
+Fields for Manipulation Planning" (CoRL 2021): every object is an SDF, moving it is a rigid
+transform of its SDF, and a plan is one trajectory optimisation whose constraints are
+analytic and learned functionals of those SDFs.
+"""
+
+from robotplan.scene import Body, Scene, SceneError, load_scene
+
+__all__ = ["Body", "Scene", "SceneError", "load_scene"]
+__version__ = "0.1.0"

@@ -1,0 +1,145 @@
+"""The scene file format (DESIGN.md §3.1) as typed dataclasses: these classes *are* the schema.
+
+Units are metres and radians in the table frame W (z up, table top at z = 0). A planar pose
+``X_WB = (x, y, yaw)`` places a shape frame B on the table.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import TYPE_CHECKING, Literal
+
+from robotplan.sdf import Box, Circle, LShape, Polygon, Workspace
+
+if TYPE_CHECKING:
+    from robotplan.scene.bodies import Body
+
+__all__ = [
+    "DEFAULT_HEIGHT",
+    "BodySpec",
+    "PusherSpec",
+    "Region",
+    "RegionGoal",
+    "RobotSpec",
+    "Scene",
+    "ShapeSpec",
+    "TouchGoal",
+]
+
+ShapeSpec = Box | Circle | LShape | Polygon
+POSITIVE = {"positive": True}
+DEFAULT_HEIGHT = 0.06
+
+
+@dataclass(frozen=True)
+class BodySpec:
+    """A movable object or a fixed obstacle: a footprint extruded to ``height``."""
+
+    name: str
+    shape: ShapeSpec
+    pose: tuple[float, float, float]
+    height: float = field(default=DEFAULT_HEIGHT, metadata=POSITIVE)
+
+
+@dataclass(frozen=True)
+class PusherSpec:
+    """A free spherical pusher, centre at ``z = radius``. ``touches``: objects it may push
+    (``None`` means all)."""
+
+    name: str
+    radius: float = field(metadata=POSITIVE)
+    position: tuple[float, float]
+    touches: list[str] | None = None
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    """An arm from ``robots/<model>/`` with a spherical tip at its flange.
+
+    ``base = (x, y, z, yaw)`` of the robot base in W; ``q0`` the start joint angles
+    (default: the model's home pose).
+    """
+
+    name: str
+    model: str
+    base: tuple[float, float, float, float]
+    tip_radius: float = field(metadata=POSITIVE)
+    q0: tuple[float, ...] | None = None
+
+
+@dataclass(frozen=True)
+class Region:
+    """A goal region: a footprint at a fixed pose."""
+
+    shape: ShapeSpec
+    pose: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class RegionGoal:
+    """``object`` must end entirely inside ``region`` (H_g, eq. 8)."""
+
+    object: str
+    region: Region
+    type: Literal["region"] = "region"
+
+
+@dataclass(frozen=True)
+class TouchGoal:
+    """The tip of ``robot`` (or the pusher ``pusher``) must end in contact with ``object``."""
+
+    object: str
+    robot: str | None = None
+    pusher: str | None = None
+    type: Literal["touch"] = "touch"
+
+    @property
+    def actor(self) -> str:
+        return self.robot if self.robot is not None else str(self.pusher)
+
+    def check(self) -> tuple[str, str] | None:
+        if (self.robot is None) == (self.pusher is None):
+            return "robot", "a touch goal names exactly one of 'robot' or 'pusher'"
+        return None
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A whole scene file. ``version`` must be 1."""
+
+    version: int
+    objects: list[BodySpec]
+    goal: RegionGoal | TouchGoal
+    name: str = "scene"
+    workspace: Workspace = field(default_factory=Workspace)
+    obstacles: list[BodySpec] = field(default_factory=list)
+    pushers: list[PusherSpec] = field(default_factory=list)
+    robots: list[RobotSpec] = field(default_factory=list)
+    path: Path | None = field(default=None, compare=False, init=False)
+
+    @cached_property
+    def bodies(self) -> dict[str, Body]:
+        """Every object, obstacle, pusher and robot tip by name, at its start pose."""
+        from robotplan.scene.bodies import scene_bodies
+
+        return scene_bodies(self)
+
+    @property
+    def goal_region(self) -> Body | None:
+        """The goal region as a body (for H_g and coverage), or None for a touch goal."""
+        from robotplan.scene.bodies import region_body
+
+        return region_body(self.goal) if isinstance(self.goal, RegionGoal) else None
+
+    def summary(self) -> str:
+        def count(n: int, word: str) -> str:
+            return f"{n} {word}" + ("" if n == 1 else "s")
+
+        g = self.goal
+        goal = (f"{g.object} into a region" if isinstance(g, RegionGoal)
+                else f"{g.actor} touches {g.object}")
+        return (f"{self.name}: {count(len(self.objects), 'object')}, "
+                f"{count(len(self.obstacles), 'obstacle')}, {count(len(self.pushers), 'pusher')}, "
+                f"{count(len(self.robots), 'robot')}; goal: {goal}")

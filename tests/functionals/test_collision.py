@@ -1,0 +1,64 @@
+import shapely
+import torch
+
+from robotplan.functionals import Collision, Quadrature
+from tests.functionals.conftest import F64, central_difference_jacobian
+
+
+def poses(*rows):
+    return torch.tensor(rows, dtype=F64)
+
+
+def test_gradcheck_in_both_poses(box, pusher, coarse):
+    H = Collision(box, pusher, coarse, a=500.0)
+    X1 = poses([0.0, 0.0, 0.1], [0.02, -0.01, 0.5]).requires_grad_(True)
+    X2 = poses([-0.11, 0.01], [-0.1, 0.05]).requires_grad_(True)
+    assert torch.autograd.gradcheck(H, (X1, X2))
+
+
+def test_jacobians_match_finite_differences(ell, pusher, coarse):
+    H = Collision(ell, pusher, coarse, a=500.0)
+    X1 = poses([0.0, 0.0, 0.3], [0.01, 0.02, -0.4], [0.0, 0.0, 1.0])
+    X2 = poses([-0.1, -0.05], [-0.08, -0.1], [0.05, 0.0])
+    r, (J1, J2) = H.jacobians(X1, X2)
+    assert r.shape == (3, 1) and J1.shape == (3, 1, 3) and J2.shape == (3, 1, 2)
+    for J, which in ((J1, 0), (J2, 1)):
+        fd = central_difference_jacobian(H, (X1, X2), which)
+        assert torch.allclose(J, fd, rtol=1e-5, atol=1e-9), (J - fd).abs().max()
+    assert (J1.abs() > 1e-6).any()  # the test would notice a zero Jacobian
+
+
+def test_zero_when_apart_beyond_the_smoothing_band(box, pusher, fine):
+    H = Collision(box, pusher, fine, a=500.0)
+    gap = 0.05  # 25 / a: far beyond the ~2 mm sigmoid edge
+    value = H(poses([0.0, 0.0, 0.0]), poses([-0.1 - 0.03 - gap, 0.0]))
+    assert value.item() < 1e-9
+
+
+def test_positive_and_growing_with_overlap_depth(box, pusher, fine):
+    H = Collision(box, pusher, fine, a=500.0)
+    depths = [0.0, 0.005, 0.01, 0.02, 0.04, 0.06]
+    X2 = poses(*[[-0.1 - 0.03 + d, 0.0] for d in depths])
+    values = H(poses([0.0, 0.0, 0.0]).expand(len(depths), 3), X2)[:, 0]
+    assert (values > 0).all()
+    assert (values.diff() > 0).all(), values
+    # deep in, the smoothed integral is close to the exact overlap area
+    exact = shapely.box(-0.1, -0.06, 0.1, 0.06).intersection(
+        shapely.Point(-0.1 - 0.03 + 0.06, 0.0).buffer(0.03, 256)).area
+    assert abs(values[-1].item() - exact) / exact < 0.02
+
+
+def test_batched_steps_equal_single_steps(box, pusher, coarse):
+    H = Collision(box, pusher, coarse)
+    X1 = poses([0.0, 0.0, 0.2], [0.01, 0.0, 0.3])
+    X2 = poses([-0.12, 0.0], [-0.1, 0.02])
+    batched = H(X1, X2)
+    single = torch.cat([H(X1[i:i + 1], X2[i:i + 1]) for i in range(2)])
+    assert torch.allclose(batched, single, rtol=0, atol=1e-15)
+
+
+def test_float32_works(box, pusher):
+    q = Quadrature.box((0.0, 0.0), (0.7, 0.7), 0.004, dtype=torch.float32)
+    H = Collision(box, pusher, q)
+    v = H(torch.tensor([[0.0, 0.0, 0.0]]), torch.tensor([[-0.11, 0.0]]))
+    assert v.dtype == torch.float32 and v.item() > 0

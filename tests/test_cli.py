@@ -1,0 +1,81 @@
+"""The command line as a user runs it: real subprocesses, exit codes, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import yaml
+
+from tests.conftest import ROOT, TASKS
+from tests.scene.test_loader import BAD_CASES
+
+
+def run(*args: str, cwd=ROOT) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "robotplan.cli", *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_check_prints_one_ok_line_per_good_file():
+    files = sorted(str(p) for p in TASKS.glob("*.yaml"))
+    res = run("check", *files)
+    assert res.returncode == 0, res.stderr
+    lines = res.stdout.splitlines()
+    assert len(lines) == len(files)
+    assert all(line.startswith(f"ok {f}: ") for line, f in zip(lines, files, strict=False))
+    assert res.stderr == ""
+
+
+def test_check_refuses_every_bad_case_with_one_line_and_exit_2(tmp_path):
+    files = []
+    for case, data, _field in BAD_CASES:
+        f = tmp_path / f"{case}.yaml"
+        f.write_text(yaml.safe_dump(data))
+        files.append(f)
+    empty = tmp_path / "empty.yaml"
+    empty.write_text("")
+    tag = tmp_path / "tag.yaml"
+    tag.write_text("!!python/object/apply:os.system ['echo pwned']\n")
+    files += [empty, tag]
+    good = TASKS / "box_push.yaml"
+    res = run("check", str(good), *map(str, files))
+    assert res.returncode == 2
+    assert res.stdout.splitlines() == [f"ok {good}: " + res.stdout.split(": ", 1)[1].strip()]
+    errors = res.stderr.splitlines()
+    assert len(errors) == len(files), res.stderr
+    fields = [c[2] for c in BAD_CASES] + ["", ""]
+    for line, f, field in zip(errors, files, fields, strict=True):
+        assert line.startswith(f"error: {f}: {field}")
+    assert "Traceback" not in res.stderr and "pwned" not in res.stdout
+
+
+def test_render_writes_png_and_refuses_to_overwrite(tmp_path):
+    scene = str(TASKS / "lshape_push.yaml")
+    res = run("render", scene, "--out", str(tmp_path))
+    png = tmp_path / "lshape_push_sdf.png"
+    assert res.returncode == 0, res.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    before = png.stat().st_mtime_ns
+    again = run("render", scene, "--out", str(tmp_path))
+    assert again.returncode == 2 and "--overwrite" in again.stderr
+    assert png.stat().st_mtime_ns == before
+    assert list(tmp_path.iterdir()) == [png]  # no temporary files left behind
+
+
+def test_bench_sdf_json():
+    res = run("bench", "sdf", "--json", "--steps", "4", "--repeats", "2")
+    assert res.returncode == 0, res.stderr
+    out = json.loads(res.stdout)
+    assert out["steps"] == 4 and out["grid"] == [140, 140]
+    assert out["values"] == 4 * 140 * 140 * out["bodies"]
+    assert out["median_ms"] > 0
+
+
+def test_bad_scene_for_bench_is_exit_2(tmp_path):
+    f = tmp_path / "x.yaml"
+    f.write_text("version: 3\n")
+    res = run("bench", "sdf", "--scene", str(f))
+    assert res.returncode == 2
+    assert res.stderr.strip() == f"error: {f}: version: unsupported version 3; this robotplan " \
+                                 "reads version 1"

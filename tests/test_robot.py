@@ -1,0 +1,36 @@
+"""Lint every robot folder (Menagerie-style): schema, files, limits, tip link, kinematics."""
+
+import numpy as np
+import pytest
+import yaml
+
+from robotplan.robot import ROBOTS_DIR, available_models, load_robot_model
+from robotplan.scene.reader import read
+
+MODELS = available_models()
+
+
+def test_there_is_at_least_the_iiwa():
+    assert "iiwa" in MODELS
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_robot_folder_is_complete(name):
+    folder = ROBOTS_DIR / name
+    model = load_robot_model(name)
+    assert model.name == name, "robot.yaml name must match its folder"
+    assert model.urdf_path.is_file()
+    assert model.within_limits(model.home)
+    assert all(v > 0 for v in model.velocity_limits)
+    text = (folder / "robot.yaml").read_text()
+    assert read(type(model), yaml.safe_load(text)) == model
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_tip_forward_kinematics_moves_with_the_base(name):
+    model = load_robot_model(name)
+    a = model.tip_position(model.home, (0.0, 0.0, 0.0, 0.0))
+    b = model.tip_position(model.home, (0.3, -0.2, 0.1, np.pi / 2))
+    expected = np.array([-a[1] + 0.3, a[0] - 0.2, a[2] + 0.1])
+    assert np.abs(b - expected).max() < 1e-9
+    assert a[2] > 0.1, "the home pose keeps the tip above the table"

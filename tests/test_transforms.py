@@ -1,0 +1,50 @@
+import numpy as np
+import torch
+from scipy.spatial.transform import Rotation
+
+from robotplan.transforms import (
+    planar_to_body,
+    planar_to_world,
+    quaternion_to_matrix,
+    spatial_to_body,
+    spatial_to_world,
+)
+
+
+def test_planar_round_trip_and_broadcast(rng):
+    pts = torch.from_numpy(rng.uniform(-1, 1, (50, 2)))
+    poses = torch.from_numpy(rng.uniform(-1, 1, (7, 3)) * [1, 1, 3])
+    body = planar_to_body(pts, poses)
+    assert body.shape == (7, 50, 2)
+    back = planar_to_world(body, poses)
+    assert torch.allclose(back, pts.expand(7, 50, 2), atol=1e-12)
+
+
+def test_planar_matches_rotation_matrix(rng):
+    x, y, yaw = 0.3, -0.2, 0.7
+    p = rng.uniform(-1, 1, (20, 2))
+    R = np.array([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
+    expected = (p - [x, y]) @ R  # R^T (p - t), row-vector form
+    got = planar_to_body(torch.from_numpy(p), torch.tensor([x, y, yaw], dtype=torch.float64))
+    assert np.abs(got.numpy() - expected).max() < 1e-12
+
+
+def test_position_only_pose_means_zero_yaw(rng):
+    p = torch.from_numpy(rng.uniform(-1, 1, (5, 2)))
+    a = planar_to_body(p, torch.tensor([0.1, 0.2], dtype=torch.float64))
+    b = planar_to_body(p, torch.tensor([0.1, 0.2, 0.0], dtype=torch.float64))
+    assert torch.equal(a, b)
+
+
+def test_quaternion_matches_scipy(rng):
+    q = rng.normal(size=(10, 4))
+    R = quaternion_to_matrix(torch.from_numpy(q)).numpy()
+    ref = Rotation.from_quat(q[:, [1, 2, 3, 0]]).as_matrix()  # scipy: (x, y, z, w)
+    assert np.abs(R - ref).max() < 1e-12
+
+
+def test_spatial_round_trip(rng):
+    pose = torch.from_numpy(np.concatenate([rng.normal(size=(4, 3)), rng.normal(size=(4, 4))], 1))
+    pts = torch.from_numpy(rng.normal(size=(4, 30, 3)))
+    back = spatial_to_world(spatial_to_body(pts, pose), pose)
+    assert torch.allclose(back, pts, atol=1e-12)
