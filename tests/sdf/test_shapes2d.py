@@ -43,7 +43,8 @@ def reference_sdf(shape, pts: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("name", [*SHAPES, "circle"])
 def test_exact_against_shapely(name, rng):
     shape = SHAPES.get(name, Circle(0.05))
-    pts = rng.uniform(-0.35, 0.35, (4000, 2))
+    # everywhere around, and densely inside the shape's neighbourhood (medial axes, corners)
+    pts = np.concatenate([rng.uniform(-0.35, 0.35, (4000, 2)), rng.uniform(-0.15, 0.15, (4000, 2))])
     got = shape.sdf(torch.from_numpy(pts)).numpy()
     err = np.abs(got - reference_sdf(shape, pts)).max()
     assert err <= 1e-6, f"{name}: max error {err:.2e} m"
