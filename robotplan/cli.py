@@ -1,4 +1,4 @@
-"""The ``robotplan`` command line: ``check``, ``render``, ``bench``.
+"""The ``robotplan`` command line: ``check``, ``render``, ``bench``, ``data``, ``train``, ``eval``.
 
 Exit status: 0 success, 1 failure of the work itself, 2 bad input (one line on stderr naming
 the file and the field, no traceback).
@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
+import time
 from pathlib import Path
 
 from robotplan.scene import SceneError, load_scene
@@ -64,6 +66,84 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_data_push(args: argparse.Namespace) -> int:
+    from robotplan.learned.push_data import generate
+
+    t0 = time.time()
+    try:
+        summary = generate(Path(args.out), args.scenes, args.seed, workers=args.workers,
+                           shard_size=args.shard_size)
+    except ValueError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    seconds = time.time() - t0
+    summary["seconds"] = round(seconds, 1)
+    if summary["new_samples"]:
+        summary["samples_per_second"] = round(summary["new_samples"] / seconds, 1)
+    print(json.dumps(summary))
+    return 0
+
+
+def _cmd_train_push(args: argparse.Namespace) -> int:
+    import torch
+
+    from robotplan.learned.model_card import write_model_card
+    from robotplan.learned.training import TrainConfig, train
+
+    out = Path(args.out)
+    if not Path(args.data).is_dir():
+        print(f"error: {args.data}: --data: no such folder", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    ckpt = out / "checkpoint.pt"
+    if args.resume and not ckpt.is_file():
+        print(f"error: {ckpt}: --resume: no checkpoint to resume from", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if not args.resume and out.exists() and any(out.iterdir()) and not args.overwrite:
+        print(f"error: {out}: --out: the folder is not empty; --resume it or pass --overwrite",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    device = args.device
+    if device == "auto":
+        device = "cuda" if torch.cuda.is_available() else "cpu"
+    torch.set_num_threads(args.threads)
+    cfg = TrainConfig(data=args.data, out=args.out, kind=args.model, steps=args.steps,
+                      batch=args.batch, lr=args.lr, points=args.points, seed=args.seed,
+                      scenes=args.scenes, device=device, minutes=args.minutes,
+                      val_every=args.val_every, command=" ".join(["robotplan", *sys.argv[1:]]))
+    if args.resume:  # the run's settings come from its checkpoint; only the budget may change
+        saved = json.loads(torch.load(ckpt, weights_only=True)["config"])
+        cfg = TrainConfig(**{**saved, "steps": args.steps or saved["steps"],
+                             "minutes": args.minutes, "device": device})
+    last = train(cfg, resume=args.resume)
+    write_model_card(out)
+    print(json.dumps(last))
+    return 0
+
+
+def _cmd_eval_push(args: argparse.Namespace) -> int:
+    import torch
+
+    from robotplan.learned.evaluation import evaluate_push
+
+    torch.set_num_threads(args.threads)
+    for path, what in ((args.model, "--model"), (args.data, "--data")):
+        if not Path(path).is_dir():
+            print(f"error: {path}: {what}: no such folder", file=sys.stderr)
+            return EXIT_BAD_INPUT
+    result = evaluate_push(args.model, args.data, scenes=args.scenes,
+                           per_scene=args.per_scene or None, seed=args.seed)
+    if args.record:
+        from robotplan.learned.model_card import record_heldout
+
+        record_heldout(Path(args.model), result)
+    if args.json:
+        print(json.dumps(result))
+    else:
+        for k, v in result.items():
+            print(f"{k:>18}: {v}")
+    return 0
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="robotplan", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -89,6 +169,51 @@ def _parser() -> argparse.ArgumentParser:
     bs.add_argument("--dtype", choices=["float32", "float64"], default="float32")
     bs.add_argument("--json", action="store_true", help="print one JSON object")
     bs.set_defaults(run=_cmd_bench)
+
+    d = sub.add_parser("data", help="generate training data")
+    dsub = d.add_subparsers(dest="what", required=True)
+    dp = dsub.add_parser("push", help="push data from pybullet (boxes and L-shapes)")
+    dp.add_argument("--scenes", type=int, required=True)
+    dp.add_argument("--seed", type=int, required=True)
+    dp.add_argument("--out", required=True, metavar="DIR")
+    dp.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    dp.add_argument("--shard-size", type=int, default=50)
+    dp.set_defaults(run=_cmd_data_push)
+
+    t = sub.add_parser("train", help="train learned functionals")
+    tsub = t.add_subparsers(dest="what", required=True)
+    tp = tsub.add_parser("push", help="train F_flow or F on push data")
+    tp.add_argument("--data", required=True, metavar="DIR")
+    tp.add_argument("--model", choices=["flow", "direct"], default="flow")
+    tp.add_argument("--out", required=True, metavar="DIR", help="e.g. learned/push_flow")
+    tp.add_argument("--steps", type=int, default=60_000, help="total optimiser steps")
+    tp.add_argument("--batch", type=int, default=32)
+    tp.add_argument("--lr", type=float, default=5e-4)
+    tp.add_argument("--points", type=int, default=256, help="query points per sample")
+    tp.add_argument("--scenes", type=int, default=None, help="use only the first N scenes")
+    tp.add_argument("--seed", type=int, default=0)
+    tp.add_argument("--device", default="auto", help="cpu, cuda or auto")
+    tp.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    tp.add_argument("--minutes", type=float, default=None, help="stop after this wall time")
+    tp.add_argument("--val-every", type=int, default=2000)
+    tp.add_argument("--resume", action="store_true", help="continue from checkpoint.pt")
+    tp.add_argument("--overwrite", action="store_true", help="start over in a used folder")
+    tp.set_defaults(run=_cmd_train_push)
+
+    e = sub.add_parser("eval", help="evaluate learned functionals")
+    esub = e.add_subparsers(dest="what", required=True)
+    ep = esub.add_parser("push", help="one-step RMSE (eq. 20) on held-out push data")
+    ep.add_argument("--model", required=True, metavar="DIR")
+    ep.add_argument("--data", required=True, metavar="DIR")
+    ep.add_argument("--scenes", type=int, default=None)
+    ep.add_argument("--per-scene", type=int, default=10,
+                    help="at most this many random samples of each scene (0: all)")
+    ep.add_argument("--seed", type=int, default=0)
+    ep.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    ep.add_argument("--json", action="store_true")
+    ep.add_argument("--record", action="store_true",
+                    help="store the result in the model's metrics.json and model card")
+    ep.set_defaults(run=_cmd_eval_push)
     return p
 
 

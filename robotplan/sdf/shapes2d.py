@@ -26,6 +26,7 @@ __all__ = [
     "LShape",
     "Polygon",
     "Shape2D",
+    "lshape_sdf",
     "polygon_sdf",
     "safe_hypot",
     "safe_norm",
@@ -125,6 +126,28 @@ def _box_sdf(px: Tensor, py: Tensor, cx: float, cy: float, hx: float, hy: float)
     return safe_hypot(qx.clamp_min(0.0), qy.clamp_min(0.0)) + torch.maximum(qx, qy).clamp_max(0.0)
 
 
+def lshape_sdf(px: Tensor, py: Tensor, w: Tensor | float, h: Tensor | float,
+               t: Tensor | float) -> Tensor:
+    """Exact SDF of the L-shape with half sizes ``(w, h)`` and thickness ``t`` (see
+    :class:`LShape`) at points ``(px, py)``; the parameters may be tensors that broadcast
+    with the points (a batch of different shapes). With ``t = 2h`` it is the box ``2w × 2h``.
+    """
+    # Per-axis gaps of the bounding box (shared with the strips) and of the other boxes.
+    qx, qy = px.abs() - w, py.abs() - h
+    qy_bottom = (py + (h - t / 2)).abs() - t / 2
+    qx_left = (px + (w - t / 2)).abs() - t / 2
+    qx_notch = (px - t / 2).abs() - (w - t / 2)
+    qy_notch = (py - t / 2).abs() - (h - t / 2)
+    inside = ((qx < 0) & (qy_bottom < 0)) | ((qx_left < 0) & (qy < 0))
+    # Outside both strips their SDFs are the plain corner distances.
+    outside = torch.minimum(safe_hypot(qx.clamp_min(0.0), qy_bottom.clamp_min(0.0)),
+                            safe_hypot(qx_left.clamp_min(0.0), qy.clamp_min(0.0)))
+    # Inside the L: inside the bounding box and outside the notch.
+    depth = torch.maximum(torch.maximum(qx, qy),
+                          -safe_hypot(qx_notch.clamp_min(0.0), qy_notch.clamp_min(0.0)))
+    return torch.where(inside, depth, outside)
+
+
 @dataclass(frozen=True)
 class Box(Shape2D):
     """Rectangle with full side lengths ``size = (w, h)``, centred on its frame."""
@@ -199,22 +222,8 @@ class LShape(_PolygonalShape):
         return None
 
     def sdf(self, p_B: Tensor) -> Tensor:
-        px, py = p_B[..., 0], p_B[..., 1]
-        w, h, t = self.size[0] / 2, self.size[1] / 2, self.thickness
-        # Per-axis gaps of the bounding box (shared with the strips) and of the other boxes.
-        qx, qy = px.abs() - w, py.abs() - h
-        qy_bottom = (py + (h - t / 2)).abs() - t / 2
-        qx_left = (px + (w - t / 2)).abs() - t / 2
-        qx_notch = (px - t / 2).abs() - (w - t / 2)
-        qy_notch = (py - t / 2).abs() - (h - t / 2)
-        inside = ((qx < 0) & (qy_bottom < 0)) | ((qx_left < 0) & (qy < 0))
-        # Outside both strips their SDFs are the plain corner distances.
-        outside = torch.minimum(safe_hypot(qx.clamp_min(0.0), qy_bottom.clamp_min(0.0)),
-                                safe_hypot(qx_left.clamp_min(0.0), qy.clamp_min(0.0)))
-        # Inside the L: inside the bounding box and outside the notch.
-        depth = torch.maximum(torch.maximum(qx, qy),
-                              -safe_hypot(qx_notch.clamp_min(0.0), qy_notch.clamp_min(0.0)))
-        return torch.where(inside, depth, outside)
+        return lshape_sdf(p_B[..., 0], p_B[..., 1], self.size[0] / 2, self.size[1] / 2,
+                          self.thickness)
 
     def outline(self, n_arc: int = 720) -> np.ndarray:
         w, h, t = self.size[0] / 2, self.size[1] / 2, self.thickness

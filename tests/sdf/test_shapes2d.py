@@ -113,3 +113,18 @@ def test_workspace_grid_is_cell_centred():
     assert grid[0, 0].tolist() == pytest.approx([-0.695, -0.695])
     assert grid[-1, -1].tolist() == pytest.approx([0.695, 0.695])
     assert grid[0, 1, 0] - grid[0, 0, 0] == pytest.approx(0.01)  # x varies along columns
+
+
+def test_batched_lshape_parameters_and_box_as_lshape(rng):
+    from robotplan.sdf.shapes2d import lshape_sdf
+
+    pts = torch.from_numpy(rng.uniform(-0.2, 0.2, (300, 2)))
+    shapes = [LShape((0.24, 0.18), 0.07), LShape((0.2, 0.3), 0.1)]
+    w = torch.tensor([[s.size[0] / 2] for s in shapes], dtype=torch.float64)
+    h = torch.tensor([[s.size[1] / 2] for s in shapes], dtype=torch.float64)
+    t = torch.tensor([[s.thickness] for s in shapes], dtype=torch.float64)
+    batched = lshape_sdf(pts[:, 0], pts[:, 1], w, h, t)  # (2, 300)
+    for i, s in enumerate(shapes):
+        assert (batched[i] - s.sdf(pts)).abs().max() < 1e-12
+    as_box = lshape_sdf(pts[:, 0], pts[:, 1], 0.1, 0.06, 0.12)
+    assert (as_box - Box((0.2, 0.12)).sdf(pts)).abs().max() < 1e-12

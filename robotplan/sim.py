@@ -1,0 +1,160 @@
+"""The pybullet world of table-top pushing, shared by data generation and plan execution.
+
+One fixed set of physics (``PHYSICS``) is part of the learned model's world: the push data
+is generated with it and plans are executed in it. The table top is the plane z = 0, a
+1.4 × 1.4 m slab; objects are footprints extruded to their height, their centre of mass at
+the footprint's centroid (uniform density); the pusher is a sphere whose centre is held at
+z = radius and driven kinematically along a path by a stiff fixed constraint.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from robotplan._quiet import c_output_silenced, connect_direct, import_pybullet
+from robotplan.polygons import signed_area
+from robotplan.sdf import Box, LShape, Shape2D
+
+__all__ = ["PHYSICS", "Physics", "PushWorld", "footprint_centroid"]
+
+
+@dataclass(frozen=True)
+class Physics:
+    """Simulation constants (SI units). pybullet multiplies the friction of two bodies."""
+
+    timestep: float = 1.0 / 240.0
+    keep_every: int = 20  # keep the state every 20th step (paper, appendix I)
+    gravity: float = 9.81
+    table_size: float = 1.4
+    table_friction: float = 1.0
+    object_mass: float = 0.5  # kg, whatever the size
+    object_friction: float = 0.5  # → object–table μ = 0.5
+    pusher_friction: float = 0.3  # → pusher–object μ = 0.15
+    restitution: float = 0.0
+    pusher_max_force: float = 500.0  # N, the constraint that drives the pusher
+    solver_iterations: int = 50
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+PHYSICS = Physics()
+
+
+def footprint_centroid(shape: Shape2D) -> np.ndarray:
+    """Area centroid ``(2,)`` of a footprint in its own frame (centre of mass, uniform)."""
+    p = shape.outline()
+    q = np.roll(p, -1, axis=0)
+    cross = p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]
+    return ((p + q) * cross[:, None]).sum(0) / (6.0 * signed_area(p))
+
+
+def _boxes_of(shape: Shape2D) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    """The footprint as axis-aligned boxes ``(centre, half_extents)`` in its frame."""
+    if isinstance(shape, Box):
+        return [((0.0, 0.0), (shape.size[0] / 2, shape.size[1] / 2))]
+    if isinstance(shape, LShape):
+        w, h, t = shape.size[0] / 2, shape.size[1] / 2, shape.thickness
+        return [((0.0, -h + t / 2), (w, t / 2)),
+                ((-w + t / 2, t / 2), (t / 2, h - t / 2))]
+    raise NotImplementedError(f"no pybullet body for {shape.type} footprints yet")
+
+
+class PushWorld:
+    """A pybullet DIRECT world with a table, one object and one spherical pusher."""
+
+    def __init__(self, physics: Physics = PHYSICS) -> None:
+        self.pb = import_pybullet()
+        self.physics = physics
+        self.client = connect_direct()
+        self.object: int | None = None
+        self.pusher: int | None = None
+        self.table: int | None = None
+        self._constraint: int | None = None
+        self._com = np.zeros(2)
+        self.pusher_radius = 0.0
+
+    def close(self) -> None:
+        with c_output_silenced():
+            self.pb.disconnect(physicsClientId=self.client)
+
+    def __enter__(self) -> PushWorld:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def reset(self, shape: Shape2D, height: float, pose: tuple[float, float, float],
+              pusher_radius: float, pusher_xy: tuple[float, float]) -> None:
+        """Place a new object (footprint ``shape``) at ``pose`` and a pusher at ``pusher_xy``."""
+        pb, c, ph = self.pb, self.client, self.physics
+        pb.resetSimulation(physicsClientId=c)  # a clean world: no ids reused across scenes
+        pb.setGravity(0, 0, -ph.gravity, physicsClientId=c)
+        pb.setTimeStep(ph.timestep, physicsClientId=c)
+        pb.setPhysicsEngineParameter(numSolverIterations=ph.solver_iterations, physicsClientId=c)
+        half = ph.table_size / 2
+        table_shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[half, half, 0.05],
+                                              physicsClientId=c)
+        self.table = pb.createMultiBody(0, table_shape, basePosition=[0, 0, -0.05],
+                                        physicsClientId=c)
+        pb.changeDynamics(self.table, -1, lateralFriction=ph.table_friction,
+                          restitution=ph.restitution, physicsClientId=c)
+        self._com = footprint_centroid(shape)
+        boxes = _boxes_of(shape)
+        col = pb.createCollisionShapeArray(
+            [pb.GEOM_BOX] * len(boxes),
+            halfExtents=[[hx, hy, height / 2] for _, (hx, hy) in boxes],
+            collisionFramePositions=[[cx - self._com[0], cy - self._com[1], 0.0]
+                                     for (cx, cy), _ in boxes],
+            physicsClientId=c)
+        # The base frame is the centre of mass; the shape frame sits at -com in it.
+        x, y, yaw = pose
+        cs, sn = np.cos(yaw), np.sin(yaw)
+        cx, cy = self._com
+        com_w = (x + cs * cx - sn * cy, y + sn * cx + cs * cy)
+        self.object = pb.createMultiBody(
+            ph.object_mass, col, basePosition=[com_w[0], com_w[1], height / 2 + 1e-4],
+            baseOrientation=pb.getQuaternionFromEuler([0, 0, yaw]), physicsClientId=c)
+        pb.changeDynamics(self.object, -1, lateralFriction=ph.object_friction,
+                          restitution=ph.restitution, physicsClientId=c)
+        sphere = pb.createCollisionShape(pb.GEOM_SPHERE, radius=pusher_radius, physicsClientId=c)
+        self.pusher_radius = pusher_radius
+        start = [pusher_xy[0], pusher_xy[1], pusher_radius]
+        self.pusher = pb.createMultiBody(1.0, sphere, basePosition=start, physicsClientId=c)
+        pb.changeDynamics(self.pusher, -1, lateralFriction=ph.pusher_friction,
+                          restitution=ph.restitution, physicsClientId=c)
+        pb.setCollisionFilterPair(self.pusher, self.table, -1, -1, 0, physicsClientId=c)
+        self._constraint = pb.createConstraint(self.pusher, -1, -1, -1, pb.JOINT_FIXED,
+                                               [0, 0, 0], [0, 0, 0], start,
+                                               physicsClientId=c)
+        pb.changeConstraint(self._constraint, start, maxForce=ph.pusher_max_force,
+                            physicsClientId=c)
+        # let the object settle onto the table
+        for _ in range(10):
+            pb.stepSimulation(physicsClientId=c)
+
+    def step(self, pusher_target: tuple[float, float]) -> bool:
+        """Drive the pusher to ``pusher_target`` for one time step; True if it touches the
+        object after the step."""
+        pb, c = self.pb, self.client
+        target = [pusher_target[0], pusher_target[1], self.pusher_radius]
+        pb.changeConstraint(self._constraint, target, maxForce=self.physics.pusher_max_force,
+                            physicsClientId=c)
+        pb.stepSimulation(physicsClientId=c)
+        return bool(pb.getContactPoints(self.pusher, self.object, physicsClientId=c))
+
+    def object_pose(self) -> tuple[np.ndarray, float]:
+        """Planar pose ``(x, y, yaw)`` of the shape frame and the tilt (rad) of the object."""
+        pos, quat = self.pb.getBasePositionAndOrientation(self.object,
+                                                          physicsClientId=self.client)
+        roll, pitch, yaw = self.pb.getEulerFromQuaternion(quat)
+        cs, sn = np.cos(yaw), np.sin(yaw)
+        x = pos[0] - (cs * self._com[0] - sn * self._com[1])
+        y = pos[1] - (sn * self._com[0] + cs * self._com[1])
+        return np.array([x, y, yaw]), float(max(abs(roll), abs(pitch)))
+
+    def pusher_position(self) -> np.ndarray:
+        pos, _ = self.pb.getBasePositionAndOrientation(self.pusher, physicsClientId=self.client)
+        return np.array(pos[:2])

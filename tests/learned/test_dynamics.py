@@ -1,0 +1,55 @@
+import pytest
+import torch
+
+from robotplan.learned.dynamics import DynamicsSpec, PushDynamics, load_model, save_model
+from tests.learned.conftest import TINY_SPEC
+
+
+def test_paper_architecture_by_default():
+    m = PushDynamics()
+    convs = [c for c in m.encoder.conv if isinstance(c, torch.nn.Conv2d)]
+    assert [c.out_channels for c in convs] == [3, 5, 5]
+    assert [c.kernel_size[0] for c in convs] == [3, 5, 5]
+    assert [c.stride[0] for c in convs] == [1, 2, 2]
+    assert m.encoder.linear.out_features == 200 and m.point_encoder.out_features == 100
+    assert m.first_sdf.in_features + m.first_point.in_features == 700
+    assert [h.out_features for h in m.head if isinstance(h, torch.nn.Linear)] == [300, 1]
+
+
+def test_split_first_layer_equals_the_concatenated_layer():
+    m = PushDynamics(DynamicsSpec(**TINY_SPEC)).double()
+    inputs = torch.rand(3, 3, 140, 140, dtype=torch.float64)
+    pts = torch.rand(3, 7, 2, dtype=torch.float64) - 0.5
+    out = m(inputs, pts)
+    # the same with one Linear over [sdf features, point features]
+    feats = m.encode(inputs.flatten(0, 1)).reshape(3, -1)
+    pf = m.point_encoder((pts - m.center) / m.half_size)
+    W = torch.cat([m.first_sdf.weight, m.first_point.weight], dim=1)
+    cat = torch.cat([feats[:, None, :].expand(3, 7, -1), pf], dim=-1)
+    h = torch.relu(cat @ W.T + m.first_sdf.bias)
+    ref = m.head(h)[..., 0] * m.spec.out_scale
+    assert out.shape == (3, 7)
+    assert (out - ref).abs().max() < 1e-12
+
+
+def test_gradients_reach_points_and_inputs():
+    m = PushDynamics(DynamicsSpec(**TINY_SPEC)).double()
+    inputs = torch.rand(2, 3, 140, 140, dtype=torch.float64, requires_grad=True)
+    pts = (torch.rand(2, 5, 2, dtype=torch.float64) - 0.5).requires_grad_(True)
+    assert torch.autograd.gradcheck(lambda p: m(inputs.detach(), p), (pts,))
+    m(inputs, pts).sum().backward()
+    assert inputs.grad.abs().sum() > 0
+
+
+def test_save_and_load_round_trip(tmp_path):
+    m = PushDynamics(DynamicsSpec(kind="direct", **TINY_SPEC))
+    save_model(m, tmp_path / "model")
+    loaded = load_model(tmp_path / "model")
+    assert loaded.spec == m.spec
+    x, p = torch.rand(1, 3, 140, 140), torch.rand(1, 4, 2)
+    assert torch.equal(loaded(x, p), m.eval()(x, p))
+
+
+def test_load_refuses_non_model_folders(tmp_path):
+    with pytest.raises(FileNotFoundError, match=r"spec\.json"):
+        load_model(tmp_path)
