@@ -1,0 +1,102 @@
+"""``robotplan bench functional``: speed and accuracy of the fast functional evaluators.
+
+Realistic configurations come from real pybullet pushes (``simulate_scene``, fixed seeds):
+windows of T + 1 consecutive kept states in which the pusher touches the object.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from robotplan.functionals import Quadrature
+from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
+from robotplan.learned.dynamics import load_model
+from robotplan.learned.push_data import simulate_scene
+from robotplan.scene.bodies import Body
+from robotplan.sdf import Circle, Workspace
+
+__all__ = ["bench_functional", "realistic_pushes"]
+
+DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "learned" / "push_flow"
+
+
+def realistic_pushes(count: int, steps: int = 10, seed: int = 321, min_contacts: int = 5
+                     ) -> list[tuple[Body, Body, torch.Tensor, torch.Tensor]]:
+    """``count`` windows ``(object, pusher, X1 (T+1, 3), X2 (T+1, 2))`` of real pushes."""
+    found: list[tuple[Body, Body, torch.Tensor, torch.Tensor]] = []
+    index = 0
+    while len(found) < count and index < 50 * count:
+        rec = simulate_scene(index, seed)
+        index += 1
+        K = len(rec.object_pose)
+        for start in range(0, K - steps, steps):
+            window = slice(start, start + steps + 1)
+            if rec.contact[window][1:].sum() >= min_contacts:
+                obj = Body("object", "object", rec.shape, (0.0, 0.0, 0.0), 0.0, 0.06)
+                pusher = Body("pusher", "pusher", Circle(rec.pusher_radius), (0.0, 0.0, 0.0),
+                              0.0, 2 * rec.pusher_radius)
+                found.append((obj, pusher, torch.tensor(rec.object_pose[window]),
+                              torch.tensor(rec.pusher_xy[window])))
+                break
+    return found
+
+
+def _time(fn, repeats: int) -> float:  # noqa: ANN001
+    fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return 1e3 * float(np.median(times))
+
+
+def phase_quadrature_for(obj: Body, X1: torch.Tensor, fine: float, coarse: float,
+                         workspace: Workspace) -> Quadrature:
+    """The quadrature a planner would fix for a phase: fine within the object's reach."""
+    return phase_quadrature(X1[:, :2].float(), obj.shape.bound_radius + 0.10, workspace,
+                            fine=fine, coarse=coarse)
+
+
+def bench_functional(model_dir: str | Path = DEFAULT_MODEL, configurations: int = 12,
+                     repeats: int = 20, fine: float = 0.05, coarse: float = 0.14,
+                     naive: bool = True) -> dict:
+    model = load_model(model_dir)
+    ws = Workspace(model.spec.workspace_center, model.spec.workspace_size,
+                   model.spec.workspace_size[0] / model.spec.grid[1])
+    pushes = realistic_pushes(configurations)
+    obj, pusher, X1, X2 = pushes[0]
+    quad = phase_quadrature_for(obj, X1, fine, coarse, ws)
+    fast = LearnedDynamics(model, obj, pusher, quad)
+    result: dict = {"model": str(model_dir), "threads": torch.get_num_threads(),
+                    "steps": X1.shape[0] - 1, "quadrature_points": len(quad.points),
+                    "quadrature": f"two-level midpoint: {fine * 100:g} cm within "
+                                  f"r_object + 10 cm of the phase's object path, "
+                                  f"{coarse * 100:g} cm elsewhere"}
+    result["hf_phase_ms"] = round(_time(lambda: fast.evaluate(X1, X2), repeats), 2)
+    result["hf_value_only_ms"] = round(
+        _time(lambda: fast.evaluate(X1, X2, jacobian=False), repeats), 2)
+    if naive:
+        result["hf_naive_phase_ms"] = round(_time(lambda: fast.evaluate_naive(X1, X2), 1), 1)
+        result["speedup"] = round(result["hf_naive_phase_ms"] / result["hf_phase_ms"], 1)
+    # accuracy of the quadrature against the full grid X_h, per step, worst case
+    rel, rel_phase, jac = [], [], []
+    full = Quadrature.grid(ws)
+    for obj, pusher, X1, X2 in pushes:
+        q = phase_quadrature_for(obj, X1, fine, coarse, ws)
+        h_fast, j1, j2 = LearnedDynamics(model, obj, pusher, q).evaluate(X1, X2)
+        h_full, k1, k2 = LearnedDynamics(model, obj, pusher, full).evaluate(X1, X2)
+        rel.append(((h_fast - h_full).abs() / h_full).max().item())
+        rel_phase.append(abs(h_fast.sum() - h_full.sum()).item() / h_full.sum().item())
+        jf = torch.cat((j1.flatten(1), j2.flatten(1)), 1)
+        jg = torch.cat((k1.flatten(1), k2.flatten(1)), 1)
+        jac.append(((jf - jg).norm(dim=1) / jg.norm(dim=1)).max().item())
+    result["configurations"] = len(pushes)
+    result["integral_rel_error"] = round(max(rel), 4)
+    result["integral_rel_error_phase"] = round(max(rel_phase), 4)
+    result["jacobian_rel_error"] = round(max(jac), 4)
+    return result

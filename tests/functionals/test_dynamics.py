@@ -1,0 +1,103 @@
+"""H_F: the fast path computes what the naive path computes; Jacobians are exact."""
+
+import pytest
+import torch
+
+from robotplan.functionals import Quadrature
+from robotplan.functionals.dynamics import LearnedDynamics, grid_with_tangents, phase_quadrature
+from robotplan.learned.dynamics import DynamicsSpec, PushDynamics
+from robotplan.scene.bodies import Body
+from robotplan.sdf import Box, Circle, LShape, Workspace
+from tests.functionals.conftest import F64
+
+SPEC = {"channels": (2, 3, 3), "sdf_features": 16, "point_features": 8, "hidden": (24, 24)}
+
+
+def trajectory(T=3):
+    X1 = torch.zeros(T + 1, 3, dtype=F64)
+    X1[:, 0] = torch.linspace(0.0, 0.03, T + 1)
+    X1[:, 2] = torch.linspace(0.1, 0.2, T + 1)
+    X2 = torch.zeros(T + 1, 2, dtype=F64)
+    X2[:, 0] = torch.linspace(-0.16, -0.12, T + 1)
+    X2[:, 1] = 0.013
+    return X1, X2
+
+
+@pytest.fixture(params=["flow", "direct"])
+def model(request):
+    torch.manual_seed(7)
+    return PushDynamics(DynamicsSpec(kind=request.param, **SPEC)).double()
+
+
+@pytest.fixture(params=[Box((0.2, 0.12)), LShape((0.24, 0.18), 0.07)], ids=["box", "lshape"])
+def obj(request):
+    return Body("obj", "object", request.param, (0, 0, 0), 0.0, 0.06)
+
+
+PUSHER = Body("pusher", "pusher", Circle(0.03), (0, 0, 0), 0.0, 0.06)
+
+
+def test_fast_full_grid_equals_naive(model, obj):
+    X1, X2 = trajectory()
+    H = LearnedDynamics(model, obj, PUSHER, Quadrature.grid(Workspace()))
+    h, j1, j2 = H.evaluate(X1, X2)
+    hn, j1n, j2n = H.evaluate_naive(X1, X2)
+    assert h.shape == (3,) and j1.shape == (3, 2, 3) and j2.shape == (3, 2, 2)
+    assert torch.allclose(h, hn, rtol=1e-9, atol=0)
+    assert torch.allclose(j1, j1n, rtol=1e-7, atol=1e-12)
+    assert torch.allclose(j2, j2n, rtol=1e-7, atol=1e-12)
+    assert (j2.abs() > 0).any() and (j1[:, 0].abs() > 0).any()
+
+
+def test_jacobian_matches_finite_differences(model, obj):
+    X1, X2 = trajectory()
+    q = phase_quadrature(X1[:, :2], 0.25, Workspace(), fine=0.05, coarse=0.14,
+                         dtype=torch.float64)
+    H = LearnedDynamics(model, obj, PUSHER, q)
+    _, j1, j2 = H.evaluate(X1, X2)
+    h = 1e-6
+    for X, J, d in ((X1, j1, 3), (X2, j2, 2)):
+        for s in range(X.shape[0]):
+            for k in range(d):
+                plus, minus = X.clone(), X.clone()
+                plus[s, k] += h
+                minus[s, k] -= h
+                args_p = (plus, X2) if X is X1 else (X1, plus)
+                args_m = (minus, X2) if X is X1 else (X1, minus)
+                fd = (H.evaluate(*args_p, jacobian=False)[0]
+                      - H.evaluate(*args_m, jacobian=False)[0]) / (2 * h)
+                # H_t depends on state s only for t = s (as "now") and t = s + 1 ("prev")
+                expected = torch.zeros_like(fd)
+                if s >= 1:
+                    expected[s - 1] = J[s - 1, 1, k]
+                if s + 1 <= X.shape[0] - 1:
+                    expected[s] = J[s, 0, k]
+                scale = fd.abs().max().clamp_min(1e-12)
+                # ReLU kinks and SDF medial axes make FD accurate to O(h) only
+                assert ((fd - expected).abs().max() / scale) < 1e-3, (s, k)
+
+
+def test_grid_tangents_are_exact(obj):
+    X = torch.tensor([[0.02, -0.01, 0.3], [0.1, 0.05, -1.0]], dtype=F64)
+    pts = torch.rand(50, 2, dtype=F64) - 0.5
+    phi, dphi = grid_with_tangents(obj, X, pts, position_only=False)
+    for k in range(3):
+        e = torch.zeros(3, dtype=F64)
+        e[k] = 1e-6
+        fd = (obj.sdf(pts, X + e) - obj.sdf(pts, X - e)) / 2e-6
+        assert (fd - dphi[:, k]).abs().max() < 1e-7
+    phi2, dphi2 = grid_with_tangents(PUSHER, X[:, :2], pts, position_only=True)
+    assert torch.allclose(phi2, PUSHER.sdf(pts, X[:, :2]))
+    fd = (PUSHER.sdf(pts, X[:, :2] + torch.tensor([1e-6, 0], dtype=F64))
+          - PUSHER.sdf(pts, X[:, :2] - torch.tensor([1e-6, 0], dtype=F64))) / 2e-6
+    assert (fd - dphi2[:, 0]).abs().max() < 1e-7
+
+
+def test_phase_quadrature_weights_sum_to_the_workspace_area():
+    centers = torch.tensor([[0.0, 0.0], [0.3, 0.1]])
+    q = phase_quadrature(centers, 0.2, Workspace(), fine=0.04, coarse=0.14)
+    assert abs(q.weights.sum().item() - 1.96) < 1e-4
+    fine = q.weights < 0.14**2 - 1e-9
+    near = torch.cdist(q.points[fine], centers).amin(1)
+    assert near.max() < 0.2 + 0.14 * 1.5
+    assert 50 < len(q.points) < 1000
