@@ -6,20 +6,21 @@ windows of T + 1 consecutive kept states in which the pusher touches the object.
 
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from robotplan.functionals import Quadrature
+from robotplan.functionals import Collision, GoalRegion, Quadrature
 from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
 from robotplan.learned.dynamics import load_model
 from robotplan.learned.push_data import simulate_scene
 from robotplan.scene.bodies import Body
-from robotplan.sdf import Circle, Workspace
+from robotplan.sdf import Box, Circle, Workspace
 
-__all__ = ["bench_functional", "realistic_pushes"]
+__all__ = ["bench_analytic", "bench_functional", "realistic_pushes"]
 
 DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "learned" / "push_flow"
 
@@ -45,7 +46,7 @@ def realistic_pushes(count: int, steps: int = 10, seed: int = 321, min_contacts:
     return found
 
 
-def _time(fn, repeats: int) -> float:  # noqa: ANN001
+def _time(fn, repeats: int) -> float:
     fn()
     times = []
     for _ in range(repeats):
@@ -62,12 +63,55 @@ def phase_quadrature_for(obj: Body, X1: torch.Tensor, fine: float, coarse: float
                             fine=fine, coarse=coarse)
 
 
+def _rss_mb() -> tuple[float, float]:
+    """(current, peak) resident memory of this process in MB."""
+    import resource
+
+    with open("/proc/self/statm") as f:
+        current = int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+    return current, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def bench_analytic(repeats: int = 30) -> dict:
+    """H_coll for all pairs of 3 bodies over 20 steps (object, pusher of a real push, and a
+    wall beside the object's path) and H_g at the last step, value + Jacobian."""
+    obj, pusher, X1, X2 = realistic_pushes(1, steps=19, seed=654)[0]
+    X1, X2 = X1.float(), X2.float()
+    end = X1[-1, :2]
+    wall = Body("wall", "obstacle", Box((0.06, 0.30)), (0.0, 0.0, 0.0), 0.0, 0.06)
+    direction = (X1[-1, :2] - X1[0, :2]) / (X1[-1, :2] - X1[0, :2]).norm().clamp_min(1e-9)
+    reach = obj.shape.bound_radius + 0.03
+    Xw = torch.cat((end + reach * direction, torch.atan2(direction[1:], direction[:1])))
+    Xw = Xw.expand(X1.shape[0], 3)
+    region = Body("goal", "region", Box((0.4, 0.4)), (float(end[0]), float(end[1]), 0.0),
+                  0.0, 0.0)
+    pairs = [(Collision(obj, pusher), X1, X2), (Collision(obj, wall), X1, Xw),
+             (Collision(pusher, wall), X2, Xw)]
+    goal = GoalRegion(obj, region)
+
+    def all_pairs() -> None:
+        for H, A, B in pairs:
+            H.jacobians(A, B)
+
+    return {"coll_phase_ms": round(_time(all_pairs, repeats), 2),
+            "coll_pairs": 3, "coll_steps": X1.shape[0],
+            "goal_ms": round(_time(lambda: goal.jacobians(X1[-1:]), repeats), 2)}
+
+
 def bench_functional(model_dir: str | Path = DEFAULT_MODEL, configurations: int = 12,
                      repeats: int = 20, fine: float = 0.05, coarse: float = 0.14,
                      naive: bool = True) -> dict:
     model = load_model(model_dir)
     ws = Workspace(model.spec.workspace_center, model.spec.workspace_size,
                    model.spec.workspace_size[0] / model.spec.grid[1])
+    # memory first, while the process's high-water mark is still low: 40 steps in one call
+    obj, pusher, X1, X2 = realistic_pushes(1, steps=40, seed=987, min_contacts=10)[0]
+    before, _ = _rss_mb()
+    LearnedDynamics(model, obj, pusher, phase_quadrature_for(obj, X1, fine, coarse, ws)
+                    ).evaluate(X1, X2)
+    _, peak = _rss_mb()
+    memory = {"hf_40_steps_peak_rss_mb": round(peak, 1),
+              "hf_40_steps_rss_growth_mb": round(max(0.0, peak - before), 1)}
     pushes = realistic_pushes(configurations)
     obj, pusher, X1, X2 = pushes[0]
     quad = phase_quadrature_for(obj, X1, fine, coarse, ws)
@@ -99,4 +143,6 @@ def bench_functional(model_dir: str | Path = DEFAULT_MODEL, configurations: int 
     result["integral_rel_error"] = round(max(rel), 4)
     result["integral_rel_error_phase"] = round(max(rel_phase), 4)
     result["jacobian_rel_error"] = round(max(jac), 4)
+    result.update(bench_analytic(repeats))
+    result.update(memory)
     return result

@@ -66,6 +66,27 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_bench_functional(args: argparse.Namespace) -> int:
+    import torch
+
+    from robotplan.bench_functional import bench_functional
+
+    torch.set_num_threads(args.threads)
+    if not (Path(args.model) / "spec.json").is_file():
+        print(f"error: {args.model}: --model: not a model folder (no spec.json)",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    result = bench_functional(args.model, configurations=args.configurations,
+                              repeats=args.repeats, fine=args.fine, coarse=args.coarse,
+                              naive=not args.no_naive)
+    if args.json:
+        print(json.dumps(result))
+    else:
+        for k, v in result.items():
+            print(f"{k:>28}: {v}")
+    return 0
+
+
 def _cmd_data_push(args: argparse.Namespace) -> int:
     from robotplan.learned.push_data import generate
 
@@ -169,6 +190,18 @@ def _parser() -> argparse.ArgumentParser:
     bs.add_argument("--dtype", choices=["float32", "float64"], default="float32")
     bs.add_argument("--json", action="store_true", help="print one JSON object")
     bs.set_defaults(run=_cmd_bench)
+    bf = bsub.add_parser("functional", help="H_F and analytic functionals: speed, accuracy")
+    bf.add_argument("--model", default=str(Path(__file__).resolve().parents[1] / "learned"
+                                           / "push_flow"), metavar="DIR")
+    bf.add_argument("--threads", type=int, default=1)
+    bf.add_argument("--configurations", type=int, default=12,
+                    help="realistic pushes for the accuracy check")
+    bf.add_argument("--repeats", type=int, default=20)
+    bf.add_argument("--fine", type=float, default=0.05, help="fine quadrature spacing (m)")
+    bf.add_argument("--coarse", type=float, default=0.14, help="coarse spacing (m)")
+    bf.add_argument("--no-naive", action="store_true", help="skip the slow naive timing")
+    bf.add_argument("--json", action="store_true")
+    bf.set_defaults(run=_cmd_bench_functional)
 
     d = sub.add_parser("data", help="generate training data")
     dsub = d.add_subparsers(dest="what", required=True)

@@ -79,3 +79,19 @@ def test_bad_scene_for_bench_is_exit_2(tmp_path):
     assert res.returncode == 2
     assert res.stderr.strip() == f"error: {f}: version: unsupported version 3; this robotplan " \
                                  "reads version 1"
+
+
+def test_bench_functional_json_runs_small():
+    res = run("bench", "functional", "--json", "--no-naive", "--configurations", "1",
+              "--repeats", "1")
+    assert res.returncode == 0, res.stderr
+    out = json.loads(res.stdout)
+    for key in ("hf_phase_ms", "integral_rel_error", "coll_phase_ms", "goal_ms",
+                "hf_40_steps_peak_rss_mb"):
+        assert out[key] > 0, key
+    assert out["integral_rel_error"] < 0.2
+
+
+def test_bench_functional_refuses_a_non_model(tmp_path):
+    res = run("bench", "functional", "--model", str(tmp_path))
+    assert res.returncode == 2 and "--model" in res.stderr and "Traceback" not in res.stderr

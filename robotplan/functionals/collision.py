@@ -6,6 +6,7 @@ import torch
 from torch import Tensor
 
 from robotplan.functionals.base import Functional, Quadrature
+from robotplan.functionals.windows import body_aabb, margin, window_points
 from robotplan.scene.bodies import Body
 
 __all__ = ["Collision"]
@@ -17,13 +18,35 @@ class Collision(Functional):
 
     ``residual(X_W1 (T, 3|2), X_W2 (T, 3|2)) → (T, 1)`` in m². It is ≈ 0 when the bodies are
     apart by more than the smoothing band and grows with the overlap.
+
+    With a ``quadrature`` the integral runs over its points (e.g. the grid X_h). Without
+    one (the fast path) each step integrates over the window where both sigmoids exceed
+    ``eps`` (the overlap of the grown bounding boxes), at ``resolution`` (default
+    2/a: 4 mm for a = 500; within 0.3 % of a 0.4 mm full grid, even for edges aligned
+    with the lattice); steps whose windows are empty cost nothing.
     """
 
-    def __init__(self, body1: Body, body2: Body, quadrature: Quadrature, a: float = 500.0):
+    def __init__(self, body1: Body, body2: Body, quadrature: Quadrature | None = None,
+                 a: float = 500.0, resolution: float | None = None, eps: float = 1e-3):
         self.body1, self.body2, self.quadrature, self.a = body1, body2, quadrature, a
+        self.resolution = resolution or 2.0 / a
+        self.margin = margin(a, eps)
 
     def residual(self, X_W1: Tensor, X_W2: Tensor) -> Tensor:
-        x = self.quadrature.points.to(X_W1)
-        inside1 = torch.sigmoid(-self.a * self.body1.sdf(x, X_W1))  # (T, N)
-        inside2 = torch.sigmoid(-self.a * self.body2.sdf(x, X_W2))
-        return self.quadrature.integrate(inside1 * inside2)[:, None]
+        if self.quadrature is not None:
+            x = self.quadrature.points.to(X_W1)
+            inside1 = torch.sigmoid(-self.a * self.body1.sdf(x, X_W1))  # (T, N)
+            inside2 = torch.sigmoid(-self.a * self.body2.sdf(x, X_W2))
+            return self.quadrature.integrate(inside1 * inside2)[:, None]
+        lo1, hi1 = body_aabb(self.body1, X_W1)
+        lo2, hi2 = body_aabb(self.body2, X_W2)
+        lo = torch.maximum(lo1, lo2) - self.margin
+        hi = torch.minimum(hi1, hi2) + self.margin
+        out = torch.zeros(X_W1.shape[0], 1, dtype=X_W1.dtype)
+        active = (hi > lo).all(dim=1).nonzero()[:, 0]
+        if len(active) == 0:
+            return out + 0.0 * (X_W1.sum() + X_W2.sum())  # keeps the graph for autograd
+        x, w = window_points(lo[active], hi[active], self.resolution)
+        inside1 = torch.sigmoid(-self.a * self.body1.sdf(x, X_W1[active]))  # (A, P)
+        inside2 = torch.sigmoid(-self.a * self.body2.sdf(x, X_W2[active]))
+        return out.index_put((active,), (inside1 * inside2 * w).sum(1, keepdim=True))

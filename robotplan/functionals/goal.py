@@ -6,6 +6,7 @@ import torch
 from torch import Tensor
 
 from robotplan.functionals.base import Functional, Quadrature
+from robotplan.functionals.windows import body_aabb, margin, window_points
 from robotplan.scene.bodies import Body
 
 __all__ = ["GoalRegion"]
@@ -16,14 +17,28 @@ class GoalRegion(Functional):
     outside the fixed goal region, smoothed with sharpness ``a`` (paper a = 100).
 
     ``residual(X_WB (T, 3|2)) → (T, 1)`` in m²; ≈ 0 when the body is well inside the region.
+
+    With a ``quadrature`` the integral runs over its points; without one (the fast path)
+    over the body's bounding box grown by the sigmoid's ``eps`` margin, at ``resolution``
+    (default 2/a: 2 cm for a = 100; within 0.2 % of a 1 mm full grid).
     """
 
-    def __init__(self, body: Body, region: Body, quadrature: Quadrature, a: float = 100.0):
+    def __init__(self, body: Body, region: Body, quadrature: Quadrature | None = None,
+                 a: float = 100.0, resolution: float | None = None, eps: float = 1e-3):
         self.body, self.region, self.quadrature, self.a = body, region, quadrature, a
-        x = quadrature.points
-        self._outside_region = torch.sigmoid(self.a * region.sdf(x))  # (N,), fixed region
+        self.resolution = resolution or 2.0 / a
+        self.margin = margin(a, eps)
+        if quadrature is not None:
+            x = quadrature.points
+            self._outside_region = torch.sigmoid(self.a * region.sdf(x))  # (N,), fixed
 
     def residual(self, X_WB: Tensor) -> Tensor:
-        x = self.quadrature.points.to(X_WB)
-        inside = torch.sigmoid(-self.a * self.body.sdf(x, X_WB))  # (T, N)
-        return self.quadrature.integrate(inside * self._outside_region.to(X_WB))[:, None]
+        if self.quadrature is not None:
+            x = self.quadrature.points.to(X_WB)
+            inside = torch.sigmoid(-self.a * self.body.sdf(x, X_WB))  # (T, N)
+            return self.quadrature.integrate(inside * self._outside_region.to(X_WB))[:, None]
+        lo, hi = body_aabb(self.body, X_WB)
+        x, w = window_points(lo - self.margin, hi + self.margin, self.resolution)
+        inside = torch.sigmoid(-self.a * self.body.sdf(x, X_WB))  # (T, P)
+        outside_region = torch.sigmoid(self.a * self.region.sdf(x))
+        return (inside * outside_region * w).sum(1, keepdim=True)

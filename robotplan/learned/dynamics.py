@@ -169,7 +169,7 @@ class PushDynamics(nn.Module):
             first = nn.functional.conv2d(images[:, None], convs[0].weight * enc.scale, None,
                                          convs[0].stride)
         results, start = [], 0
-        for g, t in groups:
+        for _g, t in groups:
             M, k = t.shape[:2]
             y_group = first[start:start + M * (1 + k)].reshape(M, 1 + k, *first.shape[1:])
             start += M * (1 + k)

@@ -80,7 +80,7 @@ def test_jacobian_matches_finite_differences(model, obj):
 def test_grid_tangents_are_exact(obj):
     X = torch.tensor([[0.02, -0.01, 0.3], [0.1, 0.05, -1.0]], dtype=F64)
     pts = torch.rand(50, 2, dtype=F64) - 0.5
-    phi, dphi = grid_with_tangents(obj, X, pts, position_only=False)
+    _phi, dphi = grid_with_tangents(obj, X, pts, position_only=False)
     for k in range(3):
         e = torch.zeros(3, dtype=F64)
         e[k] = 1e-6
