@@ -1,0 +1,62 @@
+"""The Drake program of a skeleton: variables, the start fixed, constraints evaluable with
+exact gradients at the initial guess (the solve itself is exercised by the planner tests)."""
+
+import numpy as np
+import torch
+from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoDiff
+
+from robotplan import load_scene
+from robotplan.learned.dynamics import DynamicsSpec, PushDynamics
+from robotplan.program import PushProgram
+from robotplan.skeleton import load_skeleton_space, parse_skeleton
+from tests.conftest import TASKS
+
+TINY = {"channels": (2, 2, 2), "sdf_features": 8, "point_features": 8, "hidden": (16, 16)}
+
+
+def build(text="push@2"):
+    torch.manual_seed(0)
+    scene = load_scene(TASKS / "box_push.yaml")
+    space = load_skeleton_space()
+    model = PushDynamics(DynamicsSpec(**TINY)).double()  # float64: finite differences
+    return PushProgram(scene, parse_skeleton(text, "pusher", "box"), model, space)
+
+
+def test_program_shape_and_initial_guess():
+    prog = build()
+    assert prog.N == 20 and prog.Q1.shape == (21, 3) and prog.Q2.shape == (21, 2)
+    assert prog.P.shape == (10, 2) and list(prog.push_steps) == list(range(11, 21))
+    g = prog.guess
+    assert np.allclose(g["q_obj"][0], prog.obj.pose)
+    assert np.allclose(g["q_pusher"][0], prog.pusher.pose[:2])
+    # the reach phase ends at init point 2 (180°): left of the object
+    assert g["q_pusher"][10, 0] < prog.obj.pose[0] - prog.obj.shape.bound_radius
+    names = {b.evaluator().get_description() for b in prog.prog.GetAllConstraints()}
+    assert {"H_F", "H_coll", "H_PoC", "H_g"} <= names
+
+
+def test_constraint_gradients_match_finite_differences():
+    prog = build()
+    guess = prog.guess
+    values = {}
+    for v, x in ((prog.Q1, guess["q_obj"]), (prog.Q2, guess["q_pusher"]), (prog.P, guess["p"])):
+        for var, val in zip(v.ravel(), x.ravel(), strict=True):
+            values[var.get_id()] = val
+    rng = np.random.default_rng(0)
+    for b in prog.prog.GetAllConstraints():
+        name = b.evaluator().get_description()
+        if name not in {"H_F", "H_coll", "H_PoC", "H_g"}:
+            continue
+        x = np.array([values[v.get_id()] for v in b.variables()])
+        x = x + rng.normal(0, 1e-3, x.shape)  # off the symmetric guess
+        ad = b.evaluator().Eval(InitializeAutoDiff(x))
+        J = ExtractGradient(ad)
+        f0 = ExtractValue(ad).ravel()
+        assert np.allclose(f0, b.evaluator().Eval(x), rtol=1e-6, atol=1e-9), name
+        cols = rng.choice(len(x), min(6, len(x)), replace=False)
+        for c in cols:
+            e = np.zeros_like(x)
+            e[c] = 1e-6
+            fd = (b.evaluator().Eval(x + e) - b.evaluator().Eval(x - e)) / 2e-6
+            scale = max(np.abs(fd).max(), np.abs(J[:, c]).max(), 1e-8)
+            assert np.abs(fd - J[:, c]).max() / scale < 2e-2, (name, c)
