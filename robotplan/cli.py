@@ -66,6 +66,57 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_solve(args: argparse.Namespace) -> int:
+    from robotplan.solve import UnsupportedScene, solve_scene
+
+    scene = load_scene(args.scene)
+    out = Path(args.out)
+    if out.exists() and any(out.iterdir()) and not args.overwrite:
+        print(f"error: {out}: --out: the folder is not empty; pass --overwrite to replace "
+              "its result", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if not (Path(args.model) / "spec.json").is_file():
+        print(f"error: {args.model}: --model: not a model folder (no spec.json)",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        doc = solve_scene(scene, out, Path(args.model), solver=args.solver,
+                          workers=args.workers, skeleton=args.skeleton,
+                          max_pushes=args.max_pushes)
+    except UnsupportedScene as err:
+        print(f"error: {args.scene}: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except ValueError as err:  # a bad --skeleton
+        print(f"error: --skeleton: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    ex = doc.get("execution") or {}
+    print(f"{doc['status']}: violation {doc['violation']:.3g}, coverage in pybullet "
+          f"{ex.get('coverage')}, plan {doc['plan_seconds']} s; wrote {out / 'result.json'}"
+          + (f" and {out / 'playback.html'}" if "playback" in doc else ""))
+    return 0 if doc["status"] == "solved" else 1
+
+
+def _cmd_view(args: argparse.Namespace) -> int:
+    import functools
+    import http.server
+
+    folder = Path(args.dir)
+    page = folder / "playback.html"
+    if not page.is_file():
+        print(f"error: {page}: no playback here (run robotplan solve first)", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(folder))
+    with http.server.ThreadingHTTPServer(("127.0.0.1", args.port), handler) as httpd:
+        print(f"playback at http://127.0.0.1:{httpd.server_address[1]}/playback.html "
+              "(Ctrl-C to stop)", flush=True)
+        try:
+            httpd.serve_forever()
+        except KeyboardInterrupt:
+            pass
+    return 0
+
+
 def _cmd_bench_functional(args: argparse.Namespace) -> int:
     import torch
 
@@ -202,6 +253,23 @@ def _parser() -> argparse.ArgumentParser:
     bf.add_argument("--no-naive", action="store_true", help="skip the slow naive timing")
     bf.add_argument("--json", action="store_true")
     bf.set_defaults(run=_cmd_bench_functional)
+
+    default_model = str(Path(__file__).resolve().parents[1] / "learned" / "push_flow")
+    so = sub.add_parser("solve", help="plan a scene, execute it in pybullet, write the result")
+    so.add_argument("scene", metavar="SCENE")
+    so.add_argument("--out", required=True, metavar="DIR")
+    so.add_argument("--model", default=default_model, metavar="DIR")
+    so.add_argument("--solver", choices=["snopt", "ipopt"], default="snopt")
+    so.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    so.add_argument("--skeleton", default=None, help='one skeleton, e.g. "push@2,push@0"')
+    so.add_argument("--max-pushes", type=int, default=2)
+    so.add_argument("--overwrite", action="store_true")
+    so.set_defaults(run=_cmd_solve)
+
+    vw = sub.add_parser("view", help="serve DIR/playback.html locally")
+    vw.add_argument("dir", metavar="DIR")
+    vw.add_argument("--port", type=int, default=0, help="0: any free port")
+    vw.set_defaults(run=_cmd_view)
 
     d = sub.add_parser("data", help="generate training data")
     dsub = d.add_subparsers(dest="what", required=True)

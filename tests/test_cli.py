@@ -95,3 +95,19 @@ def test_bench_functional_json_runs_small():
 def test_bench_functional_refuses_a_non_model(tmp_path):
     res = run("bench", "functional", "--model", str(tmp_path))
     assert res.returncode == 2 and "--model" in res.stderr and "Traceback" not in res.stderr
+
+
+def test_solve_refuses_unsupported_scenes_and_used_folders(tmp_path):
+    res = run("solve", str(TASKS / "two_arm_touch.yaml"), "--out", str(tmp_path / "a"))
+    assert res.returncode == 2 and "robots" in res.stderr and "Traceback" not in res.stderr
+    used = tmp_path / "b"
+    used.mkdir()
+    (used / "mine.txt").write_text("keep me")
+    res = run("solve", str(TASKS / "box_push.yaml"), "--out", str(used))
+    assert res.returncode == 2 and "--overwrite" in res.stderr
+    assert (used / "mine.txt").read_text() == "keep me"
+
+
+def test_view_needs_a_playback(tmp_path):
+    res = run("view", str(tmp_path))
+    assert res.returncode == 2 and "playback" in res.stderr
