@@ -31,8 +31,7 @@ from torch import Tensor
 from robotplan.functionals.base import Quadrature
 from robotplan.learned.dynamics import PushDynamics
 from robotplan.scene.bodies import Body
-from robotplan.sdf import Circle, Workspace
-from robotplan.sdf.shapes2d import safe_hypot
+from robotplan.sdf import Workspace
 from robotplan.transforms import planar_to_body
 
 __all__ = ["LearnedDynamics", "grid_with_tangents", "phase_quadrature"]
@@ -46,21 +45,13 @@ def grid_with_tangents(body: Body, X_WB: Tensor, points: Tensor, position_only: 
     position-only body, else 3 (x, y, yaw). Exact: from ∇φ in the body frame,
     dφ/dt = −R ∇φ_B and dφ/dθ = ∇φ_B · (p_B,y, −p_B,x).
     """
-    if isinstance(body.shape, Circle) and (position_only or X_WB.shape[-1] == 2):
-        d = points - X_WB[:, None, :2]  # a disc: ∇φ = (x − c)/|x − c| in closed form
-        norm = safe_hypot(d[..., 0], d[..., 1])
-        unit = d / norm.clamp_min(1e-12)[..., None]
-        return norm - body.shape.radius, -unit.permute(0, 2, 1)
-    with torch.enable_grad():
-        p_B = planar_to_body(points, X_WB.detach()).requires_grad_(True)  # (S, N, 2)
-        phi = body.shape.sdf(p_B)
-        (g,) = torch.autograd.grad(phi.sum(), p_B)
-    phi = phi.detach()
+    p_B = planar_to_body(points, X_WB.detach())  # (S, N, 2)
+    phi, g = body.shape.sdf_and_grad(p_B)
     gx, gy = g[..., 0], g[..., 1]
     if position_only or X_WB.shape[-1] == 2:
         return phi, torch.stack((-gx, -gy), dim=1)
     c, s = torch.cos(X_WB[:, 2:3]), torch.sin(X_WB[:, 2:3])
-    d_theta = gx * p_B[..., 1].detach() - gy * p_B[..., 0].detach()
+    d_theta = gx * p_B[..., 1] - gy * p_B[..., 0]
     return phi, torch.stack((-(c * gx - s * gy), -(s * gx + c * gy), d_theta), dim=1)
 
 

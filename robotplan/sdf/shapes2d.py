@@ -64,6 +64,15 @@ class Shape2D:
         """φ at points ``(..., 2)`` of the shape frame → ``(...)``."""
         raise NotImplementedError
 
+    def sdf_and_grad(self, p_B: Tensor) -> tuple[Tensor, Tensor]:
+        """φ ``(...)`` and ∇φ ``(..., 2)`` at points ``(..., 2)`` of the shape frame (not
+        differentiable further). Autograd by default; closed forms where cheaper."""
+        with torch.enable_grad():
+            p = p_B.detach().requires_grad_(True)
+            phi = self.sdf(p)
+            (g,) = torch.autograd.grad(phi.sum(), p)
+        return phi.detach(), g
+
     def outline(self, n_arc: int = 720) -> np.ndarray:
         """Boundary polygon ``(V, 2)`` in the shape frame, counter-clockwise (exact for
         polygonal shapes; ``n_arc`` vertices for a circle)."""
@@ -159,6 +168,20 @@ class Box(Shape2D):
     def sdf(self, p_B: Tensor) -> Tensor:
         return _box_sdf(p_B[..., 0], p_B[..., 1], 0.0, 0.0, self.size[0] / 2, self.size[1] / 2)
 
+    def sdf_and_grad(self, p_B: Tensor) -> tuple[Tensor, Tensor]:
+        px, py = p_B[..., 0], p_B[..., 1]
+        qx, qy = px.abs() - self.size[0] / 2, py.abs() - self.size[1] / 2
+        ox, oy = qx.clamp_min(0.0), qy.clamp_min(0.0)
+        out = safe_hypot(ox, oy)
+        inner = torch.maximum(qx, qy).clamp_max(0.0)
+        sx, sy = torch.sign(px), torch.sign(py)
+        outside = out > 0
+        safe = torch.where(outside, out, torch.ones_like(out))
+        x_face = qx > qy
+        gx = torch.where(outside, sx * ox / safe, torch.where(x_face, sx, torch.zeros_like(sx)))
+        gy = torch.where(outside, sy * oy / safe, torch.where(x_face, torch.zeros_like(sy), sy))
+        return out + inner, torch.stack((gx, gy), dim=-1)
+
     def outline(self, n_arc: int = 720) -> np.ndarray:
         w, h = self.size[0] / 2, self.size[1] / 2
         return np.array([[-w, -h], [w, -h], [w, h], [-w, h]], dtype=np.float64)
@@ -177,6 +200,10 @@ class Circle(Shape2D):
 
     def sdf(self, p_B: Tensor) -> Tensor:
         return safe_hypot(p_B[..., 0], p_B[..., 1]) - self.radius
+
+    def sdf_and_grad(self, p_B: Tensor) -> tuple[Tensor, Tensor]:
+        norm = safe_hypot(p_B[..., 0], p_B[..., 1])
+        return norm - self.radius, p_B / norm.clamp_min(1e-12)[..., None]
 
     def outline(self, n_arc: int = 720) -> np.ndarray:
         ang = np.linspace(0.0, 2 * math.pi, n_arc, endpoint=False)

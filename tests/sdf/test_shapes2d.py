@@ -128,3 +128,14 @@ def test_batched_lshape_parameters_and_box_as_lshape(rng):
         assert (batched[i] - s.sdf(pts)).abs().max() < 1e-12
     as_box = lshape_sdf(pts[:, 0], pts[:, 1], 0.1, 0.06, 0.12)
     assert (as_box - Box((0.2, 0.12)).sdf(pts)).abs().max() < 1e-12
+
+
+@pytest.mark.parametrize("name", [*SHAPES, "circle"])
+def test_sdf_and_grad_matches_autograd(name, rng):
+    shape = SHAPES.get(name, Circle(0.05))
+    pts = torch.from_numpy(rng.uniform(-0.3, 0.3, (500, 2)))
+    phi, g = shape.sdf_and_grad(pts)
+    p = pts.clone().requires_grad_(True)
+    (ref,) = torch.autograd.grad(shape.sdf(p).sum(), p)
+    assert (phi - shape.sdf(pts)).abs().max() < 1e-15
+    assert (g - ref).abs().max() < 1e-9
