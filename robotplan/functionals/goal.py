@@ -24,7 +24,7 @@ class GoalRegion(Functional):
     """
 
     def __init__(self, body: Body, region: Body, quadrature: Quadrature | None = None,
-                 a: float = 100.0, resolution: float | None = None, eps: float = 1e-3):
+                 a: float = 100.0, resolution: float | None = None, eps: float = 1e-4):
         self.body, self.region, self.quadrature, self.a = body, region, quadrature, a
         self.resolution = resolution or 2.0 / a
         self.margin = margin(a, eps)
@@ -38,7 +38,8 @@ class GoalRegion(Functional):
             inside = torch.sigmoid(-self.a * self.body.sdf(x, X_WB))  # (T, N)
             return self.quadrature.integrate(inside * self._outside_region.to(X_WB))[:, None]
         lo, hi = body_aabb(self.body, X_WB)
-        x, w = window_points(lo - self.margin, hi + self.margin, self.resolution)
+        lo, hi = lo - self.margin, hi + self.margin
+        x, w = window_points(lo, hi, self.resolution, self.margin / 3)
         inside = torch.sigmoid(-self.a * self.body.sdf(x, X_WB))  # (T, P)
         outside_region = torch.sigmoid(self.a * self.region.sdf(x))
         return (inside * outside_region * w).sum(1, keepdim=True)
