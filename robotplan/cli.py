@@ -181,11 +181,15 @@ def _cmd_train_push(args: argparse.Namespace) -> int:
     cfg = TrainConfig(data=args.data, out=args.out, kind=args.model, steps=args.steps,
                       batch=args.batch, lr=args.lr, points=args.points, seed=args.seed,
                       scenes=args.scenes, device=device, minutes=args.minutes,
-                      val_every=args.val_every, command=" ".join(["robotplan", *sys.argv[1:]]))
+                      val_every=args.val_every, contact_share=args.contact_share,
+                      command=" ".join(["robotplan", *sys.argv[1:]]))
     if args.resume:  # the run's settings come from its checkpoint; only the budget may change
         saved = json.loads(torch.load(ckpt, weights_only=True)["config"])
         cfg = TrainConfig(**{**saved, "steps": args.steps or saved["steps"],
-                             "minutes": args.minutes, "device": device})
+                             "minutes": args.minutes, "device": device,
+                             "contact_share": args.contact_share
+                             if args.contact_share is not None
+                             else saved.get("contact_share")})
     last = train(cfg, resume=args.resume)
     write_model_card(out)
     print(json.dumps(last))
@@ -297,6 +301,8 @@ def _parser() -> argparse.ArgumentParser:
     tp.add_argument("--threads", type=int, default=os.cpu_count() or 1)
     tp.add_argument("--minutes", type=float, default=None, help="stop after this wall time")
     tp.add_argument("--val-every", type=int, default=2000)
+    tp.add_argument("--contact-share", type=float, default=None,
+                    help="balanced batches with this share of contact samples")
     tp.add_argument("--resume", action="store_true", help="continue from checkpoint.pt")
     tp.add_argument("--overwrite", action="store_true", help="start over in a used folder")
     tp.set_defaults(run=_cmd_train_push)

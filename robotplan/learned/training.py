@@ -40,6 +40,7 @@ class TrainConfig:
     warmup: int = 500
     points: int = 256
     near_share: float = 0.25  # share of query points drawn near the object
+    contact_share: float | None = None  # draw batches with this share of contact samples
     val_fraction: float = 0.02
     val_samples: int = 128
     val_every: int = 2000
@@ -143,6 +144,8 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
                    spec.workspace_size[0] / spec.grid[1])
     grid = ws.points().reshape(-1, 2).to(device)
     per_epoch = len(train_idx) // cfg.batch
+    train_contact = train_idx[samples.contact[train_idx]]
+    train_free = train_idx[~samples.contact[train_idx]]
 
     def save_checkpoint() -> None:
         tmp = ckpt_path.with_suffix(".tmp")
@@ -180,8 +183,15 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
     try:
         while step < cfg.steps:
             epoch, b = divmod(step, per_epoch)
-            perm = np.random.default_rng([cfg.seed, epoch]).permutation(train_idx)
-            batch = samples.batch(perm[b * cfg.batch:(b + 1) * cfg.batch], device=device)
+            if cfg.contact_share is None:
+                perm = np.random.default_rng([cfg.seed, epoch]).permutation(train_idx)
+                chosen = perm[b * cfg.batch:(b + 1) * cfg.batch]
+            else:  # balanced batches: the metric averages contact and free separately
+                rng = np.random.default_rng([cfg.seed, 7, step])
+                n_contact = round(cfg.contact_share * cfg.batch)
+                chosen = np.concatenate([rng.choice(train_contact, n_contact),
+                                         rng.choice(train_free, cfg.batch - n_contact)])
+            batch = samples.batch(chosen, device=device)
             gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
             pts = _query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)
             inputs = batch.inputs(grid, ws.shape)

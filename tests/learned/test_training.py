@@ -53,3 +53,9 @@ def test_evaluation_and_model_card(tiny_push_data, tmp_path):
     card = (out / "MODEL_CARD.md").read_text()
     assert "held-out" in card and "Known failure modes" in card
     assert json.loads((out / "metrics.json").read_text())["heldout"] == result
+
+
+def test_balanced_batches_run(tiny_push_data, tmp_path):
+    cfg = config(tiny_push_data, tmp_path / "m", 5)
+    cfg.contact_share = 0.5
+    assert train(cfg, progress=False)["step"] == 5
