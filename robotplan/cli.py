@@ -182,11 +182,13 @@ def _cmd_train_push(args: argparse.Namespace) -> int:
                       batch=args.batch, lr=args.lr, points=args.points, seed=args.seed,
                       scenes=args.scenes, device=device, minutes=args.minutes,
                       val_every=args.val_every, contact_share=args.contact_share,
+                      spec={"encoder": args.encoder},
                       command=" ".join(["robotplan", *sys.argv[1:]]))
     if args.resume:  # the run's settings come from its checkpoint; only the budget may change
         saved = json.loads(torch.load(ckpt, weights_only=True)["config"])
         cfg = TrainConfig(**{**saved, "steps": args.steps or saved["steps"],
                              "minutes": args.minutes, "device": device,
+                             "out": args.out, "data": args.data,
                              "contact_share": args.contact_share
                              if args.contact_share is not None
                              else saved.get("contact_share")})
@@ -290,6 +292,9 @@ def _parser() -> argparse.ArgumentParser:
     tp = tsub.add_parser("push", help="train F_flow or F on push data")
     tp.add_argument("--data", required=True, metavar="DIR")
     tp.add_argument("--model", choices=["flow", "direct"], default="flow")
+    tp.add_argument("--encoder", choices=["shared", "joint"], default="shared",
+                    help="shared: the paper's (one encoder per SDF, shared weights); "
+                         "joint: one encoder over the three SDFs stacked as channels")
     tp.add_argument("--out", required=True, metavar="DIR", help="e.g. learned/push_flow")
     tp.add_argument("--steps", type=int, default=60_000, help="total optimiser steps")
     tp.add_argument("--batch", type=int, default=32)

@@ -107,18 +107,32 @@ class LearnedDynamics:
         # one rendering + encoding per state: φ1 at states 0…T−1, φ2 at states 0…T
         phi1, dphi1 = grid_with_tangents(self.obj, X1[:-1], self.grid, position_only=False)
         phi2, dphi2 = grid_with_tangents(self.pusher, X2, self.grid, position_only=True)
-        if jacobian:
+        joint = m.spec.encoder == "joint"
+        if joint:  # one encoding per step of the stacked φ1_{t−1}, φ2_{t−1}, φ2_t
+            stacked = torch.stack((phi1, phi2[:-1], phi2[1:]), dim=1).reshape(T, 3, *shape)
+            if jacobian:
+                f, df = m.encode_joint_with_tangents(
+                    stacked, [dphi1.reshape(T, 3, *shape), dphi2[:-1].reshape(T, 2, *shape),
+                              dphi2[1:].reshape(T, 2, *shape)])
+            else:
+                with torch.no_grad():
+                    f = m.encoder(stacked)
+            F = m.spec.sdf_features
+            f1, f2p, f2n = f[:, :F], f[:, F:2 * F], f[:, 2 * F:]
+        elif jacobian:
             # forward mode for every grid, in one batch: object grids with 3 tangents,
             # pusher grids with 2 (each pusher grid feeds two steps)
             (f1, df1), (f2, df2) = m.encode_with_tangents(
                 (phi1.reshape(T, *shape), dphi1.reshape(T, 3, *shape)),
                 (phi2.reshape(T + 1, *shape), dphi2.reshape(T + 1, 2, *shape)))
+            f2p, f2n = f2[:-1], f2[1:]
         else:
             with torch.no_grad():
                 f1 = m.encode(phi1.reshape(T, *shape))
                 f2 = m.encode(phi2.reshape(T + 1, *shape))
+            f2p, f2n = f2[:-1], f2[1:]
         # per-step leaves: every step's inputs are its own, so one backward gives blocks
-        leaves = [f1.clone(), f2[:-1].clone(), f2[1:].clone(), X1[:-1].clone(), X1[1:].clone()]
+        leaves = [f1.clone(), f2p.clone(), f2n.clone(), X1[:-1].clone(), X1[1:].clone()]
         with torch.enable_grad():
             for leaf in leaves:
                 leaf.requires_grad_(jacobian)
@@ -134,6 +148,12 @@ class LearnedDynamics:
             grads = torch.autograd.grad(H.sum(), leaves, allow_unused=True)
             gF1p, gF2p, gF2n, gQ1p, gQ1n = (torch.zeros_like(leaf) if g is None else g
                                             for g, leaf in zip(grads, leaves, strict=True))
+        if joint:
+            g = torch.cat((gF1p, gF2p, gF2n), dim=1)  # d H_t / d features of step t
+            d = torch.einsum("tf,tkf->tk", g, df)  # (T, 7): q1_{t−1} (3), q2_{t−1}, q2_t
+            J1 = torch.stack((gQ1p + d[:, :3], gQ1n), dim=1)
+            J2 = torch.stack((d[:, 3:5], d[:, 5:7]), dim=1)
+            return H.detach(), J1, J2
         J1 = torch.stack((gQ1p + torch.einsum("tf,tkf->tk", gF1p, df1), gQ1n), dim=1)
         J2 = torch.stack((torch.einsum("tf,tkf->tk", gF2p, df2[:-1]),
                           torch.einsum("tf,tkf->tk", gF2n, df2[1:])), dim=1)
@@ -158,7 +178,8 @@ class LearnedDynamics:
             with torch.enable_grad():
                 grids = torch.stack((self.obj.sdf(x, q1p), self.pusher.sdf(x, q2p),
                                      self.pusher.sdf(x, q2n))).reshape(3, *shape)
-                feats = m.encode(grids).reshape(1, -1).expand(len(x), -1)  # (N, 600)
+                feats = (m.encoder(grids[None]) if m.spec.encoder == "joint"
+                         else m.encode(grids).reshape(1, -1)).expand(len(x), -1)  # (N, 600)
                 h = torch.relu(torch.cat((feats, point_feats), dim=1) @ W.T + m.first_sdf.bias)
                 out = m.head(h)[:, 0] * m.spec.out_scale
                 prev = self.obj.sdf(x, q1p)

@@ -41,6 +41,7 @@ class DynamicsSpec:
     sdf_features: int = 200
     point_features: int = 100
     hidden: tuple[int, ...] = (300, 300)
+    encoder: Literal["shared", "joint"] = "shared"  # joint: one encoder sees all 3 SDFs
     sdf_scale: float = 5.0  # input SDF values (m) are multiplied by this
     out_scale: float = 0.01  # the network's output is multiplied by this (m)
     extra: dict = field(default_factory=dict)  # free-form notes (not used by the network)
@@ -99,17 +100,19 @@ class _no_onednn:
 
 
 class SDFEncoder(nn.Module):
-    """φ(X_h) ``(M, 1, H, W)`` → features ``(M, sdf_features)``."""
+    """φ(X_h) ``(M, C, H, W)`` → features ``(M, F)``: C = 1, F = sdf_features for the
+    paper's shared encoder; C = 3, F = 3 · sdf_features for the joint variant."""
 
     def __init__(self, spec: DynamicsSpec) -> None:
         super().__init__()
         layers: list[nn.Module] = []
-        c_in, (h, w) = 1, spec.grid
+        joint = spec.encoder == "joint"
+        c_in, (h, w) = (3 if joint else 1), spec.grid
         for c, k, s in zip(spec.channels, spec.kernels, spec.strides, strict=True):
             layers += [nn.Conv2d(c_in, c, k, stride=s), nn.ReLU()]
             c_in, h, w = c, (h - k) // s + 1, (w - k) // s + 1
         self.conv = nn.Sequential(*layers)
-        self.linear = nn.Linear(c_in * h * w, spec.sdf_features)
+        self.linear = nn.Linear(c_in * h * w, spec.sdf_features * (3 if joint else 1))
         self.scale = spec.sdf_scale
 
     def forward(self, grids: Tensor) -> Tensor:
@@ -169,25 +172,58 @@ class PushDynamics(nn.Module):
             first = nn.functional.conv2d(images[:, None], convs[0].weight * enc.scale, None,
                                          convs[0].stride)
         results, start = [], 0
-        for _g, t in groups:
+        for _, t in groups:
             M, k = t.shape[:2]
             y_group = first[start:start + M * (1 + k)].reshape(M, 1 + k, *first.shape[1:])
             start += M * (1 + k)
-            feats, dfeats = [], []
-            for i in range(0, M, chunk):
-                y = y_group[i:i + chunk]
-                for j, conv in enumerate(convs):
-                    if j > 0:
-                        m = y.shape[0]
-                        y = nn.functional.conv2d(y.flatten(0, 1), conv.weight, None, conv.stride)
-                        y = y.reshape(m, 1 + k, *y.shape[1:])
-                    primal = y[:, 0].add_(conv.bias[:, None, None])
-                    y.mul_((primal > 0)[:, None])  # the primal's ReLU mask, for all
-                out = y.flatten(2) @ enc.linear.weight.T
-                feats.append(out[:, 0] + enc.linear.bias)
-                dfeats.append(out[:, 1:])
-            results.append((torch.cat(feats), torch.cat(dfeats)))
+            results.append(self._tangents_after_first(y_group, chunk))
         return results
+
+    @torch.no_grad()
+    def encode_joint_with_tangents(self, grids: Tensor, tangents: list[Tensor],
+                                   chunk: int = 4) -> tuple[Tensor, Tensor]:
+        """The joint encoder's features and forward-mode derivatives.
+
+        Args:
+            grids: ``(M, 3, H, W)`` the stacked inputs φ1_{t−1}, φ2_{t−1}, φ2_t.
+            tangents: per input channel c, ``(M, k_c, H, W)`` derivatives of that channel.
+        Returns:
+            features ``(M, F)`` and derivatives ``(M, Σ k_c, F)`` (channel 0's first).
+        A tangent touches one channel only, so its first convolution uses that channel's
+        weights alone (a one-channel convolution, as cheap as the shared encoder's).
+        """
+        enc = self.encoder
+        conv = enc.conv[0]
+        weight = conv.weight * enc.scale
+        with _no_onednn():
+            primal = nn.functional.conv2d(grids, weight, None, conv.stride)
+            parts = [primal[:, None]]
+            for c, t in enumerate(tangents):
+                y = nn.functional.conv2d(t.flatten(0, 1)[:, None], weight[:, c:c + 1], None,
+                                         conv.stride)
+                parts.append(y.reshape(t.shape[0], t.shape[1], *y.shape[1:]))
+        return self._tangents_after_first(torch.cat(parts, dim=1), chunk)
+
+    def _tangents_after_first(self, y_group: Tensor, chunk: int) -> tuple[Tensor, Tensor]:
+        """Finish the encoder from first-layer outputs ``(M, 1 + k, C, h, w)`` without bias
+        on the primal: masks, the remaining convolutions and the linear layer."""
+        enc = self.encoder
+        convs = [m for m in enc.conv if isinstance(m, nn.Conv2d)]
+        M, kp1 = y_group.shape[:2]
+        feats, dfeats = [], []
+        for i in range(0, M, chunk):
+            y = y_group[i:i + chunk]
+            for j, conv in enumerate(convs):
+                if j > 0:
+                    m = y.shape[0]
+                    y = nn.functional.conv2d(y.flatten(0, 1), conv.weight, None, conv.stride)
+                    y = y.reshape(m, kp1, *y.shape[1:])
+                primal = y[:, 0].add_(conv.bias[:, None, None])
+                y.mul_((primal > 0)[:, None])  # the primal's ReLU mask, for all
+            out = y.flatten(2) @ enc.linear.weight.T
+            feats.append(out[:, 0] + enc.linear.bias)
+            dfeats.append(out[:, 1:])
+        return torch.cat(feats), torch.cat(dfeats)
 
     def sdf_term(self, features: Tensor) -> Tensor:
         """``(B, 3 · sdf_features)`` (φ1_{t−1}, φ2_{t−1}, φ2_t) → first-layer term ``(B, H1)``."""
@@ -209,7 +245,10 @@ class PushDynamics(nn.Module):
         Returns ``(B, P)``: F_flow(x) for ``kind="flow"``, φ1_t(x) for ``kind="direct"``.
         """
         B = inputs.shape[0]
-        feats = self.encode(inputs.flatten(0, 1)).reshape(B, -1)
+        if self.spec.encoder == "joint":
+            feats = self.encoder(inputs)
+        else:
+            feats = self.encode(inputs.flatten(0, 1)).reshape(B, -1)
         return self.from_terms(self.sdf_term(feats), self.point_term(points))
 
     def predict_next(self, inputs: Tensor, points: Tensor, phi1_prev_at_points: Tensor

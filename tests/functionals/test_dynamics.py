@@ -23,10 +23,12 @@ def trajectory(T=3):
     return X1, X2
 
 
-@pytest.fixture(params=["flow", "direct"])
+@pytest.fixture(params=[("flow", "shared"), ("direct", "shared"), ("flow", "joint")],
+                ids=["flow", "direct", "flow-joint"])
 def model(request):
     torch.manual_seed(7)
-    return PushDynamics(DynamicsSpec(kind=request.param, **SPEC)).double()
+    kind, encoder = request.param
+    return PushDynamics(DynamicsSpec(kind=kind, encoder=encoder, **SPEC)).double()
 
 
 @pytest.fixture(params=[Box((0.2, 0.12)), LShape((0.24, 0.18), 0.07)], ids=["box", "lshape"])

@@ -53,3 +53,20 @@ def test_save_and_load_round_trip(tmp_path):
 def test_load_refuses_non_model_folders(tmp_path):
     with pytest.raises(FileNotFoundError, match=r"spec\.json"):
         load_model(tmp_path)
+
+
+def test_joint_encoder_variant():
+    m = PushDynamics(DynamicsSpec(encoder="joint", **TINY_SPEC)).double()
+    assert m.encoder.conv[0].in_channels == 3
+    x, p = torch.rand(2, 3, 140, 140, dtype=torch.float64), torch.rand(2, 5, 2, dtype=torch.float64)
+    assert m(x, p).shape == (2, 5)
+    # the joint forward-mode features equal autograd's directional derivatives
+    t = [torch.rand(2, 3, 140, 140, dtype=torch.float64), torch.zeros(2, 2, 140, 140,
+                                                                       dtype=torch.float64),
+         torch.zeros(2, 2, 140, 140, dtype=torch.float64)]
+    f, df = m.encode_joint_with_tangents(x, t)
+    direction = torch.stack((t[0][:, 0], t[1][:, 0], t[2][:, 0]), 1)
+    with torch.no_grad():
+        fd = (m.encoder(x + 1e-6 * direction) - m.encoder(x - 1e-6 * direction)) / 2e-6
+        assert torch.allclose(f, m.encoder(x), atol=1e-10)
+    assert torch.allclose(df[:, 0], fd, atol=1e-6)
