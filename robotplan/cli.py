@@ -18,6 +18,16 @@ from robotplan.scene import SceneError, load_scene
 EXIT_BAD_INPUT = 2
 
 
+def _print_result(result: dict, as_json: bool) -> None:
+    """One JSON object (``--json``), or aligned ``key: value`` lines for a person."""
+    if as_json:
+        print(json.dumps(result))
+        return
+    width = max(map(len, result), default=0)
+    for k, v in result.items():
+        print(f"{k:>{width}}: {v}")
+
+
 def _cmd_check(args: argparse.Namespace) -> int:
     status = 0
     for f in args.files:
@@ -58,11 +68,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene)
     dtype = {"float32": torch.float32, "float64": torch.float64}[args.dtype]
     result = bench_sdf(scene, steps=args.steps, repeats=args.repeats, dtype=dtype)
-    if args.json:
-        print(json.dumps(result))
-    else:
-        for k, v in result.items():
-            print(f"{k:>10}: {v}")
+    _print_result(result, args.json)
     return 0
 
 
@@ -130,11 +136,7 @@ def _cmd_bench_functional(args: argparse.Namespace) -> int:
     result = bench_functional(args.model, configurations=args.configurations,
                               repeats=args.repeats, fine=args.fine, coarse=args.coarse,
                               naive=not args.no_naive)
-    if args.json:
-        print(json.dumps(result))
-    else:
-        for k, v in result.items():
-            print(f"{k:>28}: {v}")
+    _print_result(result, args.json)
     return 0
 
 
@@ -214,11 +216,7 @@ def _cmd_eval_push(args: argparse.Namespace) -> int:
         from robotplan.learned.model_card import record_heldout
 
         record_heldout(Path(args.model), result)
-    if args.json:
-        print(json.dumps(result))
-    else:
-        for k, v in result.items():
-            print(f"{k:>18}: {v}")
+    _print_result(result, args.json)
     return 0
 
 
