@@ -184,7 +184,7 @@ def _cmd_train_push(args: argparse.Namespace) -> int:
                       batch=args.batch, lr=args.lr, points=args.points, seed=args.seed,
                       scenes=args.scenes, device=device, minutes=args.minutes,
                       val_every=args.val_every, contact_share=args.contact_share,
-                      spec={"encoder": args.encoder},
+                      spec={"encoder": args.encoder}, init_weights=args.init_weights,
                       command=" ".join(["robotplan", *sys.argv[1:]]))
     if args.resume:  # the run's settings come from its checkpoint; only the budget may change
         saved = json.loads(torch.load(ckpt, weights_only=True)["config"])
@@ -304,6 +304,8 @@ def _parser() -> argparse.ArgumentParser:
     tp.add_argument("--threads", type=int, default=os.cpu_count() or 1)
     tp.add_argument("--minutes", type=float, default=None, help="stop after this wall time")
     tp.add_argument("--val-every", type=int, default=2000)
+    tp.add_argument("--init-weights", default=None, metavar="FILE",
+                    help="start from these weights (e.g. a previous run's weights.pt)")
     tp.add_argument("--contact-share", type=float, default=None,
                     help="balanced batches with this share of contact samples")
     tp.add_argument("--resume", action="store_true", help="continue from checkpoint.pt")

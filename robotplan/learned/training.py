@@ -41,6 +41,7 @@ class TrainConfig:
     points: int = 256
     near_share: float = 0.25  # share of query points drawn near the object
     contact_share: float | None = None  # draw batches with this share of contact samples
+    init_weights: str | None = None  # start from these weights (a state_dict file)
     val_fraction: float = 0.02
     val_samples: int = 128
     val_every: int = 2000
@@ -131,6 +132,9 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
     model = PushDynamics(spec).to(device)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
     step, history, seconds = 0, [], 0.0
+    if cfg.init_weights and not resume:
+        model.load_state_dict(torch.load(cfg.init_weights, map_location=device,
+                                         weights_only=True))
     if resume:
         state = torch.load(ckpt_path, map_location=device, weights_only=True)
         model.load_state_dict(state["model"])

@@ -59,3 +59,14 @@ def test_balanced_batches_run(tiny_push_data, tmp_path):
     cfg = config(tiny_push_data, tmp_path / "m", 5)
     cfg.contact_share = 0.5
     assert train(cfg, progress=False)["step"] == 5
+
+
+def test_init_weights_starts_from_a_previous_run(tiny_push_data, tmp_path):
+    train(config(tiny_push_data, tmp_path / "a", 10), progress=False)
+    cfg = config(tiny_push_data, tmp_path / "b", 1)
+    cfg.init_weights = str(tmp_path / "a" / "weights.pt")
+    cfg.lr = 1e-12  # one step that changes nothing measurable
+    train(cfg, progress=False)
+    a, b = load_model(tmp_path / "a"), load_model(tmp_path / "b")
+    for va, vb in zip(a.state_dict().values(), b.state_dict().values(), strict=True):
+        assert torch.allclose(va, vb, atol=1e-6)
