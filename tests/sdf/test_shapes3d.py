@@ -86,3 +86,23 @@ def test_mesh_requires_watertight():
 def test_gradcheck_3d(shape, rng):
     pts = torch.from_numpy(rng.uniform(-0.25, 0.25, (8, 3))).requires_grad_(True)
     assert torch.autograd.gradcheck(shape.sdf, (pts,))
+
+
+def test_se3_transform_of_an_sdf_against_a_transformed_mesh(rng):
+    """T(q)[φ](x) = φ(R(q)ᵀ(x − r(q))) for a spatial pose (translation + unit quaternion)."""
+    from scipy.spatial.transform import Rotation
+
+    from robotplan.transforms import spatial_to_body
+
+    size = (0.2, 0.12, 0.06)
+    quat_xyzw = Rotation.from_euler("xyz", [0.3, -0.5, 1.1]).as_quat()
+    t = np.array([0.05, -0.02, 0.1])
+    X_WB = torch.tensor([*t, quat_xyzw[3], *quat_xyzw[:3]], dtype=torch.float64)
+    mesh = trimesh.creation.box(extents=size)
+    M = np.eye(4)
+    M[:3, :3] = Rotation.from_quat(quat_xyzw).as_matrix()
+    M[:3, 3] = t
+    mesh.apply_transform(M)
+    pts = rng.uniform(-0.3, 0.3, (2000, 3))
+    got = Box3D(size).sdf(spatial_to_body(torch.from_numpy(pts), X_WB)).numpy()
+    assert np.abs(got - trimesh_sdf(mesh, pts)).max() <= 1e-6
