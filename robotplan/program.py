@@ -41,8 +41,8 @@ class ProgramSettings:
     dynamics_rmse: float = 0.0015  # m: allowed RMSE of φ1_t against F(…) over X per step
     coll_area: float = 2e-5  # m²: allowed smoothed overlap (touching itself gives ~1e-6)
     goal_tol: float = 0.003  # share of the object's area allowed outside the goal
-    accel_weight: float = 1e3
-    contact_accel_weight: float = 1e2
+    accel_weight: float = 1.0  # larger weights kept SNOPT from certifying optimality
+    contact_accel_weight: float = 0.1
     solver: str = "snopt"
     optimality_tol: float = 2e-3
     feasibility_tol: float = 1e-4
