@@ -64,6 +64,7 @@ def phase_quadrature(centers: Tensor, radius: float, workspace: Workspace, fine:
     ratio = round(coarse / fine)
     fine = coarse / ratio
     big = Workspace(workspace.center, workspace.size, coarse).points(torch.float64).reshape(-1, 2)
+    # a coarse cell is refined when any part of it (half-diagonal ≈ 0.707·coarse) is near
     near = torch.cdist(big, centers.double()).amin(dim=1) <= radius + coarse * 0.7072
     offs = (torch.arange(ratio, dtype=torch.float64) + 0.5) * fine - coarse / 2
     oy, ox = torch.meshgrid(offs, offs, indexing="ij")

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from robotplan.sdf import Box, LShape, Shape2D
-from robotplan.sim import PHYSICS, PushWorld
+from robotplan.sim import PHYSICS, PushWorld, footprint_centroid
 
 __all__ = ["PushDataSpec", "SceneRecord", "generate", "load_shards", "simulate_scene"]
 
@@ -101,7 +101,7 @@ def simulate_scene(index: int, seed: int, spec: PushDataSpec = PushDataSpec(),
                          rng.uniform(-math.pi, math.pi)])
         if _on_table(_world_outline(shape, pose), 0.02):
             break
-    centre = pose[:2] + _rotate(_centroid(shape), pose[2])
+    centre = pose[:2] + _rotate(footprint_centroid(shape), pose[2])
     for _ in range(100):
         ang = rng.uniform(0, 2 * math.pi)
         dist = shape.bound_radius + radius + rng.uniform(*spec.start_gap)
@@ -123,16 +123,10 @@ def _rotate(v: np.ndarray, yaw: float) -> np.ndarray:
     return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
 
 
-def _centroid(shape: Shape2D) -> np.ndarray:
-    from robotplan.sim import footprint_centroid
-
-    return footprint_centroid(shape)
-
-
 def _rollout(world: PushWorld, shape: Shape2D, radius: float, rng: np.random.Generator,
              spec: PushDataSpec) -> SceneRecord:
     dt, keep = world.physics.timestep, world.physics.keep_every
-    centroid = _centroid(shape)
+    centroid = footprint_centroid(shape)
     pose, _ = world.object_pose()
     target = world.pusher_position()
     poses, pushers, contacts = [pose], [target.copy()], [False]
