@@ -106,8 +106,13 @@ class LearnedDynamics:
         T = X1.shape[0] - 1
         m, shape = self.model, self.workspace.shape
         # one rendering + encoding per state: φ1 at states 0…T−1, φ2 at states 0…T
-        phi1, dphi1 = grid_with_tangents(self.obj, X1[:-1], self.grid, position_only=False)
-        phi2, dphi2 = grid_with_tangents(self.pusher, X2, self.grid, position_only=True)
+        if jacobian:
+            phi1, dphi1 = grid_with_tangents(self.obj, X1[:-1], self.grid, position_only=False)
+            phi2, dphi2 = grid_with_tangents(self.pusher, X2, self.grid, position_only=True)
+        else:  # values only (e.g. a line search): no tangent grids
+            with torch.no_grad():
+                phi1 = self.obj.sdf(self.grid, X1[:-1])
+                phi2 = self.pusher.sdf(self.grid, X2)
         joint = m.spec.encoder == "joint"
         if joint:  # one encoding per step of the stacked φ1_{t−1}, φ2_{t−1}, φ2_t
             stacked = torch.stack((phi1, phi2[:-1], phi2[1:]), dim=1).reshape(T, 3, *shape)
