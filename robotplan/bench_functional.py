@@ -56,11 +56,9 @@ def _time(fn, repeats: int) -> float:
     return 1e3 * float(np.median(times))
 
 
-def phase_quadrature_for(obj: Body, X1: torch.Tensor, fine: float, coarse: float,
-                         workspace: Workspace) -> Quadrature:
-    """The quadrature a planner would fix for a phase: fine within the object's reach."""
-    return phase_quadrature(X1[:, :2].float(), obj.shape.bound_radius + 0.10, workspace,
-                            fine=fine, coarse=coarse)
+def phase_quadrature_for(obj: Body, X1: torch.Tensor, workspace: Workspace) -> Quadrature:
+    """The quadrature a planner fixes for a phase: finer near the object's path."""
+    return phase_quadrature(X1[:, :2].float(), obj.shape.bound_radius, workspace)
 
 
 def _rss_mb() -> tuple[float, float]:
@@ -99,28 +97,27 @@ def bench_analytic(repeats: int = 30) -> dict:
 
 
 def bench_functional(model_dir: str | Path = DEFAULT_MODEL, configurations: int = 12,
-                     repeats: int = 20, fine: float = 0.05, coarse: float = 0.14,
-                     naive: bool = True) -> dict:
+                     repeats: int = 20, naive: bool = True) -> dict:
     model = load_model(model_dir)
     ws = Workspace(model.spec.workspace_center, model.spec.workspace_size,
                    model.spec.workspace_size[0] / model.spec.grid[1])
     # memory first, while the process's high-water mark is still low: 40 steps in one call
     obj, pusher, X1, X2 = realistic_pushes(1, steps=40, seed=987, min_contacts=10)[0]
     before, _ = _rss_mb()
-    LearnedDynamics(model, obj, pusher, phase_quadrature_for(obj, X1, fine, coarse, ws)
+    LearnedDynamics(model, obj, pusher, phase_quadrature_for(obj, X1, ws)
                     ).evaluate(X1, X2)
     _, peak = _rss_mb()
     memory = {"hf_40_steps_peak_rss_mb": round(peak, 1),
               "hf_40_steps_rss_growth_mb": round(max(0.0, peak - before), 1)}
     pushes = realistic_pushes(configurations)
     obj, pusher, X1, X2 = pushes[0]
-    quad = phase_quadrature_for(obj, X1, fine, coarse, ws)
+    quad = phase_quadrature_for(obj, X1, ws)
     fast = LearnedDynamics(model, obj, pusher, quad)
     result: dict = {"model": str(model_dir), "threads": torch.get_num_threads(),
                     "steps": X1.shape[0] - 1, "quadrature_points": len(quad.points),
-                    "quadrature": f"two-level midpoint: {fine * 100:g} cm within "
-                                  f"r_object + 10 cm of the phase's object path, "
-                                  f"{coarse * 100:g} cm elsewhere"}
+                    "quadrature": "multi-level midpoint: 14 cm cells, 7 cm within "
+                                  "r_object + 10 cm of the phase's object path, 3.5 cm "
+                                  "within r_object + 2 cm"}
     result["hf_phase_ms"] = round(_time(lambda: fast.evaluate(X1, X2), repeats), 2)
     result["hf_value_only_ms"] = round(
         _time(lambda: fast.evaluate(X1, X2, jacobian=False), repeats), 2)
@@ -131,7 +128,7 @@ def bench_functional(model_dir: str | Path = DEFAULT_MODEL, configurations: int 
     rel, rel_phase, jac = [], [], []
     full = Quadrature.grid(ws)
     for obj, pusher, X1, X2 in pushes:
-        q = phase_quadrature_for(obj, X1, fine, coarse, ws)
+        q = phase_quadrature_for(obj, X1, ws)
         h_fast, j1, j2 = LearnedDynamics(model, obj, pusher, q).evaluate(X1, X2)
         h_full, k1, k2 = LearnedDynamics(model, obj, pusher, full).evaluate(X1, X2)
         rel.append(((h_fast - h_full).abs() / h_full).max().item())

@@ -134,7 +134,7 @@ def _cmd_bench_functional(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return EXIT_BAD_INPUT
     result = bench_functional(args.model, configurations=args.configurations,
-                              repeats=args.repeats, fine=args.fine, coarse=args.coarse,
+                              repeats=args.repeats,
                               naive=not args.no_naive)
     _print_result(result, args.json)
     return 0
@@ -252,8 +252,6 @@ def _parser() -> argparse.ArgumentParser:
     bf.add_argument("--configurations", type=int, default=12,
                     help="realistic pushes for the accuracy check")
     bf.add_argument("--repeats", type=int, default=20)
-    bf.add_argument("--fine", type=float, default=0.05, help="fine quadrature spacing (m)")
-    bf.add_argument("--coarse", type=float, default=0.14, help="coarse spacing (m)")
     bf.add_argument("--no-naive", action="store_true", help="skip the slow naive timing")
     bf.add_argument("--json", action="store_true")
     bf.set_defaults(run=_cmd_bench_functional)

@@ -47,8 +47,7 @@ class ProgramSettings:
     optimality_tol: float = 2e-3
     feasibility_tol: float = 1e-4
     iterations: int = 400
-    quad_fine: float = 0.05
-    quad_coarse: float = 0.14
+    quad_coarse: float = 0.14  # H_F quadrature (see phase_quadrature)
 
 
 @dataclass
@@ -161,8 +160,8 @@ class PushProgram:
     def _add_dynamics(self, model: PushDynamics) -> None:
         s = self.settings
         path = torch.as_tensor(self.guess["q_obj"][:, :2], dtype=torch.float32)
-        quad = phase_quadrature(path, self.obj.shape.bound_radius + 0.10, self.scene.workspace,
-                                fine=s.quad_fine, coarse=s.quad_coarse)
+        quad = phase_quadrature(path, self.obj.shape.bound_radius, self.scene.workspace,
+                                coarse=s.quad_coarse)
         self.dynamics = LearnedDynamics(model, self.obj, self.pusher, quad)
         N = self.N
         area = float(self.scene.workspace.size[0] * self.scene.workspace.size[1])

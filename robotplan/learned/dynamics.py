@@ -150,80 +150,56 @@ class PushDynamics(nn.Module):
         return self.encoder(grids[:, None])
 
     @torch.no_grad()
-    def encode_with_tangents(self, *groups: tuple[Tensor, Tensor], chunk: int = 4
-                             ) -> list[tuple[Tensor, Tensor]]:
-        """Features and their forward-mode derivatives (exact, no autograd).
-
-        Args:
-            groups: pairs ``(grids (M, H, W), tangents (M, k, H, W))``: SDF grids φ(X_h) and
-                their derivatives dφ(X_h)/dq_j along k directions (k may differ by group).
-            chunk: grids per batched call after the first layer (stays in the CPU caches).
-        Returns:
-            per group, features ``(M, F)`` and their derivatives ``(M, k, F)``.
-
-        The encoder is piecewise linear: each tangent goes through the same convolutions
-        (without bias) and the primal's ReLU masks. The first convolution runs once over
-        every image of every group (one large batch takes PyTorch's fast NNPACK path).
-        """
+    def encode_with_masks(self, grids: Tensor) -> tuple[Tensor, list[Tensor]]:
+        """Features ``(M, F)`` of grids ``(M, C, H, W)`` and the encoder's ReLU masks, which
+        :meth:`encoder_input_grad` needs to pull feature gradients back to the grids."""
         enc = self.encoder
         convs = [m for m in enc.conv if isinstance(m, nn.Conv2d)]
-        images = torch.cat([torch.cat((g[:, None], t), dim=1).flatten(0, 1) for g, t in groups])
-        with _no_onednn():
-            first = nn.functional.conv2d(images[:, None], convs[0].weight * enc.scale, None,
-                                         convs[0].stride)
-        results, start = [], 0
-        for _, t in groups:
-            M, k = t.shape[:2]
-            y_group = first[start:start + M * (1 + k)].reshape(M, 1 + k, *first.shape[1:])
-            start += M * (1 + k)
-            results.append(self._tangents_after_first(y_group, chunk))
-        return results
+        masks: list[Tensor] = []
+        y = grids
+        for j, conv in enumerate(convs):
+            if j == 0:
+                with _no_onednn():  # see _ConvWithoutOneDNN
+                    y = nn.functional.conv2d(y, conv.weight * enc.scale, conv.bias, conv.stride)
+            else:
+                y = nn.functional.conv2d(y, conv.weight, conv.bias, conv.stride)
+            masks.append(y > 0)
+            y = y.clamp_min_(0)
+        return enc.linear(y.flatten(1)), masks
 
     @torch.no_grad()
-    def encode_joint_with_tangents(self, grids: Tensor, tangents: list[Tensor],
-                                   chunk: int = 4) -> tuple[Tensor, Tensor]:
-        """The joint encoder's features and forward-mode derivatives.
+    def encoder_input_grad(self, masks: list[Tensor], grad_features: Tensor,
+                           index: Tensor | None = None, size: tuple[int, ...] | None = None
+                           ) -> Tensor:
+        """Reverse mode through the encoder: ``∂(Σ grad_features · features) / ∂grids``.
 
         Args:
-            grids: ``(M, 3, H, W)`` the stacked inputs φ1_{t−1}, φ2_{t−1}, φ2_t.
-            tangents: per input channel c, ``(M, k_c, H, W)`` derivatives of that channel.
+            masks: from :meth:`encode_with_masks`.
+            grad_features: ``(M', F)`` gradients with respect to the features.
+            index: ``(M',)`` which encoded grid each row belongs to (default: row i ↔ grid i);
+                a grid may appear several times (e.g. a pusher grid used by two steps).
+            size: ``(C, H, W)`` of the encoded grids (default: the spec's grid, C channels).
         Returns:
-            features ``(M, F)`` and derivatives ``(M, Σ k_c, F)`` (channel 0's first).
-        A tangent touches one channel only, so its first convolution uses that channel's
-        weights alone (a one-channel convolution, as cheap as the shared encoder's).
+            ``(M', C, H, W)``: one gradient image per row of ``grad_features``.
+        The encoder is piecewise linear, so this is exact: transposed convolutions masked by
+        the primal's ReLU pattern (one pass per image, about the cost of a forward pass).
         """
         enc = self.encoder
-        conv = enc.conv[0]
-        weight = conv.weight * enc.scale
-        with _no_onednn():
-            primal = nn.functional.conv2d(grids, weight, None, conv.stride)
-            parts = [primal[:, None]]
-            for c, t in enumerate(tangents):
-                y = nn.functional.conv2d(t.flatten(0, 1)[:, None], weight[:, c:c + 1], None,
-                                         conv.stride)
-                parts.append(y.reshape(t.shape[0], t.shape[1], *y.shape[1:]))
-        return self._tangents_after_first(torch.cat(parts, dim=1), chunk)
-
-    def _tangents_after_first(self, y_group: Tensor, chunk: int) -> tuple[Tensor, Tensor]:
-        """Finish the encoder from first-layer outputs ``(M, 1 + k, C, h, w)`` without bias
-        on the primal: masks, the remaining convolutions and the linear layer."""
-        enc = self.encoder
         convs = [m for m in enc.conv if isinstance(m, nn.Conv2d)]
-        M, kp1 = y_group.shape[:2]
-        feats, dfeats = [], []
-        for i in range(0, M, chunk):
-            y = y_group[i:i + chunk]
-            for j, conv in enumerate(convs):
-                if j > 0:
-                    m = y.shape[0]
-                    y = nn.functional.conv2d(y.flatten(0, 1), conv.weight, None, conv.stride)
-                    y = y.reshape(m, kp1, *y.shape[1:])
-                primal = y[:, 0].add_(conv.bias[:, None, None])
-                y.mul_((primal > 0)[:, None])  # the primal's ReLU mask, for all
-            out = y.flatten(2) @ enc.linear.weight.T
-            feats.append(out[:, 0] + enc.linear.bias)
-            dfeats.append(out[:, 1:])
-        return torch.cat(feats), torch.cat(dfeats)
+        if index is not None:
+            masks = [mk[index] for mk in masks]
+        g = (grad_features @ enc.linear.weight).reshape(masks[-1].shape)
+        for j in range(len(convs) - 1, -1, -1):
+            g = g * masks[j]
+            conv = convs[j]
+            if j > 0:
+                g = nn.grad.conv2d_input(masks[j - 1].shape, conv.weight, g, conv.stride)
+            else:
+                c, h, w = size or (conv.in_channels, *self.spec.grid)
+                with _no_onednn():
+                    g = nn.grad.conv2d_input((g.shape[0], c, h, w), conv.weight * enc.scale,
+                                             g, conv.stride)
+        return g
 
     def sdf_term(self, features: Tensor) -> Tensor:
         """``(B, 3 · sdf_features)`` (φ1_{t−1}, φ2_{t−1}, φ2_t) → first-layer term ``(B, H1)``."""

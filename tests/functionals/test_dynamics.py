@@ -53,8 +53,7 @@ def test_fast_full_grid_equals_naive(model, obj):
 
 def test_jacobian_matches_finite_differences(model, obj):
     X1, X2 = trajectory()
-    q = phase_quadrature(X1[:, :2], 0.25, Workspace(), fine=0.05, coarse=0.14,
-                         dtype=torch.float64)
+    q = phase_quadrature(X1[:, :2], 0.15, Workspace(), dtype=torch.float64)
     H = LearnedDynamics(model, obj, PUSHER, q)
     _, j1, j2 = H.evaluate(X1, X2)
     h = 1e-6
@@ -97,9 +96,14 @@ def test_grid_tangents_are_exact(obj):
 
 def test_phase_quadrature_weights_sum_to_the_workspace_area():
     centers = torch.tensor([[0.0, 0.0], [0.3, 0.1]])
-    q = phase_quadrature(centers, 0.2, Workspace(), fine=0.04, coarse=0.14)
+    q = phase_quadrature(centers, 0.1, Workspace(), levels=((0.1, 0.07), (0.02, 0.035)))
     assert abs(q.weights.sum().item() - 1.96) < 1e-4
-    fine = q.weights < 0.14**2 - 1e-9
-    near = torch.cdist(q.points[fine], centers).amin(1)
-    assert near.max() < 0.2 + 0.14 * 1.5
-    assert 50 < len(q.points) < 1000
+    assert sorted(q.weights.unique().tolist()) == pytest.approx([0.035**2, 0.07**2, 0.14**2])
+    for spacing, reach in ((0.07, 0.2), (0.035, 0.12)):
+        level = (q.weights - spacing**2).abs() < 1e-9
+        near = torch.cdist(q.points[level], centers).amin(1)
+        assert near.max() < reach + 2 * spacing * 1.5
+    # every point within the finest reach is on the finest level
+    close = torch.cdist(q.points, centers).amin(1) < 0.12
+    assert torch.allclose(q.weights[close], torch.tensor(0.035**2))
+    assert 100 < len(q.points) < 1000

@@ -60,13 +60,26 @@ def test_joint_encoder_variant():
     assert m.encoder.conv[0].in_channels == 3
     x, p = torch.rand(2, 3, 140, 140, dtype=torch.float64), torch.rand(2, 5, 2, dtype=torch.float64)
     assert m(x, p).shape == (2, 5)
-    # the joint forward-mode features equal autograd's directional derivatives
-    t = [torch.rand(2, 3, 140, 140, dtype=torch.float64), torch.zeros(2, 2, 140, 140,
-                                                                       dtype=torch.float64),
-         torch.zeros(2, 2, 140, 140, dtype=torch.float64)]
-    f, df = m.encode_joint_with_tangents(x, t)
-    direction = torch.stack((t[0][:, 0], t[1][:, 0], t[2][:, 0]), 1)
+    # reverse mode through the encoder equals autograd's input gradient
+    f, masks = m.encode_with_masks(x)
+    g = torch.rand_like(f)
+    grad = m.encoder_input_grad(masks, g)
+    xr = x.clone().requires_grad_(True)
+    (m.encoder(xr) * g).sum().backward()
     with torch.no_grad():
-        fd = (m.encoder(x + 1e-6 * direction) - m.encoder(x - 1e-6 * direction)) / 2e-6
-        assert torch.allclose(f, m.encoder(x), atol=1e-10)
-    assert torch.allclose(df[:, 0], fd, atol=1e-6)
+        assert torch.allclose(f, m.encoder(x), atol=1e-12)
+    assert torch.allclose(grad, xr.grad, rtol=1e-9, atol=1e-12)
+    assert grad.abs().sum() > 0
+
+
+def test_shared_encoder_input_grad_with_repeated_rows():
+    m = PushDynamics(DynamicsSpec(**TINY_SPEC)).double()
+    x = torch.rand(3, 1, 140, 140, dtype=torch.float64)
+    f, masks = m.encode_with_masks(x)
+    index = torch.tensor([2, 0, 2])
+    g = torch.rand(3, f.shape[1], dtype=torch.float64)
+    grad = m.encoder_input_grad(masks, g, index)
+    for row, i in enumerate(index.tolist()):
+        xr = x[i:i + 1].clone().requires_grad_(True)
+        (m.encoder(xr) * g[row]).sum().backward()
+        assert torch.allclose(grad[row:row + 1], xr.grad, rtol=1e-9, atol=1e-12)
