@@ -25,7 +25,9 @@ lint: setup
 demo: setup
 	$(VENV)/bin/robotplan check tasks/*.yaml
 	$(VENV)/bin/robotplan render tasks/*.yaml --out $(DEMO) --overwrite
-	@echo "pictures of the scene SDFs are in $(DEMO)/"
+	$(VENV)/bin/robotplan solve tasks/box_push.yaml --out $(DEMO)/box_push --overwrite
+	@echo "SDF pictures in $(DEMO)/; the plan and its pybullet execution: $(DEMO)/box_push/playback.html"
+	@echo "(robotplan view $(DEMO)/box_push serves it)"
 
 bench: setup
 	$(VENV)/bin/robotplan bench sdf --json

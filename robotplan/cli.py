@@ -89,7 +89,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     try:
         doc = solve_scene(scene, out, Path(args.model), solver=args.solver,
                           workers=args.workers, skeleton=args.skeleton,
-                          max_pushes=args.max_pushes)
+                          max_pushes=args.max_pushes, exhaustive=args.exhaustive)
     except UnsupportedScene as err:
         print(f"error: {args.scene}: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -120,6 +120,44 @@ def _cmd_view(args: argparse.Namespace) -> int:
             httpd.serve_forever()
         except KeyboardInterrupt:
             pass
+    return 0
+
+
+def _cmd_bench_push(args: argparse.Namespace) -> int:
+    from robotplan.bench_push import run_bench_push
+
+    if not (Path(args.model) / "spec.json").is_file():
+        print(f"error: {args.model}: --model: not a model folder (no spec.json)",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.scenes < 1:
+        print("error: --scenes: must be at least 1", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    bad = set(args.shapes.split(",")) - {"box", "lshape"}
+    if bad:
+        print(f"error: --shapes: unknown shape type {sorted(bad)[0]!r} (box, lshape)",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    out = Path(args.out)
+    summary_path = out / "summary.json"
+    if summary_path.exists() and not args.overwrite:
+        print(f"error: {out}: --out: holds a finished benchmark; pass --overwrite to redo it",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.overwrite and out.exists():
+        for name in ("summary.json", "rows.jsonl", "results.csv", "coverage.png"):
+            (out / name).unlink(missing_ok=True)
+    summary = run_bench_push(args.scenes, args.seed, out, Path(args.model), args.workers,
+                             tuple(args.shapes.split(",")), args.exhaustive)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        for kind, q in summary["coverage"].items():
+            t = summary["plan_seconds"][kind]
+            print(f"{kind:>7}: coverage median {q['median']:.3f} (quartiles {q['q1']:.3f}–"
+                  f"{q['q3']:.3f}, min {q['min']:.3f}, n={q['n']}); plan time median "
+                  f"{t['median']:.1f} s (quartiles {t['q1']:.1f}–{t['q3']:.1f})")
+        print(f"wrote {out / 'results.csv'}, {out / 'coverage.png'}, {summary_path}")
     return 0
 
 
@@ -255,6 +293,19 @@ def _parser() -> argparse.ArgumentParser:
     bf.add_argument("--no-naive", action="store_true", help="skip the slow naive timing")
     bf.add_argument("--json", action="store_true")
     bf.set_defaults(run=_cmd_bench_functional)
+    bp = bsub.add_parser("push", help="plan + execute random push scenes (paper Fig. 3)")
+    bp.add_argument("--scenes", type=int, default=20, help="scenes per shape type")
+    bp.add_argument("--seed", type=int, default=0)
+    bp.add_argument("--out", required=True, metavar="DIR",
+                    help="scenes, per-scene results, CSV, box plot (continues a partial run)")
+    bp.add_argument("--model", default=str(Path(__file__).resolve().parents[1] / "learned"
+                                           / "push_flow"), metavar="DIR")
+    bp.add_argument("--shapes", default="box,lshape", help="comma-separated: box, lshape")
+    bp.add_argument("--workers", type=int, default=2)
+    bp.add_argument("--exhaustive", action="store_true", help="solve every skeleton")
+    bp.add_argument("--overwrite", action="store_true")
+    bp.add_argument("--json", action="store_true")
+    bp.set_defaults(run=_cmd_bench_push)
 
     default_model = str(Path(__file__).resolve().parents[1] / "learned" / "push_flow")
     so = sub.add_parser("solve", help="plan a scene, execute it in pybullet, write the result")
@@ -266,6 +317,8 @@ def _parser() -> argparse.ArgumentParser:
     so.add_argument("--skeleton", default=None, help='one skeleton, e.g. "push@2,push@0"')
     so.add_argument("--max-pushes", type=int, default=2)
     so.add_argument("--overwrite", action="store_true")
+    so.add_argument("--exhaustive", action="store_true",
+                    help="solve every candidate skeleton (default: stop at the first good one)")
     so.set_defaults(run=_cmd_solve)
 
     vw = sub.add_parser("view", help="serve DIR/playback.html locally")

@@ -1,13 +1,20 @@
 """Skeleton search (paper §4, app. I.2): solve one program per candidate skeleton in parallel
-processes, keep the one with the least constraint violation, then the least cost."""
+processes, keep the one with the least constraint violation, then the least cost.
+
+Candidates are tried most promising first (init points behind the object as seen from the
+goal) and the search stops at the first one that is *good enough*: feasible, with the
+learned-dynamics residual of a typical real push (``GOOD_RMS_MM``). ``exhaustive=True``
+solves every candidate, as the paper does."""
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from multiprocessing import get_context
 from pathlib import Path
 
+import numpy as np
 import torch
 
 from robotplan.program import ProgramSettings, PushProgram, Solution
@@ -17,6 +24,7 @@ from robotplan.skeleton import Skeleton, load_skeleton_space
 __all__ = ["SearchResult", "search_push"]
 
 FEASIBLE = 1e-2  # largest scaled constraint violation that counts as solved
+GOOD_RMS_MM = 5.0  # H_F residual (RMS over steps) good enough to stop: F_flow errs ~4.2 mm
 
 _worker: dict = {}
 
@@ -49,30 +57,63 @@ def _rank(s: Solution) -> tuple[float, float]:
     return (max(s.violation, FEASIBLE), s.cost)
 
 
+def good_enough(s: Solution) -> bool:
+    return s.violation <= FEASIBLE and s.dynamics_rms_mm <= GOOD_RMS_MM
+
+
+def order_candidates(scene: Scene, skeletons: list[Skeleton]) -> list[Skeleton]:
+    """Most promising first: pushes from init points behind the object (seen from the goal),
+    then fewer pushes. Stable for ties."""
+    space = load_skeleton_space()
+    region = scene.goal_region
+    if region is None:
+        return list(skeletons)
+
+    def score(sk: Skeleton) -> tuple[float, int]:
+        obj = scene.bodies[sk.phases[0].object]
+        away = np.array(obj.pose[:2]) - np.array(region.pose[:2])
+        away = away / max(float(np.linalg.norm(away)), 1e-9)
+        dirs = [math.radians(space.init_directions_deg[p.init]) for p in sk.phases
+                if p.mode == "push"]
+        align = np.mean([away @ np.array([math.cos(a), math.sin(a)]) for a in dirs])
+        return (-round(float(align), 6), sk.pushes)
+
+    return sorted(skeletons, key=score)
+
+
 def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
                 settings: ProgramSettings | None = None, workers: int = 2,
-                progress: bool = True) -> SearchResult:
-    """Solve every skeleton (a process per core) and pick the best."""
+                progress: bool = True, exhaustive: bool = False) -> SearchResult:
+    """Solve the skeletons (a process per core), most promising first, and pick the best;
+    stop at the first good-enough plan unless ``exhaustive``."""
     from tqdm import tqdm
 
     settings = settings or ProgramSettings()
     t0 = time.time()
     args = (scene, str(model_dir), settings)
+    queue = order_candidates(scene, skeletons)
     solutions: list[Solution] = []
-    bar = tqdm(total=len(skeletons), unit="program", desc="skeletons", disable=not progress)
+    bar = tqdm(total=len(queue), unit="program", desc="skeletons", disable=not progress)
+
+    def collect(sol: Solution) -> bool:
+        solutions.append(sol)
+        bar.update()
+        bar.set_postfix(best_violation=f"{min(s.violation for s in solutions):.3g}")
+        return not exhaustive and good_enough(sol)
+
     if workers <= 1:
         _init_worker(*args)
-        for sk in skeletons:
-            solutions.append(_solve(sk))
-            bar.update()
+        for sk in queue:
+            if collect(_solve(sk)):
+                break
     else:
         with get_context("fork").Pool(workers, _init_worker, args) as pool:
-            for sol in pool.imap_unordered(_solve, skeletons):
-                solutions.append(sol)
-                bar.update()
-                bar.set_postfix(best_violation=f"{min(s.violation for s in solutions):.3g}")
+            for sol in pool.imap_unordered(_solve, queue):
+                if collect(sol):
+                    pool.terminate()
+                    break
     bar.close()
-    order = {sk: i for i, sk in enumerate(skeletons)}
+    order = {sk: i for i, sk in enumerate(queue)}
     solutions.sort(key=lambda s: order[s.skeleton])
     best = min(solutions, key=_rank) if solutions else None
     return SearchResult(best, solutions, time.time() - t0)

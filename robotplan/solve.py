@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -37,17 +36,19 @@ def _check_supported(scene: Scene) -> tuple[str, str]:
 
 
 def candidate_table(result: SearchResult) -> str:
-    lines = [f"{'#':>2}  {'skeleton':<34} {'violation':>10} {'cost':>9} {'seconds':>8}  status"]
+    lines = [f"{'#':>2}  {'skeleton':<40} {'violation':>10} {'cost':>9} {'H_F rms mm':>10} "
+             f"{'seconds':>8}  status"]
     for i, s in enumerate(result.candidates):
         mark = " <- best" if s is result.best else ""
-        lines.append(f"{i:>2}  {s.skeleton.describe():<34} {s.violation:>10.3g} "
-                     f"{s.cost:>9.3g} {s.seconds:>8.1f}  {s.status}{mark}")
+        lines.append(f"{i:>2}  {s.skeleton.describe():<40} {s.violation:>10.3g} "
+                     f"{s.cost:>9.3g} {s.dynamics_rms_mm:>10.2f} {s.seconds:>8.1f}  "
+                     f"{s.status}{mark}")
     return "\n".join(lines)
 
 
 def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                 workers: int = 2, skeleton: str | None = None, max_pushes: int = 2,
-                progress: bool = True) -> dict:
+                progress: bool = True, exhaustive: bool = False, quiet: bool = False) -> dict:
     from robotplan.viewer import write_playback
 
     obj, pusher = _check_supported(scene)
@@ -55,8 +56,9 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
     skeletons = ([parse_skeleton(skeleton, pusher, obj)] if skeleton
                  else space.candidates(pusher, obj, max_pushes))
     settings = ProgramSettings(solver=solver)
-    result = search_push(scene, model_dir, skeletons, settings, workers, progress)
-    print(candidate_table(result), file=sys.stderr if not progress else sys.stdout)
+    result = search_push(scene, model_dir, skeletons, settings, workers, progress, exhaustive)
+    if not quiet:
+        print(candidate_table(result))
     best = result.best
     dt = 1.0 / 12.0  # a kept step of the push data: 20 × 1/240 s
     doc: dict = {"scene": scene.name, "status": "solved" if result.solved else "no_solution",
@@ -64,7 +66,8 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                  "plan_seconds": round(result.seconds, 2),
                  "programs_solved": len(result.candidates),
                  "violation": float(best.violation) if best else None,
-                 "cost": float(best.cost) if best else None}
+                 "cost": float(best.cost) if best else None,
+                 "dynamics_rms_mm": round(best.dynamics_rms_mm, 3) if best else None}
     if best is not None:
         ex = execute_push(scene, obj, pusher, best.q_pusher)
         doc["execution"] = {"simulator": "pybullet", "coverage": ex.coverage,
@@ -78,6 +81,7 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                            "objects": {obj: ex.object_poses.tolist()}}
         doc["candidates"] = [{"skeleton": s.skeleton.describe(), "violation": s.violation,
                               "cost": s.cost, "seconds": round(s.seconds, 2),
+                              "dynamics_rms_mm": round(s.dynamics_rms_mm, 3),
                               "status": s.status} for s in result.candidates]
         write_playback(scene, out / "playback.html",
                        {obj: best.q_obj, pusher: best.q_pusher},

@@ -2,24 +2,26 @@
 exact gradients at the initial guess (the solve itself is exercised by the planner tests)."""
 
 import numpy as np
+import pytest
 import torch
 from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoDiff
 
 from robotplan import load_scene
 from robotplan.learned.dynamics import DynamicsSpec, PushDynamics
-from robotplan.program import PushProgram
+from robotplan.program import ProgramSettings, PushProgram
 from robotplan.skeleton import load_skeleton_space, parse_skeleton
 from tests.conftest import TASKS
 
 TINY = {"channels": (2, 2, 2), "sdf_features": 8, "point_features": 8, "hidden": (16, 16)}
 
 
-def build(text="push@2"):
+def build(text="push@2", **settings):
     torch.manual_seed(0)
     scene = load_scene(TASKS / "box_push.yaml")
     space = load_skeleton_space()
     model = PushDynamics(DynamicsSpec(**TINY)).double()  # float64: finite differences
-    return PushProgram(scene, parse_skeleton(text, "pusher", "box"), model, space)
+    return PushProgram(scene, parse_skeleton(text, "pusher", "box"), model, space,
+                       ProgramSettings(**settings))
 
 
 def test_program_shape_and_initial_guess():
@@ -32,18 +34,36 @@ def test_program_shape_and_initial_guess():
     # the reach phase ends at init point 2 (180°): left of the object
     assert g["q_pusher"][10, 0] < prog.obj.pose[0] - prog.obj.shape.bound_radius
     names = {b.evaluator().get_description() for b in prog.prog.GetAllConstraints()}
-    assert {"H_F", "H_coll", "H_PoC", "H_g"} <= names
+    assert {"H_coll", "H_PoC", "H_g"} <= names and "H_F" not in names
+    assert "H_F" in {b.evaluator().get_description() for b in prog.prog.GetAllCosts()}
+    # the pusher starts the push in contact with the box (φ_box = radius − 1 mm)
+    X = torch.tensor(g["q_obj"][11])
+    gap = prog.obj.sdf(torch.tensor(g["q_pusher"][11])[None], X).item()
+    assert abs(gap - (prog.pusher.shape.radius - 0.001)) < 1e-6
+    # H_F as a constraint instead
+    names = {b.evaluator().get_description()
+             for b in build(dynamics_weight=0.0).prog.GetAllConstraints()}
+    assert "H_F" in names
 
 
-def test_constraint_gradients_match_finite_differences():
+def test_step_limits_hold_for_the_initial_guess():
     prog = build()
+    d = np.abs(np.diff(prog.guess["q_pusher"], axis=0))
+    assert d.max() <= prog.settings.guess_speed + 1e-12
+    limited = build(max_step=0.03, max_turn=0.25)
+    assert len(limited.prog.linear_constraints()) == len(prog.prog.linear_constraints()) + 2
+
+
+@pytest.mark.parametrize("weight", [0.01, 0.0], ids=["H_F-cost", "H_F-constraint"])
+def test_constraint_gradients_match_finite_differences(weight):
+    prog = build(dynamics_weight=weight)
     guess = prog.guess
     values = {}
     for v, x in ((prog.Q1, guess["q_obj"]), (prog.Q2, guess["q_pusher"]), (prog.P, guess["p"])):
         for var, val in zip(v.ravel(), x.ravel(), strict=True):
             values[var.get_id()] = val
     rng = np.random.default_rng(0)
-    for b in prog.prog.GetAllConstraints():
+    for b in list(prog.prog.GetAllConstraints()) + list(prog.prog.GetAllCosts()):
         name = b.evaluator().get_description()
         if name not in {"H_F", "H_coll", "H_PoC", "H_g"}:
             continue

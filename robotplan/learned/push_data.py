@@ -71,8 +71,12 @@ class SceneRecord:
         return LShape(self.size, self.thickness)
 
 
-def _draw_shape(rng: np.random.Generator, spec: PushDataSpec) -> Shape2D:
-    if rng.random() < spec.lshape_share:
+def draw_shape(rng: np.random.Generator, spec: PushDataSpec, kind: str | None = None
+               ) -> Shape2D:
+    """A box or an L-shape from the data ranges (``kind`` None: L with ``lshape_share``)."""
+    if kind is None:
+        kind = "lshape" if rng.random() < spec.lshape_share else "box"
+    if kind == "lshape":
         w, h = rng.uniform(*spec.lshape_side, size=2)
         t_max = min(spec.lshape_thickness[1], 0.6 * min(w, h))
         t = rng.uniform(spec.lshape_thickness[0], t_max)
@@ -94,7 +98,7 @@ def simulate_scene(index: int, seed: int, spec: PushDataSpec = PushDataSpec(),
                    world: PushWorld | None = None) -> SceneRecord:
     """Draw scene ``index`` of ``seed`` and simulate it (deterministic)."""
     rng = np.random.default_rng([seed, index])
-    shape = _draw_shape(rng, spec)
+    shape = draw_shape(rng, spec)
     radius = float(rng.uniform(*spec.pusher_radius))
     while True:
         pose = np.array([*rng.uniform(-spec.object_region, spec.object_region, 2),

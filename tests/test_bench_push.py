@@ -1,0 +1,73 @@
+"""Benchmark scenes for ``robotplan bench push``: valid, deterministic, drawn as in the paper."""
+
+import math
+
+import numpy as np
+import pytest
+
+from robotplan.bench_push import GOAL_DISTANCE, draw_scene, summarize
+from robotplan.coverage import coverage
+from robotplan.planner import order_candidates
+from robotplan.scene import parse_scene
+from robotplan.skeleton import load_skeleton_space
+from tests.test_cli import run
+
+
+@pytest.mark.parametrize("kind", ["box", "lshape"])
+def test_scenes_are_valid_deterministic_and_in_the_data_ranges(kind):
+    docs = [draw_scene(i, 5, kind) for i in range(30)]
+    assert docs[3] == draw_scene(3, 5, kind)
+    assert docs[3] != draw_scene(3, 6, kind)
+    directions = set()
+    for i, doc in enumerate(docs):
+        scene = parse_scene(doc, f"bench/{i}.yaml")  # the scene schema's own checks
+        obj, region = scene.objects[0], scene.goal_region
+        assert obj.shape.type == kind
+        side = min(obj.shape.size) if kind == "lshape" else None
+        assert 0.08 - 1e-9 <= min(obj.shape.size) and max(obj.shape.size) <= 0.30 + 1e-9
+        if side is not None:
+            assert obj.shape.thickness <= 0.6 * side + 1e-4
+        assert np.linalg.norm(obj.pose[:2]) < 0.15  # roughly in the middle
+        assert 0.02 <= scene.pushers[0].radius <= 0.05
+        offset = np.array(region.pose[:2]) - np.array(obj.pose[:2])
+        assert abs(np.linalg.norm(offset) - GOAL_DISTANCE) < 0.1
+        directions.add(round(math.degrees(math.atan2(offset[1], offset[0])) / 45) % 8)
+        # the goal region holds the object in any orientation
+        body = scene.bodies[obj.name]
+        for yaw in np.linspace(0, math.pi, 7):
+            at_goal = (region.pose[0], region.pose[1], float(yaw))
+            assert coverage(body, at_goal, region) > 0.999
+        # the object starts outside the goal: there is something to do
+        assert coverage(body, body.pose, region) < 0.5
+    assert len(directions) >= 6  # the 8 goal positions are all used
+
+
+def test_summary_quartiles():
+    rows = [{"shape": "box", "coverage": c, "plan_seconds": 10.0 * k}
+            for k, c in enumerate([1.0, 0.9, 0.5, 1.0, 0.0])]
+    s = summarize(rows)
+    assert s["coverage"]["box"]["median"] == pytest.approx(0.9)
+    assert s["coverage"]["box"]["q1"] == pytest.approx(0.5)
+    assert s["coverage"]["box"]["min"] == 0.0
+    assert s["plan_seconds"]["all"]["median"] == pytest.approx(20.0)
+
+
+def test_candidates_behind_the_object_come_first():
+    doc = draw_scene(0, 1, "box")
+    doc["objects"][0]["pose"] = [0.0, 0.0, 0.0]
+    doc["goal"]["region"]["pose"] = [0.35, 0.0, 0.0]  # goal to the east: push from the west
+    scene = parse_scene(doc, "bench.yaml")
+    skeletons = load_skeleton_space().candidates("pusher", "object")
+    ordered = order_candidates(scene, skeletons)
+    assert sorted(map(id, ordered)) == sorted(map(id, skeletons))
+    first = ordered[0]
+    assert first.pushes == 1 and first.phases[1].init == 2  # 180°: west of the object
+    assert [p.init for p in ordered[1].phases if p.mode == "push"] == [2, 2]
+
+
+def test_bench_push_refuses_bad_options(tmp_path):
+    res = run("bench", "push", "--scenes", "1", "--shapes", "box,triangle",
+              "--out", str(tmp_path / "b"))
+    assert res.returncode == 2 and res.stderr.count("\n") == 1 and "--shapes" in res.stderr
+    res = run("bench", "push", "--scenes", "0", "--out", str(tmp_path / "b"))
+    assert res.returncode == 2 and "--scenes" in res.stderr

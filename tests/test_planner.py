@@ -1,0 +1,30 @@
+"""The skeleton search end to end on box_push with the shipped F_flow: the most promising
+skeleton is solved first, the search stops when it is good, and the plan works in pybullet."""
+
+import numpy as np
+import pytest
+
+from robotplan import load_scene
+from robotplan.execute import execute_push
+from robotplan.planner import FEASIBLE, GOOD_RMS_MM, search_push
+from robotplan.program import ProgramSettings
+from robotplan.skeleton import parse_skeleton
+from tests.conftest import ROOT, TASKS
+
+MODEL = ROOT / "learned" / "push_flow"
+
+
+@pytest.mark.skipif(not (MODEL / "weights.pt").exists(), reason="push_flow not shipped")
+def test_search_solves_box_push_and_the_plan_works_in_pybullet():
+    scene = load_scene(TASKS / "box_push.yaml")
+    # the goal is east of the box: a push from the west (init 2, 180°) is tried first
+    skeletons = [parse_skeleton(s, "pusher", "box") for s in ("push@0", "push@2")]
+    result = search_push(scene, MODEL, skeletons, ProgramSettings(iterations=40), workers=1,
+                         progress=False)
+    assert len(result.candidates) == 1, "stops at the first good-enough plan"
+    best = result.best
+    assert best.skeleton == skeletons[1]
+    assert best.violation <= FEASIBLE and best.dynamics_rms_mm <= GOOD_RMS_MM
+    assert np.allclose(best.q_obj[0], scene.bodies["box"].pose)
+    ex = execute_push(scene, "box", "pusher", best.q_pusher)
+    assert ex.coverage >= 0.95
