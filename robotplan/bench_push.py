@@ -115,8 +115,8 @@ def _box_plot(rows: list[dict], path: Path) -> None:
 
 
 def run_bench_push(scenes: int, seed: int, out: Path, model_dir: Path, workers: int = 2,
-                   shapes: tuple[str, ...] = ("box", "lshape"), exhaustive: bool = False
-                   ) -> dict:
+                   shapes: tuple[str, ...] = ("box", "lshape"), exhaustive: bool = False,
+                   time_budget: float | None = None) -> dict:
     """Solve and execute ``scenes`` scenes per shape type; returns the summary."""
     from robotplan.solve import solve_scene
 
@@ -140,7 +140,8 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: Path, workers: 
         t0 = time.time()
         print(f"[{n + 1}/{len(todo)}] {name}: {scene.objects[0].shape.describe()}", flush=True)
         result = solve_scene(scene, out / "solutions" / name, model_dir, workers=workers,
-                             progress=False, exhaustive=exhaustive, quiet=True)
+                             progress=False, exhaustive=exhaustive, quiet=True,
+                             time_budget=time_budget)
         ex = result.get("execution") or {}
         row = {"scene": name, "shape": kind, "status": result["status"],
                "coverage": float(ex.get("coverage") or 0.0),
@@ -156,7 +157,8 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: Path, workers: 
               f"{row['programs']} programs, {row['skeleton']}", flush=True)
     rows = [done[draw_scene(i, seed, kind)["name"]] for i, kind in todo]
     summary = summarize(rows)
-    summary.update({"seed": seed, "model": str(model_dir), "exhaustive": exhaustive})
+    summary.update({"seed": seed, "model": str(model_dir), "exhaustive": exhaustive,
+                    "time_budget_s": time_budget})
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=list(rows[0].keys()))
     writer.writeheader()

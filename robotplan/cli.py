@@ -89,7 +89,8 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     try:
         doc = solve_scene(scene, out, Path(args.model), solver=args.solver,
                           workers=args.workers, skeleton=args.skeleton,
-                          max_pushes=args.max_pushes, exhaustive=args.exhaustive)
+                          max_pushes=args.max_pushes, exhaustive=args.exhaustive,
+                          time_budget=args.time_budget)
     except UnsupportedScene as err:
         print(f"error: {args.scene}: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -148,7 +149,7 @@ def _cmd_bench_push(args: argparse.Namespace) -> int:
         for name in ("summary.json", "rows.jsonl", "results.csv", "coverage.png"):
             (out / name).unlink(missing_ok=True)
     summary = run_bench_push(args.scenes, args.seed, out, Path(args.model), args.workers,
-                             tuple(args.shapes.split(",")), args.exhaustive)
+                             tuple(args.shapes.split(",")), args.exhaustive, args.time_budget)
     if args.json:
         print(json.dumps(summary))
     else:
@@ -303,6 +304,8 @@ def _parser() -> argparse.ArgumentParser:
     bp.add_argument("--shapes", default="box,lshape", help="comma-separated: box, lshape")
     bp.add_argument("--workers", type=int, default=2)
     bp.add_argument("--exhaustive", action="store_true", help="solve every skeleton")
+    bp.add_argument("--time-budget", type=float, default=None, metavar="S",
+                    help="per scene: start no program after S seconds (best so far wins)")
     bp.add_argument("--overwrite", action="store_true")
     bp.add_argument("--json", action="store_true")
     bp.set_defaults(run=_cmd_bench_push)
@@ -319,6 +322,8 @@ def _parser() -> argparse.ArgumentParser:
     so.add_argument("--overwrite", action="store_true")
     so.add_argument("--exhaustive", action="store_true",
                     help="solve every candidate skeleton (default: stop at the first good one)")
+    so.add_argument("--time-budget", type=float, default=None, metavar="S",
+                    help="start no program after S seconds; the best so far wins")
     so.set_defaults(run=_cmd_solve)
 
     vw = sub.add_parser("view", help="serve DIR/playback.html locally")

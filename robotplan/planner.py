@@ -73,7 +73,7 @@ def order_candidates(scene: Scene, skeletons: list[Skeleton]) -> list[Skeleton]:
         obj = scene.bodies[sk.phases[0].object]
         away = np.array(obj.pose[:2]) - np.array(region.pose[:2])
         away = away / max(float(np.linalg.norm(away)), 1e-9)
-        dirs = [math.radians(space.init_directions_deg[p.init]) for p in sk.phases
+        dirs = [space.init_angle(p.init, obj.pose[:2], region.pose[:2]) for p in sk.phases
                 if p.mode == "push"]
         align = np.mean([away @ np.array([math.cos(a), math.sin(a)]) for a in dirs])
         return (-round(float(align), 6), sk.pushes)
@@ -83,9 +83,11 @@ def order_candidates(scene: Scene, skeletons: list[Skeleton]) -> list[Skeleton]:
 
 def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
                 settings: ProgramSettings | None = None, workers: int = 2,
-                progress: bool = True, exhaustive: bool = False) -> SearchResult:
+                progress: bool = True, exhaustive: bool = False,
+                time_budget: float | None = None) -> SearchResult:
     """Solve the skeletons (a process per core), most promising first, and pick the best;
-    stop at the first good-enough plan unless ``exhaustive``."""
+    stop at the first good-enough plan unless ``exhaustive``, and start no program after
+    ``time_budget`` seconds (the best so far wins)."""
     from tqdm import tqdm
 
     settings = settings or ProgramSettings()
@@ -99,7 +101,8 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
         solutions.append(sol)
         bar.update()
         bar.set_postfix(best_violation=f"{min(s.violation for s in solutions):.3g}")
-        return not exhaustive and good_enough(sol)
+        over = time_budget is not None and time.time() - t0 > time_budget
+        return over or (not exhaustive and good_enough(sol))
 
     if workers <= 1:
         _init_worker(*args)

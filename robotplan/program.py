@@ -43,6 +43,7 @@ class ProgramSettings:
     # constraint ≤ dynamics_rmse² per step: the model's own error (~4.5 mm in contact) makes
     # the bound either infeasible or loose enough to move the object without contact
     dynamics_weight: float = 0.01
+    hold_while_reaching: bool = True  # q_obj,t = q_obj,t−1 in reach phases
     guess_speed: float = 0.027  # m per step and axis in the initial guess (data: ≤ 2.9 cm)
     # optional hard limits per step and axis (m, rad); off by default: on box_push they
     # left SNOPT at violation 1.2 (coverage 0.997) instead of 7e-5 (coverage 1.0)
@@ -71,6 +72,7 @@ class Solution:
     q_pusher: np.ndarray
     contact: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     dynamics_mm2: np.ndarray = field(default_factory=lambda: np.zeros(0))  # H_F per step
+    timings: dict = field(default_factory=dict)  # seconds per functional; "solver": the rest
 
     @property
     def dynamics_rms_mm(self) -> float:
@@ -78,14 +80,20 @@ class Solution:
         return float(np.sqrt(self.dynamics_mm2.mean())) if self.dynamics_mm2.size else 0.0
 
 
-def _bridge(fn):
-    """Drake calls constraints with floats or AutoDiffXd; answer both from fn."""
+def _bridge(fn, timings: dict[str, float] | None = None, name: str = ""):
+    """Drake calls constraints with floats or AutoDiffXd; answer both from fn (and add the
+    seconds spent to ``timings[name]``)."""
 
     def wrapped(x: np.ndarray) -> np.ndarray:
+        t0 = time.perf_counter()
         if x.dtype != object:
-            return fn(np.asarray(x, dtype=float), False)[0]
-        values, J = fn(ExtractValue(x).ravel(), True)
-        return InitializeAutoDiff(values.reshape(-1, 1), J @ ExtractGradient(x)).ravel()
+            out = fn(np.asarray(x, dtype=float), False)[0]
+        else:
+            values, J = fn(ExtractValue(x).ravel(), True)
+            out = InitializeAutoDiff(values.reshape(-1, 1), J @ ExtractGradient(x)).ravel()
+        if timings is not None:
+            timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
+        return out
 
     return wrapped
 
@@ -105,6 +113,7 @@ class PushProgram:
         N = self.N
         self.push_steps = np.array([k * T + s + 1 for k, ph in enumerate(skeleton.phases)
                                     if ph.mode == "push" for s in range(T)], dtype=int)
+        self.timings: dict[str, float] = {}  # seconds inside each functional's callback
         prog = self.prog = MathematicalProgram()
         self.Q1 = prog.NewContinuousVariables(N + 1, 3, "q_obj")
         self.Q2 = prog.NewContinuousVariables(N + 1, 2, "q_pusher")
@@ -121,6 +130,8 @@ class PushProgram:
                 prog.AddBoundingBoxConstraint(np.tile([x0, y0], (Q.shape[0], 1)).ravel(),
                                               np.tile([x1, y1], (Q.shape[0], 1)).ravel(),
                                               Q.ravel())
+        if settings.hold_while_reaching:
+            self._hold_object_while_reaching()
         self._add_dynamics(model)
         self._add_step_limits()
         self._add_collision()
@@ -130,7 +141,8 @@ class PushProgram:
 
     # ------------------------------------------------------------------ guess
     def _init_point(self, index: int, center: np.ndarray) -> np.ndarray:
-        ang = math.radians(self.space.init_directions_deg[index])
+        goal = self.region.pose[:2] if self.region is not None else None
+        ang = self.space.init_angle(index, self.obj.pose[:2], goal)
         dist = (self.obj.shape.bound_radius + self.pusher.shape.radius
                 + self.space.init_clearance)
         return center + dist * np.array([math.cos(ang), math.sin(ang)])
@@ -235,11 +247,25 @@ class PushProgram:
                 return (np.array([w * values.sum()]),
                         None if J is None else w * J.sum(axis=0, keepdims=True))
 
-            bridged = _bridge(total)
+            bridged = _bridge(total, self.timings, "H_F")
             self.prog.AddCost(lambda x: bridged(x)[0], variables, description="H_F")
             return
         bound = (s.dynamics_rmse * 1e3) ** 2
-        self.prog.AddConstraint(_bridge(fn), np.zeros(N), np.full(N, bound), variables, "H_F")
+        self.prog.AddConstraint(_bridge(fn, self.timings, "H_F"), np.zeros(N), np.full(N, bound),
+                                variables, "H_F")
+
+    def _hold_object_while_reaching(self) -> None:
+        """A reach phase moves the pusher without touching (H_coll keeps it off), so the
+        object stays where it is: q_obj,t = q_obj,t−1 in reach steps. Without this, the
+        cost on H_F alone let the optimiser drift the object a few mm per step."""
+        T = self.T
+        for k, ph in enumerate(self.skeleton.phases):
+            if ph.mode != "reach":
+                continue
+            for t in range(k * T + 1, (k + 1) * T + 1):
+                self.prog.AddLinearEqualityConstraint(
+                    np.hstack((np.eye(3), -np.eye(3))), np.zeros(3),
+                    np.concatenate((self.Q1[t], self.Q1[t - 1])))
 
     def _add_step_limits(self) -> None:
         """Travel per step and axis ≤ ``max_step`` for the pusher and the object, object
@@ -278,7 +304,7 @@ class PushProgram:
                 J[rows, 3 * N + 2 * rows + k] = J2[:, 0, k].numpy() * scale
             return r[:, 0].numpy() * scale, J
 
-        self.prog.AddConstraint(_bridge(fn), np.zeros(N), np.full(N, ub),
+        self.prog.AddConstraint(_bridge(fn, self.timings, name), np.zeros(N), np.full(N, ub),
                                 np.concatenate((self.Q1[1:].ravel(), self.Q2[1:].ravel())),
                                 name)
 
@@ -309,7 +335,8 @@ class PushProgram:
                     J[row, 5 * n + 2 * i:5 * n + 2 * i + 2] = Jp[i, c].numpy()
             return r.numpy().ravel() * 100, J * 100  # cm
 
-        self.prog.AddConstraint(_bridge(fn), np.zeros(2 * n), np.zeros(2 * n),
+        self.prog.AddConstraint(_bridge(fn, self.timings, "H_PoC"), np.zeros(2 * n),
+                                np.zeros(2 * n),
                                 np.concatenate((self.Q1[steps].ravel(), self.Q2[steps].ravel(),
                                                 self.P.ravel())), "H_PoC")
 
@@ -326,7 +353,8 @@ class PushProgram:
             r, (J,) = H.jacobians(X)
             return r[:, 0].numpy() * scale, J[:, 0].numpy() * scale
 
-        self.prog.AddConstraint(_bridge(fn), np.zeros(1), np.array([self.settings.goal_tol]),
+        self.prog.AddConstraint(_bridge(fn, self.timings, "H_g"), np.zeros(1),
+                                np.array([self.settings.goal_tol]),
                                 self.Q1[self.N], "H_g")
 
     def _add_costs(self) -> None:
@@ -371,6 +399,7 @@ class PushProgram:
         t0 = time.time()
         result = solver.Solve(prog, None, opts)
         seconds = time.time() - t0
+        timings = self._timing_report(seconds)  # before the checks below call back again
         if s.solver == "snopt":
             info = result.get_solver_details().info
             status = f"snopt info {info}"
@@ -383,7 +412,12 @@ class PushProgram:
         cost = float(result.get_optimal_cost()) if np.isfinite(
             result.get_optimal_cost()) else float("inf")
         return Solution(self.skeleton, violation < 1e-2, status, violation, cost, seconds,
-                        q1, q2, p, self.dynamics_mm2(q1, q2))
+                        q1, q2, p, self.dynamics_mm2(q1, q2), timings)
+
+    def _timing_report(self, seconds: float) -> dict:
+        out = {k: round(v, 3) for k, v in self.timings.items()}
+        out["solver"] = round(max(0.0, seconds - sum(self.timings.values())), 3)
+        return out
 
     def dynamics_mm2(self, q_obj: np.ndarray, q_pusher: np.ndarray) -> np.ndarray:
         """H_F per step as the mean squared SDF residual over the table, mm²."""

@@ -8,6 +8,7 @@ The choices come from ``skeletons/push.yaml``.
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -52,6 +53,16 @@ class SkeletonSpace:
     templates: dict[str, tuple[str, ...]]
     init_directions_deg: tuple[float, ...]
     init_clearance: float
+    init_frame: Literal["table", "goal"] = "table"
+
+    def init_angle(self, index: int, obj_xy, goal_xy) -> float:
+        """Direction (rad, table frame) of init point ``index`` around an object at
+        ``obj_xy``: the table frame (paper Fig. 17), or measured from the direction away
+        from the goal (``init_frame: goal``, so init 0 is straight behind the object)."""
+        base = 0.0
+        if self.init_frame == "goal" and goal_xy is not None:
+            base = math.atan2(obj_xy[1] - goal_xy[1], obj_xy[0] - goal_xy[0])
+        return base + math.radians(self.init_directions_deg[index])
 
     def candidates(self, actor: str, obj: str, max_pushes: int = 2) -> list[Skeleton]:
         """Every template with up to ``max_pushes`` pushes × every init per push."""
@@ -76,7 +87,7 @@ def load_skeleton_space(path: Path = SKELETONS_DIR / "push.yaml") -> SkeletonSpa
     return SkeletonSpace(int(data["steps_per_phase"]),
                          {k: tuple(v) for k, v in data["templates"].items()},
                          tuple(float(d) for d in data["init_directions_deg"]),
-                         float(data["init_clearance"]))
+                         float(data["init_clearance"]), data.get("init_frame", "table"))
 
 
 def parse_skeleton(text: str, actor: str, obj: str) -> Skeleton:

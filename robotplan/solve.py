@@ -48,7 +48,8 @@ def candidate_table(result: SearchResult) -> str:
 
 def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                 workers: int = 2, skeleton: str | None = None, max_pushes: int = 2,
-                progress: bool = True, exhaustive: bool = False, quiet: bool = False) -> dict:
+                progress: bool = True, exhaustive: bool = False, quiet: bool = False,
+                time_budget: float | None = None) -> dict:
     from robotplan.viewer import write_playback
 
     obj, pusher = _check_supported(scene)
@@ -56,7 +57,8 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
     skeletons = ([parse_skeleton(skeleton, pusher, obj)] if skeleton
                  else space.candidates(pusher, obj, max_pushes))
     settings = ProgramSettings(solver=solver)
-    result = search_push(scene, model_dir, skeletons, settings, workers, progress, exhaustive)
+    result = search_push(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
+                         time_budget)
     if not quiet:
         print(candidate_table(result))
     best = result.best
@@ -82,6 +84,7 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
         doc["candidates"] = [{"skeleton": s.skeleton.describe(), "violation": s.violation,
                               "cost": s.cost, "seconds": round(s.seconds, 2),
                               "dynamics_rms_mm": round(s.dynamics_rms_mm, 3),
+                              "timings": s.timings,
                               "status": s.status} for s in result.candidates]
         write_playback(scene, out / "playback.html",
                        {obj: best.q_obj, pusher: best.q_pusher},

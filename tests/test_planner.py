@@ -17,7 +17,7 @@ MODEL = ROOT / "learned" / "push_flow"
 @pytest.mark.skipif(not (MODEL / "weights.pt").exists(), reason="push_flow not shipped")
 def test_search_solves_box_push_and_the_plan_works_in_pybullet():
     scene = load_scene(TASKS / "box_push.yaml")
-    # the goal is east of the box: a push from the west (init 2, 180°) is tried first
+    # the goal is east of the box: the push from the west (init 2, 180°) is tried first
     skeletons = [parse_skeleton(s, "pusher", "box") for s in ("push@0", "push@2")]
     result = search_push(scene, MODEL, skeletons, ProgramSettings(iterations=40), workers=1,
                          progress=False)
@@ -26,5 +26,7 @@ def test_search_solves_box_push_and_the_plan_works_in_pybullet():
     assert best.skeleton == skeletons[1]
     assert best.violation <= FEASIBLE and best.dynamics_rms_mm <= GOOD_RMS_MM
     assert np.allclose(best.q_obj[0], scene.bodies["box"].pose)
+    assert {"H_F", "H_coll", "H_PoC", "H_g", "solver"} <= set(best.timings)
+    assert 0 < sum(best.timings.values()) <= best.seconds + 1e-6
     ex = execute_push(scene, "box", "pusher", best.q_pusher)
     assert ex.coverage >= 0.95

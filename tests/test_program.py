@@ -31,14 +31,14 @@ def test_program_shape_and_initial_guess():
     g = prog.guess
     assert np.allclose(g["q_obj"][0], prog.obj.pose)
     assert np.allclose(g["q_pusher"][0], prog.pusher.pose[:2])
-    # the reach phase ends at init point 2 (180°): left of the object
+    # the reach phase ends at init point 2 (180° in the table frame): west of the object
     assert g["q_pusher"][10, 0] < prog.obj.pose[0] - prog.obj.shape.bound_radius
     names = {b.evaluator().get_description() for b in prog.prog.GetAllConstraints()}
     assert {"H_coll", "H_PoC", "H_g"} <= names and "H_F" not in names
     assert "H_F" in {b.evaluator().get_description() for b in prog.prog.GetAllCosts()}
-    # the pusher starts the push in contact with the box (φ_box = radius − 1 mm)
-    X = torch.tensor(g["q_obj"][11])
-    gap = prog.obj.sdf(torch.tensor(g["q_pusher"][11])[None], X).item()
+    # the pusher pushes in contact with the box (φ_box = radius − 1 mm)
+    X = torch.tensor(g["q_obj"][20])
+    gap = prog.obj.sdf(torch.tensor(g["q_pusher"][20])[None], X).item()
     assert abs(gap - (prog.pusher.shape.radius - 0.001)) < 1e-6
     # H_F as a constraint instead
     names = {b.evaluator().get_description()
