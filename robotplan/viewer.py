@@ -50,11 +50,19 @@ def write_playback(scene: Scene, path: Path, plan: dict[str, np.ndarray],
                    executed: dict[str, np.ndarray], fps: float = 12.0) -> None:
     """``plan`` and ``executed`` map body names to trajectories ``(N+1, 3)`` (objects) or
     ``(N+1, 2)`` (pushers). Writes ``path`` whole or not at all."""
+    import logging
+
     from pydrake.geometry import Box, Meshcat, MeshcatAnimation, Rgba, Sphere
 
     from robotplan.render import write_atomically
 
-    meshcat = Meshcat()
+    drake_log = logging.getLogger("drake")
+    level = drake_log.level
+    drake_log.setLevel(logging.WARNING)  # no "Meshcat listening at …": nothing is served
+    try:
+        meshcat = Meshcat()
+    finally:
+        drake_log.setLevel(level)
     meshcat.SetProperty("/Grid", "visible", False)
     meshcat.SetProperty("/Axes", "visible", False)
     meshcat.SetCameraPose(np.array([0.0, -1.25, 1.05]), np.array([0.0, 0.0, 0.0]))
