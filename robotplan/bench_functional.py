@@ -14,7 +14,7 @@ import numpy as np
 import torch
 
 from robotplan.functionals import Collision, GoalRegion, Quadrature
-from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
+from robotplan.functionals.dynamics import QUADRATURE_LEVELS, LearnedDynamics, phase_quadrature
 from robotplan.learned.dynamics import load_model
 from robotplan.learned.push_data import simulate_scene
 from robotplan.scene.bodies import Body
@@ -59,6 +59,13 @@ def _time(fn, repeats: int) -> float:
 def phase_quadrature_for(obj: Body, X1: torch.Tensor, workspace: Workspace) -> Quadrature:
     """The quadrature a planner fixes for a phase: finer near the object's path."""
     return phase_quadrature(X1[:, :2].float(), obj.shape.bound_radius, workspace)
+
+
+def _describe_quadrature(coarse: float = 0.14) -> str:
+    """The default of :func:`phase_quadrature` in words (from its constants)."""
+    finer = ", ".join(f"{spacing * 100:g} cm within r_object + {margin * 100:g} cm"
+                      for margin, spacing in QUADRATURE_LEVELS)
+    return f"multi-level midpoint: {coarse * 100:g} cm cells, {finer} of the phase's object path"
 
 
 def _rss_mb() -> tuple[float, float]:
@@ -115,9 +122,7 @@ def bench_functional(model_dir: str | Path = DEFAULT_MODEL, configurations: int 
     fast = LearnedDynamics(model, obj, pusher, quad)
     result: dict = {"model": str(model_dir), "threads": torch.get_num_threads(),
                     "steps": X1.shape[0] - 1, "quadrature_points": len(quad.points),
-                    "quadrature": "multi-level midpoint: 14 cm cells, 7 cm within "
-                                  "r_object + 10 cm of the phase's object path, 3.5 cm "
-                                  "within r_object + 2 cm"}
+                    "quadrature": _describe_quadrature()}
     result["hf_phase_ms"] = round(_time(lambda: fast.evaluate(X1, X2), repeats), 2)
     result["hf_value_only_ms"] = round(
         _time(lambda: fast.evaluate(X1, X2, jacobian=False), repeats), 2)

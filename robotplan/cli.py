@@ -28,6 +28,14 @@ def _print_result(result: dict, as_json: bool) -> None:
         print(f"{k:>{width}}: {v}")
 
 
+def _not_a_model(folder: str) -> bool:
+    """True (after the one-line error) when ``--model`` is not a model folder."""
+    if (Path(folder) / "spec.json").is_file():
+        return False
+    print(f"error: {folder}: --model: not a model folder (no spec.json)", file=sys.stderr)
+    return True
+
+
 def _cmd_check(args: argparse.Namespace) -> int:
     status = 0
     for f in args.files:
@@ -81,9 +89,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         print(f"error: {out}: --out: the folder is not empty; pass --overwrite to replace "
               "its result", file=sys.stderr)
         return EXIT_BAD_INPUT
-    if not (Path(args.model) / "spec.json").is_file():
-        print(f"error: {args.model}: --model: not a model folder (no spec.json)",
-              file=sys.stderr)
+    if _not_a_model(args.model):
         return EXIT_BAD_INPUT
     out.mkdir(parents=True, exist_ok=True)
     try:
@@ -127,9 +133,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
 def _cmd_bench_push(args: argparse.Namespace) -> int:
     from robotplan.bench_push import run_bench_push
 
-    if not (Path(args.model) / "spec.json").is_file():
-        print(f"error: {args.model}: --model: not a model folder (no spec.json)",
-              file=sys.stderr)
+    if _not_a_model(args.model):
         return EXIT_BAD_INPUT
     if args.scenes < 1:
         print("error: --scenes: must be at least 1", file=sys.stderr)
@@ -168,9 +172,7 @@ def _cmd_bench_functional(args: argparse.Namespace) -> int:
     from robotplan.bench_functional import bench_functional
 
     torch.set_num_threads(args.threads)
-    if not (Path(args.model) / "spec.json").is_file():
-        print(f"error: {args.model}: --model: not a model folder (no spec.json)",
-              file=sys.stderr)
+    if _not_a_model(args.model):
         return EXIT_BAD_INPUT
     result = bench_functional(args.model, configurations=args.configurations,
                               repeats=args.repeats,

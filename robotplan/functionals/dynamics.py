@@ -192,8 +192,7 @@ class LearnedDynamics:
             with torch.enable_grad():
                 grids = torch.stack((self.obj.sdf(x, q1p), self.pusher.sdf(x, q2p),
                                      self.pusher.sdf(x, q2n))).reshape(3, *shape)
-                feats = (m.encoder(grids[None]) if m.spec.encoder == "joint"
-                         else m.encode(grids).reshape(1, -1)).expand(len(x), -1)  # (N, 600)
+                feats = m.features(grids[None]).expand(len(x), -1)  # (N, 600)
                 h = torch.relu(torch.cat((feats, point_feats), dim=1) @ W.T + m.first_sdf.bias)
                 out = m.head(h)[:, 0] * m.spec.out_scale
                 prev = self.obj.sdf(x, q1p)

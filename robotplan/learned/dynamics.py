@@ -169,8 +169,7 @@ class PushDynamics(nn.Module):
 
     @torch.no_grad()
     def encoder_input_grad(self, masks: list[Tensor], grad_features: Tensor,
-                           index: Tensor | None = None, size: tuple[int, ...] | None = None
-                           ) -> Tensor:
+                           index: Tensor | None = None) -> Tensor:
         """Reverse mode through the encoder: ``∂(Σ grad_features · features) / ∂grids``.
 
         Args:
@@ -178,7 +177,6 @@ class PushDynamics(nn.Module):
             grad_features: ``(M', F)`` gradients with respect to the features.
             index: ``(M',)`` which encoded grid each row belongs to (default: row i ↔ grid i);
                 a grid may appear several times (e.g. a pusher grid used by two steps).
-            size: ``(C, H, W)`` of the encoded grids (default: the spec's grid, C channels).
         Returns:
             ``(M', C, H, W)``: one gradient image per row of ``grad_features``.
         The encoder is piecewise linear, so this is exact: transposed convolutions masked by
@@ -195,10 +193,9 @@ class PushDynamics(nn.Module):
             if j > 0:
                 g = nn.grad.conv2d_input(masks[j - 1].shape, conv.weight, g, conv.stride)
             else:
-                c, h, w = size or (conv.in_channels, *self.spec.grid)
                 with _no_onednn():
-                    g = nn.grad.conv2d_input((g.shape[0], c, h, w), conv.weight * enc.scale,
-                                             g, conv.stride)
+                    g = nn.grad.conv2d_input((g.shape[0], conv.in_channels, *self.spec.grid),
+                                             conv.weight * enc.scale, g, conv.stride)
         return g
 
     def sdf_term(self, features: Tensor) -> Tensor:
@@ -215,17 +212,19 @@ class PushDynamics(nn.Module):
         return self.head(h)[..., 0] * self.spec.out_scale
 
     # --- the whole model ---
+    def features(self, inputs: Tensor) -> Tensor:
+        """``inputs (B, 3, H, W)`` = φ1_{t−1}, φ2_{t−1}, φ2_t on X_h → ``(B, 3 · sdf_features)``,
+        with either encoder (shared: each grid alone; joint: the three as channels)."""
+        if self.spec.encoder == "joint":
+            return self.encoder(inputs)
+        return self.encode(inputs.flatten(0, 1)).reshape(inputs.shape[0], -1)
+
     def forward(self, inputs: Tensor, points: Tensor) -> Tensor:
         """``inputs (B, 3, H, W)`` = φ1_{t−1}, φ2_{t−1}, φ2_t on X_h; ``points (B or 1, P, 2)``.
 
         Returns ``(B, P)``: F_flow(x) for ``kind="flow"``, φ1_t(x) for ``kind="direct"``.
         """
-        B = inputs.shape[0]
-        if self.spec.encoder == "joint":
-            feats = self.encoder(inputs)
-        else:
-            feats = self.encode(inputs.flatten(0, 1)).reshape(B, -1)
-        return self.from_terms(self.sdf_term(feats), self.point_term(points))
+        return self.from_terms(self.sdf_term(self.features(inputs)), self.point_term(points))
 
     def predict_next(self, inputs: Tensor, points: Tensor, phi1_prev_at_points: Tensor
                      ) -> Tensor:

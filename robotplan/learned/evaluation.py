@@ -49,9 +49,7 @@ def evaluate_push(model_dir: str | Path, data_dir: str | Path, scenes: int | Non
     for i in tqdm(range(0, len(idx), chunk), desc="eval", unit="batch", disable=not progress):
         b: SampleBatch = samples.batch(idx[i:i + chunk])
         inputs = b.inputs(grid, ws.shape)
-        feats = (model.encoder(inputs) if spec.encoder == "joint"
-                 else model.encode(inputs.flatten(0, 1)).reshape(len(b.radius), -1))
-        out = model.from_terms(model.sdf_term(feats), point_term)
+        out = model.from_terms(model.sdf_term(model.features(inputs)), point_term)
         prev = inputs[:, 0].reshape(len(b.radius), -1)
         now = b.phi1_now(grid[None])
         pred = prev + out if spec.kind == "flow" else out
