@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from robotplan.program import ProgramSettings, PushProgram, Solution
+from robotplan.program import ProgramSettings, Solution, solve_skeleton
 from robotplan.scene import Scene
 from robotplan.skeleton import Skeleton, load_skeleton_space
 
@@ -50,7 +50,7 @@ def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings) -> Non
 
 def _solve(skeleton: Skeleton) -> Solution:
     w = _worker
-    return PushProgram(w["scene"], skeleton, w["model"], w["space"], w["settings"]).solve()
+    return solve_skeleton(w["scene"], skeleton, w["model"], w["space"], w["settings"])
 
 
 def _rank(s: Solution) -> tuple[float, float]:

@@ -2,36 +2,51 @@
 
 Decision variables over N = K·T steps (states 0…N): the planar pose of the pushed object
 ``q_obj (N+1, 3)``, the pusher position ``q_pusher (N+1, 2)`` and, in push phases, contact
-points ``p (·, 2)``. State 0 is the scene's start. Constraints (all through the fast
-evaluators, one Python callback per functional covering every step):
+points ``p (·, 2)``. State 0 is the scene's start. Through the fast evaluators, one Python
+callback per functional covering every step:
 
-* H_F (learned dynamics, eq. 5) in every step, as a bound on the mean squared SDF residual;
-* H_coll (eq. 7) between pusher and object in every step, a bound on the overlap area;
+* H_F (learned dynamics, eq. 5) in every step: a cost on the mean squared SDF residual
+  (``dynamics_weight``), or a bound on it;
+* H_coll (eq. 7) between pusher and object in every step, bounded by what a face contact
+  costs in push steps and by ``reach_clearance`` of free space in the other steps;
 * H_PoC (eq. 9, decision-variable form) in push steps: φ_obj(p) = φ_pusher(p) = 0;
-* H_g (eq. 8) at the last state: at most ``goal_tol`` of the object's area outside the goal.
+* H_g (eq. 8) at the last state: at most ``goal_tol`` of the object's area outside the goal
+  region shrunk by ``goal_inset``;
+* the object holds still in reach phases.
 
 Costs: squared accelerations of the pusher and of the contact points, with the prefix
-q_{−2} = q_{−1} = q_0.
+q_{−2} = q_{−1} = q_0, and the lever arm of the push about the object's centroid.
+
+:func:`solve_skeleton` solves in two stages: the kinematic program (``model=None``: sticking
+contact and pushing direction instead of H_F, pusher ≤ 3 cm per push step) converges in a
+few seconds from the circle-and-push guess; the learned program starts from its solution.
 """
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 import torch
-from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoDiff
 from pydrake.solvers import IpoptSolver, MathematicalProgram, SnoptSolver, SolverOptions
 
+from robotplan.bridge import bridge, stepwise
 from robotplan.functionals import Collision, ContactPoint, GoalRegion
+from robotplan.functionals.collision import face_contact_overlap
 from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
+from robotplan.functionals.sticking import (
+    PushingDirection,
+    PushLever,
+    StickingContact,
+    centroid,
+)
+from robotplan.guess import initial_guess
 from robotplan.learned.dynamics import PushDynamics
 from robotplan.scene import Scene
 from robotplan.skeleton import Skeleton, SkeletonSpace
 
-__all__ = ["ProgramSettings", "PushProgram", "Solution"]
+__all__ = ["ProgramSettings", "PushProgram", "Solution", "solve_skeleton"]
 
 
 @dataclass(frozen=True)
@@ -49,15 +64,36 @@ class ProgramSettings:
     # left SNOPT at violation 1.2 (coverage 0.997) instead of 7e-5 (coverage 1.0)
     max_step: float | None = None
     max_turn: float | None = None
-    coll_area: float = 2e-5  # m²: allowed smoothed overlap (touching itself gives ~1e-6)
+    # allowed smoothed overlap: what a face contact pressed in by ``coll_depth`` costs (at
+    # least ``coll_area``, m²); a fixed 2e-5 m² was below touching for pushers ≥ 2 cm, so
+    # H_coll and H_PoC fought and SNOPT stopped with both violated by ~1 mm
+    coll_area: float = 2e-5
+    coll_depth: float = 0.0005
+    reach_clearance: float = 0.01  # m between pusher and object outside push steps
     goal_tol: float = 0.003  # share of the object's area allowed outside the goal
+    # plan into the region shrunk by this much (m), at most a third of the room the object
+    # has when aligned (region inradius − half its longer side), so tight fits stay feasible
+    goal_inset: float = 0.02
     accel_weight: float = 1.0  # larger weights kept SNOPT from certifying optimality
     contact_accel_weight: float = 0.1
     solver: str = "snopt"
     optimality_tol: float = 2e-3
     feasibility_tol: float = 1e-4
     iterations: int = 100  # SNOPT major iterations; the best point so far is kept
+    # SNOPT "Major step limit" r: a line search moves x by at most r (1 + |x|); the learned
+    # stage only refines the kinematic plan, and long steps land where the model knows nothing
+    step_limit: float = 2.0
+    warm_step_limit: float = 2.0
     quad_coarse: float = 0.14  # H_F quadrature (see phase_quadrature)
+    # warm start: first solve the kinematic program (sticking contact, pushing direction,
+    # no H_F: milliseconds per iteration) and start the learned program from its solution
+    warm_start: bool = True
+    warm_iterations: int = 300
+    warm_max_step: float = 0.03  # m per step and axis for the pusher (data: ≤ 2.9 cm)
+    object_motion_weight: float = 1.0  # kinematic stage: Σ|Δq_obj|² (yaw in 10 cm units)
+    # cost per cm² of the push's lever arm about the centroid (PushLever), both stages: an
+    # off-centre push on a long face turned the box in pybullet, not in the plan
+    lever_weight: float = 0.01
 
 
 @dataclass
@@ -73,6 +109,7 @@ class Solution:
     contact: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     dynamics_mm2: np.ndarray = field(default_factory=lambda: np.zeros(0))  # H_F per step
     timings: dict = field(default_factory=dict)  # seconds per functional; "solver": the rest
+    violations: dict = field(default_factory=dict)  # worst violation per constraint name
 
     @property
     def dynamics_rms_mm(self) -> float:
@@ -80,29 +117,17 @@ class Solution:
         return float(np.sqrt(self.dynamics_mm2.mean())) if self.dynamics_mm2.size else 0.0
 
 
-def _bridge(fn, timings: dict[str, float] | None = None, name: str = ""):
-    """Drake calls constraints with floats or AutoDiffXd; answer both from fn (and add the
-    seconds spent to ``timings[name]``)."""
-
-    def wrapped(x: np.ndarray) -> np.ndarray:
-        t0 = time.perf_counter()
-        if x.dtype != object:
-            out = fn(np.asarray(x, dtype=float), False)[0]
-        else:
-            values, J = fn(ExtractValue(x).ravel(), True)
-            out = InitializeAutoDiff(values.reshape(-1, 1), J @ ExtractGradient(x)).ravel()
-        if timings is not None:
-            timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
-        return out
-
-    return wrapped
+WARM_USABLE = 0.1  # largest violation of a kinematic solution worth starting from
 
 
 class PushProgram:
     """One skeleton of a single-pusher, single-object scene as a nonlinear program."""
 
-    def __init__(self, scene: Scene, skeleton: Skeleton, model: PushDynamics,
-                 space: SkeletonSpace, settings: ProgramSettings = ProgramSettings()) -> None:
+    def __init__(self, scene: Scene, skeleton: Skeleton, model: PushDynamics | None,
+                 space: SkeletonSpace, settings: ProgramSettings = ProgramSettings(),
+                 guess: dict[str, np.ndarray] | None = None) -> None:
+        """``model=None`` builds the kinematic program (sticking contact and pushing
+        direction instead of H_F); ``guess`` replaces the circle-and-push initial guess."""
         self.scene, self.skeleton, self.settings, self.space = scene, skeleton, settings, space
         first = skeleton.phases[0]
         self.obj = scene.bodies[first.object]
@@ -118,7 +143,7 @@ class PushProgram:
         self.Q1 = prog.NewContinuousVariables(N + 1, 3, "q_obj")
         self.Q2 = prog.NewContinuousVariables(N + 1, 2, "q_pusher")
         self.P = prog.NewContinuousVariables(len(self.push_steps), 2, "p")
-        self.guess = self._initial_guess()
+        self.guess = guess if guess is not None else initial_guess(self)
         # state 0 is the scene's start
         prog.AddBoundingBoxConstraint(np.array(self.obj.pose), np.array(self.obj.pose),
                                       self.Q1[0])
@@ -132,83 +157,17 @@ class PushProgram:
                                               Q.ravel())
         if settings.hold_while_reaching:
             self._hold_object_while_reaching()
-        self._add_dynamics(model)
-        self._add_step_limits()
+        self.dynamics = None
+        if model is not None:
+            self._add_dynamics(model)
+        else:
+            self._add_kinematic_pushing()
+        self._add_step_limits(settings.warm_max_step if model is None else settings.max_step)
         self._add_collision()
         self._add_contact()
         self._add_goal()
         self._add_costs()
-
-    # ------------------------------------------------------------------ guess
-    def _init_point(self, index: int, center: np.ndarray) -> np.ndarray:
-        goal = self.region.pose[:2] if self.region is not None else None
-        ang = self.space.init_angle(index, self.obj.pose[:2], goal)
-        dist = (self.obj.shape.bound_radius + self.pusher.shape.radius
-                + self.space.init_clearance)
-        return center + dist * np.array([math.cos(ang), math.sin(ang)])
-
-    def _contact_offset(self, X_obj: np.ndarray, direction: np.ndarray,
-                        depth: float = 0.001) -> np.ndarray:
-        """Where along ``direction`` from the object's origin the pusher touches it (its
-        centre at φ_obj = radius − depth), by bisection on the ray."""
-        u = direction / max(float(np.linalg.norm(direction)), 1e-9)
-        target = self.pusher.shape.radius - depth
-        lo, hi = 0.0, self.obj.shape.bound_radius + self.pusher.shape.radius
-        X = torch.as_tensor(X_obj, dtype=torch.float64)[None]
-        for _ in range(30):
-            mid = 0.5 * (lo + hi)
-            point = torch.as_tensor(X_obj[:2] + mid * u, dtype=torch.float64)[None]
-            if self.obj.sdf(point, X).item() < target:
-                lo = mid
-            else:
-                hi = mid
-        return hi * u
-
-    def _initial_guess(self) -> dict[str, np.ndarray]:
-        """Paper app. I.2: the pusher moves on a circle around the object to the phase's
-        init point, then pushes; the object slides towards the goal in push phases."""
-        T, N = self.T, self.N
-        start = np.array(self.obj.pose, dtype=float)
-        goal = (np.array(self.region.pose[:2]) if self.region is not None else start[:2])
-        q1 = np.tile(start, (N + 1, 1))
-        q2 = np.zeros((N + 1, 2))
-        q2[0] = self.pusher.pose[:2]
-        n_push = self.skeleton.pushes
-        speed = self.settings.guess_speed  # per step and axis
-        done = 0
-        for k, ph in enumerate(self.skeleton.phases):
-            a, b = k * T, (k + 1) * T
-            center = q1[a, :2]
-            target = self._init_point(ph.init, center)
-            if ph.mode == "reach":
-                r0 = q2[a] - center
-                r1 = target - center
-                ang0, ang1 = math.atan2(r0[1], r0[0]), math.atan2(r1[1], r1[0])
-                dang = (ang1 - ang0 + math.pi) % (2 * math.pi) - math.pi
-                rad0, rad1 = np.linalg.norm(r0), np.linalg.norm(r1)
-                for s in range(1, T + 1):
-                    u = s / T
-                    ang, rad = ang0 + u * dang, rad0 + u * (rad1 - rad0)
-                    q2[a + s] = center + rad * np.array([math.cos(ang), math.sin(ang)])
-                q1[a + 1:b + 1] = q1[a]
-            else:  # the pusher steps into contact, then the two move towards the goal
-                done += 1
-                end = start[:2] + (goal - start[:2]) * done / n_push
-                offset = self._contact_offset(q1[a], q2[a] - q1[a, :2])
-                contact = q1[a, :2] + offset
-                k = min(T - 1, math.ceil(np.abs(contact - q2[a]).max() / speed))
-                for s in range(1, k + 1):  # approach, the object still
-                    q2[a + s] = q2[a] + (contact - q2[a]) * s / k
-                    q1[a + s] = q1[a]
-                # push at most at the data's speeds (the goal constraint asks for the rest)
-                travel = end - q1[a, :2]
-                travel *= min(1.0, (T - k) * speed / max(np.abs(travel).max(), 1e-9))
-                for s in range(k + 1, T + 1):
-                    q1[a + s] = q1[a]
-                    q1[a + s, :2] = q1[a, :2] + travel * (s - k) / (T - k)
-                    q2[a + s] = q1[a + s, :2] + offset
-        p = np.array([0.5 * (q1[t, :2] + q2[t]) for t in self.push_steps]).reshape(-1, 2)
-        return {"q_obj": q1, "q_pusher": q2, "p": p}
+        self._add_lever_cost()
 
     # ------------------------------------------------------------ functionals
     def _add_dynamics(self, model: PushDynamics) -> None:
@@ -247,11 +206,11 @@ class PushProgram:
                 return (np.array([w * values.sum()]),
                         None if J is None else w * J.sum(axis=0, keepdims=True))
 
-            bridged = _bridge(total, self.timings, "H_F")
+            bridged = bridge(total, self.timings, "H_F")
             self.prog.AddCost(lambda x: bridged(x)[0], variables, description="H_F")
             return
         bound = (s.dynamics_rmse * 1e3) ** 2
-        self.prog.AddConstraint(_bridge(fn, self.timings, "H_F"), np.zeros(N), np.full(N, bound),
+        self.prog.AddConstraint(bridge(fn, self.timings, "H_F"), np.zeros(N), np.full(N, bound),
                                 variables, "H_F")
 
     def _hold_object_while_reaching(self) -> None:
@@ -267,83 +226,105 @@ class PushProgram:
                     np.hstack((np.eye(3), -np.eye(3))), np.zeros(3),
                     np.concatenate((self.Q1[t], self.Q1[t - 1])))
 
-    def _add_step_limits(self) -> None:
-        """Travel per step and axis ≤ ``max_step`` for the pusher and the object, object
-        rotation ≤ ``max_turn``: the speeds of the push data, and a trust region that keeps
-        the solver among the states the learned model knows."""
-        N, s = self.N, self.settings
+    def _add_step_limits(self, max_step: float | None) -> None:
+        """Travel per push step and axis ≤ ``max_step`` for the pusher (and the object, with
+        its rotation ≤ ``max_turn`` if set): the speeds of the push data. Reach steps move
+        through free space and are not limited."""
+        s = self.settings
+        if max_step is None:
+            return
 
         def differences(Q: np.ndarray, limits: list[float]) -> None:
-            d = len(limits)
-            D = np.zeros((d * N, d * (N + 1)))
-            for t in range(N):
+            d, n = len(limits), len(self.push_steps)
+            D = np.zeros((d * n, d * (self.N + 1)))
+            for i, t in enumerate(self.push_steps):
                 for k in range(d):
-                    D[d * t + k, d * (t + 1) + k], D[d * t + k, d * t + k] = 1.0, -1.0
-            lim = np.tile(limits, N)
+                    D[d * i + k, d * t + k], D[d * i + k, d * (t - 1) + k] = 1.0, -1.0
+            lim = np.tile(limits, n)
             self.prog.AddLinearConstraint(D, -lim, lim, Q.ravel())
 
-        if s.max_step is not None:
-            differences(self.Q2, [s.max_step] * 2)
-        if s.max_step is not None and s.max_turn is not None:
-            differences(self.Q1, [s.max_step, s.max_step, s.max_turn])
+        if len(self.push_steps):
+            differences(self.Q2, [max_step] * 2)
+            if s.max_turn is not None:
+                differences(self.Q1, [max_step, max_step, s.max_turn])
 
-    def _per_step_pair(self, H, name: str, scale: float, ub: float) -> None:
-        N = self.N
-
-        def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
-            X1 = torch.from_numpy(x[:3 * N].reshape(N, 3))
-            X2 = torch.from_numpy(x[3 * N:].reshape(N, 2))
-            if not jac:
-                return H(X1, X2)[:, 0].numpy() * scale, None
-            r, (J1, J2) = H.jacobians(X1, X2)
-            J = np.zeros((N, 5 * N))
-            rows = np.arange(N)
-            for k in range(3):
-                J[rows, 3 * rows + k] = J1[:, 0, k].numpy() * scale
-            for k in range(2):
-                J[rows, 3 * N + 2 * rows + k] = J2[:, 0, k].numpy() * scale
-            return r[:, 0].numpy() * scale, J
-
-        self.prog.AddConstraint(_bridge(fn, self.timings, name), np.zeros(N), np.full(N, ub),
-                                np.concatenate((self.Q1[1:].ravel(), self.Q2[1:].ravel())),
-                                name)
+    def _add_rows(self, H, blocks: list[np.ndarray], m: int, scale: float, lb: float,
+                  ub: float, name: str) -> None:
+        """Constraint lb ≤ scale · H(row t) ≤ ub (m residuals each) for every row t of the
+        variable blocks."""
+        fn, variables = stepwise(H, blocks, scale)
+        n = blocks[0].shape[0] * m
+        self.prog.AddConstraint(bridge(fn, self.timings, name), np.full(n, lb),
+                                np.full(n, ub), variables, name)
 
     def _add_collision(self) -> None:
-        H = Collision(self.obj, self.pusher, a=self.settings.a_coll)
-        self._per_step_pair(H, "H_coll", 1e4, self.settings.coll_area * 1e4)  # in cm²
+        """H_coll in every step: at most a pressed-in face contact in push steps, and
+        ``reach_clearance`` of free space in the other steps (the pusher follows straight
+        lines between the planned points; brushing the object on the way turned it)."""
+        s = self.settings
+        H = Collision(self.obj, self.pusher, a=s.a_coll)
+        touch = max(s.coll_area, face_contact_overlap(self.pusher, s.a_coll, s.coll_depth))
+        clear = face_contact_overlap(self.pusher, s.a_coll, -s.reach_clearance)
+        ub = np.full(self.N, clear)
+        ub[self.push_steps - 1] = touch
+        fn, variables = stepwise(H, [self.Q1[1:], self.Q2[1:]], 1e4)  # in cm²
+        self.prog.AddConstraint(bridge(fn, self.timings, "H_coll"), np.zeros(self.N),
+                                ub * 1e4, variables, "H_coll")
 
     def _add_contact(self) -> None:
-        n = len(self.push_steps)
-        if n == 0:
+        if len(self.push_steps):
+            H = ContactPoint(self.obj, self.pusher)
+            steps = self.push_steps
+            self._add_rows(H, [self.Q1[steps], self.Q2[steps], self.P], 2, 100, 0.0, 0.0,
+                           "H_PoC")  # cm
+
+    def _add_lever_cost(self) -> None:
+        """``lever_weight`` · Σ (lever arm in cm)² over push steps (see PushLever)."""
+        w = self.settings.lever_weight
+        if w <= 0 or not len(self.push_steps):
             return
-        H = ContactPoint(self.obj, self.pusher)
+        H = PushLever(centroid(self.obj.shape.outline()))
         steps = self.push_steps
+        fn, variables = stepwise(H, [self.Q1[steps], self.Q2[steps], self.P], 100.0)
 
-        def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
-            X1 = torch.from_numpy(x[:3 * n].reshape(n, 3))
-            X2 = torch.from_numpy(x[3 * n:5 * n].reshape(n, 2))
-            p = torch.from_numpy(x[5 * n:].reshape(n, 2))
-            if not jac:
-                return H(X1, X2, p).numpy().ravel() * 100, None
-            r, (J1, J2, Jp) = H.jacobians(X1, X2, p)
-            J = np.zeros((2 * n, 7 * n))
-            for i in range(n):
-                for c in range(2):
-                    row = 2 * i + c
-                    J[row, 3 * i:3 * i + 3] = J1[i, c].numpy()
-                    J[row, 3 * n + 2 * i:3 * n + 2 * i + 2] = J2[i, c].numpy()
-                    J[row, 5 * n + 2 * i:5 * n + 2 * i + 2] = Jp[i, c].numpy()
-            return r.numpy().ravel() * 100, J * 100  # cm
+        def total(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
+            r, J = fn(x, jac)
+            return np.array([w * r @ r]), None if J is None else (2 * w * r @ J)[None]
 
-        self.prog.AddConstraint(_bridge(fn, self.timings, "H_PoC"), np.zeros(2 * n),
-                                np.zeros(2 * n),
-                                np.concatenate((self.Q1[steps].ravel(), self.Q2[steps].ravel(),
-                                                self.P.ravel())), "H_PoC")
+        bridged = bridge(total, self.timings, "lever")
+        self.prog.AddCost(lambda x: bridged(x)[0], variables, description="lever")
+
+    def _add_kinematic_pushing(self) -> None:
+        """The kinematic stand-in for H_F: in push steps the contact point sticks to the
+        object and the pusher moves into it; the object's travel is a small cost."""
+        steps = list(self.push_steps)
+        pairs = [(i - 1, i) for i in range(1, len(steps)) if steps[i] == steps[i - 1] + 1
+                 and (steps[i] - 1) % self.T != 0]
+        if pairs:
+            a, b = np.array(pairs).T
+            ta, tb = self.push_steps[a], self.push_steps[b]
+            self._add_rows(StickingContact(), [self.Q1[ta], self.P[a], self.Q1[tb], self.P[b]],
+                           2, 100, 0.0, 0.0, "sticking")
+        if steps:
+            self._add_rows(PushingDirection(), [self.Q2[self.push_steps - 1],
+                                                self.Q2[self.push_steps], self.P],
+                           1, 100, 0.0, np.inf, "pushing")
+        w = self.settings.object_motion_weight
+        scale = np.array([1.0, 1.0, 0.1])
+        for t in range(1, self.N + 1):
+            D = np.hstack((np.diag(scale), -np.diag(scale)))
+            self.prog.AddQuadraticCost(2 * w * D.T @ D, np.zeros(6),
+                                       np.concatenate((self.Q1[t], self.Q1[t - 1])),
+                                       is_convex=True)
 
     def _add_goal(self) -> None:
         if self.region is None:
             return
-        H = GoalRegion(self.obj, self.region, a=self.settings.a_goal)
+        origin = torch.zeros(1, 2, dtype=torch.float64)
+        extent = np.ptp(self.obj.shape.outline(), axis=0).max() / 2
+        room = -float(self.region.shape.sdf(origin)[0]) - extent
+        inset = min(self.settings.goal_inset, max(0.0, room / 3))
+        H = GoalRegion(self.obj, self.region, a=self.settings.a_goal, inset=inset)
         scale = 1.0 / self.obj.area
 
         def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
@@ -353,7 +334,7 @@ class PushProgram:
             r, (J,) = H.jacobians(X)
             return r[:, 0].numpy() * scale, J[:, 0].numpy() * scale
 
-        self.prog.AddConstraint(_bridge(fn, self.timings, "H_g"), np.zeros(1),
+        self.prog.AddConstraint(bridge(fn, self.timings, "H_g"), np.zeros(1),
                                 np.array([self.settings.goal_tol]),
                                 self.Q1[self.N], "H_g")
 
@@ -385,17 +366,20 @@ class PushProgram:
         prog.SetInitialGuess(self.Q2, self.guess["q_pusher"])
         if len(self.P):
             prog.SetInitialGuess(self.P, self.guess["p"])
+        iterations = s.iterations if self.dynamics is not None else s.warm_iterations
         opts = SolverOptions()
         if s.solver == "snopt":
             solver = SnoptSolver()
             opts.SetOption(solver.id(), "Major optimality tolerance", s.optimality_tol)
             opts.SetOption(solver.id(), "Major feasibility tolerance", s.feasibility_tol)
-            opts.SetOption(solver.id(), "Major iterations limit", s.iterations)
+            opts.SetOption(solver.id(), "Major iterations limit", iterations)
+            opts.SetOption(solver.id(), "Major step limit",
+                           s.step_limit if self.dynamics is not None else s.warm_step_limit)
         else:
             solver = IpoptSolver()
             opts.SetOption(solver.id(), "tol", s.optimality_tol)
             opts.SetOption(solver.id(), "acceptable_tol", 10 * s.optimality_tol)
-            opts.SetOption(solver.id(), "max_iter", s.iterations)
+            opts.SetOption(solver.id(), "max_iter", iterations)
         t0 = time.perf_counter()  # the clock of the per-functional timings
         result = solver.Solve(prog, None, opts)
         seconds = time.perf_counter() - t0
@@ -408,11 +392,16 @@ class PushProgram:
         q1 = result.GetSolution(self.Q1)
         q2 = result.GetSolution(self.Q2)
         p = result.GetSolution(self.P) if len(self.P) else np.zeros((0, 2))
-        violation = self.violation(result)
+        violations = self.violations(result)
+        violation = max(violations.values(), default=0.0)
         cost = float(result.get_optimal_cost()) if np.isfinite(
             result.get_optimal_cost()) else float("inf")
         return Solution(self.skeleton, violation < 1e-2, status, violation, cost, seconds,
-                        q1, q2, p, self.dynamics_mm2(q1, q2), timings)
+                        q1, q2, p, self.dynamics_mm2(q1, q2), timings, violations)
+
+    def as_guess(self, sol: Solution) -> dict[str, np.ndarray]:
+        """A solution of this program as the initial guess of another on the same skeleton."""
+        return {"q_obj": sol.q_obj, "q_pusher": sol.q_pusher, "p": sol.contact}
 
     def _timing_report(self, seconds: float) -> dict:
         out = {k: round(v, 3) for k, v in self.timings.items()}
@@ -420,19 +409,44 @@ class PushProgram:
         return out
 
     def dynamics_mm2(self, q_obj: np.ndarray, q_pusher: np.ndarray) -> np.ndarray:
-        """H_F per step as the mean squared SDF residual over the table, mm²."""
+        """H_F per step as the mean squared SDF residual over the table, mm² (none in the
+        kinematic program)."""
+        if self.dynamics is None:
+            return np.zeros(0)
         H, _, _ = self.dynamics.evaluate(torch.from_numpy(q_obj), torch.from_numpy(q_pusher),
                                          jacobian=False)
         area = float(self.scene.workspace.size[0] * self.scene.workspace.size[1])
         return H.double().numpy() * 1e6 / area
 
-    def violation(self, result) -> float:
-        """Largest violation over all constraints, each in its own (scaled) units."""
-        worst = 0.0
+    def violations(self, result) -> dict[str, float]:
+        """Largest violation of each named constraint (linear ones under "linear"), each in
+        its own scaled units."""
+        worst: dict[str, float] = {}
         for binding in self.prog.GetAllConstraints():
             c = binding.evaluator()
             v = np.asarray(result.EvalBinding(binding), dtype=float).ravel()
             lb, ub = c.lower_bound(), c.upper_bound()
-            worst = max(worst, float(np.max(np.maximum(lb - v, 0.0), initial=0.0)),
-                        float(np.max(np.maximum(v - ub, 0.0), initial=0.0)))
+            name = c.get_description() or "linear"
+            worst[name] = max(worst.get(name, 0.0),
+                              float(np.max(np.maximum(lb - v, 0.0), initial=0.0)),
+                              float(np.max(np.maximum(v - ub, 0.0), initial=0.0)))
         return worst
+
+
+def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space: SkeletonSpace,
+                   settings: ProgramSettings = ProgramSettings()) -> Solution:
+    """Solve one skeleton: the kinematic program first (``warm_start``), then the learned
+    program from its solution; seconds and timings cover both (``"warm_start"``: stage 1)."""
+    guess = None
+    warm_seconds = 0.0
+    if settings.warm_start:
+        kin = PushProgram(scene, skeleton, None, space, settings)
+        warm = kin.solve()
+        warm_seconds = warm.seconds
+        if warm.violation <= WARM_USABLE:  # else the circle-and-push guess
+            guess = kin.as_guess(warm)
+    sol = PushProgram(scene, skeleton, model, space, settings, guess=guess).solve()
+    if settings.warm_start:
+        sol.seconds += warm_seconds
+        sol.timings = {"warm_start": round(warm_seconds, 3), **sol.timings}
+    return sol

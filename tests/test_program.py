@@ -15,11 +15,11 @@ from tests.conftest import TASKS
 TINY = {"channels": (2, 2, 2), "sdf_features": 8, "point_features": 8, "hidden": (16, 16)}
 
 
-def build(text="push@2", **settings):
+def build(text="push@2", kinematic=False, **settings):
     torch.manual_seed(0)
     scene = load_scene(TASKS / "box_push.yaml")
     space = load_skeleton_space()
-    model = PushDynamics(DynamicsSpec(**TINY)).double()  # float64: finite differences
+    model = None if kinematic else PushDynamics(DynamicsSpec(**TINY)).double()  # float64
     return PushProgram(scene, parse_skeleton(text, "pusher", "box"), model, space,
                        ProgramSettings(**settings))
 
@@ -46,6 +46,29 @@ def test_program_shape_and_initial_guess():
     assert "H_F" in names
 
 
+def test_kinematic_program_replaces_h_f_by_sticking_contact():
+    prog = build(kinematic=True)
+    names = {b.evaluator().get_description() for b in prog.prog.GetAllConstraints()}
+    assert {"H_coll", "H_PoC", "H_g", "sticking", "pushing"} <= names
+    costs = {b.evaluator().get_description() for b in prog.prog.GetAllCosts()}
+    assert "H_F" not in costs and "lever" in costs
+    sol = prog.solve()  # milliseconds per iteration: solve it for real
+    assert sol.violation < 1e-3, sol.violations
+    n = prog.settings.warm_max_step
+    push = prog.push_steps
+    assert np.abs(sol.q_pusher[push] - sol.q_pusher[push - 1]).max() <= n + 1e-6
+    # the contact point keeps its place on the box between consecutive push steps
+    c, s_ = np.cos(sol.q_obj[push, 2]), np.sin(sol.q_obj[push, 2])
+    d = sol.contact - sol.q_obj[push, :2]
+    local = np.stack((c * d[:, 0] + s_ * d[:, 1], -s_ * d[:, 0] + c * d[:, 1]), -1)
+    assert np.abs(np.diff(local, axis=0)).max() < 1e-4
+    # and reach steps keep their distance: the pusher never brushes the box on the way
+    gaps = prog.obj.sdf(torch.from_numpy(sol.q_pusher[1:])[:, None], torch.from_numpy(
+        sol.q_obj[1:]))[:, 0].numpy() - prog.pusher.shape.radius
+    reach = np.setdiff1d(np.arange(1, prog.N + 1), push)
+    assert gaps[reach - 1].min() > 0.003
+
+
 def test_step_limits_hold_for_the_initial_guess():
     prog = build()
     d = np.abs(np.diff(prog.guess["q_pusher"], axis=0))
@@ -54,9 +77,10 @@ def test_step_limits_hold_for_the_initial_guess():
     assert len(limited.prog.linear_constraints()) == len(prog.prog.linear_constraints()) + 2
 
 
-@pytest.mark.parametrize("weight", [0.01, 0.0], ids=["H_F-cost", "H_F-constraint"])
+@pytest.mark.parametrize("weight", [0.01, 0.0, None],
+                         ids=["H_F-cost", "H_F-constraint", "kinematic"])
 def test_constraint_gradients_match_finite_differences(weight):
-    prog = build(dynamics_weight=weight)
+    prog = build(kinematic=True) if weight is None else build(dynamics_weight=weight)
     guess = prog.guess
     values = {}
     for v, x in ((prog.Q1, guess["q_obj"]), (prog.Q2, guess["q_pusher"]), (prog.P, guess["p"])):
@@ -65,7 +89,7 @@ def test_constraint_gradients_match_finite_differences(weight):
     rng = np.random.default_rng(0)
     for b in list(prog.prog.GetAllConstraints()) + list(prog.prog.GetAllCosts()):
         name = b.evaluator().get_description()
-        if name not in {"H_F", "H_coll", "H_PoC", "H_g"}:
+        if name not in {"H_F", "H_coll", "H_PoC", "H_g", "sticking", "pushing", "lever"}:
             continue
         x = np.array([values[v.get_id()] for v in b.variables()])
         x = x + rng.normal(0, 1e-3, x.shape)  # off the symmetric guess

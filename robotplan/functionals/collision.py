@@ -8,8 +8,9 @@ from torch import Tensor
 from robotplan.functionals.base import Functional, Quadrature
 from robotplan.functionals.windows import body_aabb, margin, window_points
 from robotplan.scene.bodies import Body
+from robotplan.sdf import Box, Circle
 
-__all__ = ["Collision"]
+__all__ = ["Collision", "face_contact_overlap"]
 
 
 class Collision(Functional):
@@ -51,3 +52,17 @@ class Collision(Functional):
         inside1 = torch.sigmoid(-self.a * self.body1.sdf(x, X_W1[active]))  # (A, P)
         inside2 = torch.sigmoid(-self.a * self.body2.sdf(x, X_W2[active]))
         return out.index_put((active,), (inside1 * inside2 * w).sum(1, keepdim=True))
+
+
+def face_contact_overlap(body: Body, a: float = 500.0, depth: float = 0.0) -> float:
+    """H_coll (m²) between ``body`` and a flat face it presses ``depth`` into (its extent
+    along x measured by its SDF): what touching itself costs. The sigmoids' tails make it
+    large (a 2.7 cm disc touching a face: 0.49 cm² at a = 500), so a collision bound below
+    it forbids the contact that H_PoC asks for."""
+    if not isinstance(body.shape, Circle):
+        raise ValueError("face_contact_overlap: defined for disc bodies (pushers, tips)")
+    wall = Body("wall", "obstacle", Box((1.0, 1.0)), (0.0, 0.0, 0.0), 0.0, 1.0)
+    reach = body.shape.radius
+    X_wall = torch.zeros(1, 3, dtype=torch.float64)
+    X_body = torch.tensor([[0.5 + reach - depth, 0.0, 0.0]], dtype=torch.float64)
+    return float(Collision(wall, body, a=a)(X_wall, X_body)[0, 0])

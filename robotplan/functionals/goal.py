@@ -14,7 +14,8 @@ __all__ = ["GoalRegion"]
 
 class GoalRegion(Functional):
     """H_g(φ1, φg) = ∫_X σ(−a φ1(x)) σ(a φg(x)) dx (eq. 8): the area of the body that lies
-    outside the fixed goal region, smoothed with sharpness ``a`` (paper a = 100).
+    outside the fixed goal region, smoothed with sharpness ``a`` (paper a = 100). ``inset``
+    (m) shrinks the region: a plan that ends deeper inside tolerates execution error.
 
     ``residual(X_WB (T, 3|2)) → (T, 1)`` in m²; ≈ 0 when the body is well inside the region.
 
@@ -24,13 +25,15 @@ class GoalRegion(Functional):
     """
 
     def __init__(self, body: Body, region: Body, quadrature: Quadrature | None = None,
-                 a: float = 100.0, resolution: float | None = None, eps: float = 1e-4):
+                 a: float = 100.0, resolution: float | None = None, eps: float = 1e-4,
+                 inset: float = 0.0):
         self.body, self.region, self.quadrature, self.a = body, region, quadrature, a
+        self.inset = inset  # m: measure against the region shrunk by this much
         self.resolution = resolution or 2.0 / a
         self.margin = margin(a, eps)
         if quadrature is not None:
             x = quadrature.points
-            self._outside_region = torch.sigmoid(self.a * region.sdf(x))  # (N,), fixed
+            self._outside_region = torch.sigmoid(self.a * (region.sdf(x) + inset))  # fixed
 
     def residual(self, X_WB: Tensor) -> Tensor:
         if self.quadrature is not None:
@@ -41,5 +44,5 @@ class GoalRegion(Functional):
         lo, hi = lo - self.margin, hi + self.margin
         x, w = window_points(lo, hi, self.resolution, self.margin / 3)
         inside = torch.sigmoid(-self.a * self.body.sdf(x, X_WB))  # (T, P)
-        outside_region = torch.sigmoid(self.a * self.region.sdf(x))
+        outside_region = torch.sigmoid(self.a * (self.region.sdf(x) + self.inset))
         return (inside * outside_region * w).sum(1, keepdim=True)

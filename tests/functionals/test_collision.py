@@ -1,7 +1,9 @@
+import pytest
 import shapely
 import torch
 
 from robotplan.functionals import Collision, Quadrature
+from robotplan.functionals.collision import face_contact_overlap
 from tests.functionals.conftest import F64, central_difference_jacobian
 
 
@@ -62,3 +64,20 @@ def test_float32_works(box, pusher):
     H = Collision(box, pusher, q)
     v = H(torch.tensor([[0.0, 0.0, 0.0]]), torch.tensor([[-0.11, 0.0]]))
     assert v.dtype == torch.float32 and v.item() > 0
+
+
+def test_face_contact_overlap_is_what_touching_costs(box, pusher, fine):
+    """The planner's collision bound: a face contact pressed in ``depth`` stays within it, a
+    deeper one does not, and it exceeds the old fixed 2e-5 m² for a 3 cm pusher."""
+    bound = face_contact_overlap(pusher, a=500.0, depth=0.0005)
+    H = Collision(box, pusher, fine, a=500.0)
+    X_box = poses([0.0, 0.0, 0.0])
+
+    def pressed(depth):  # pusher on the box's −x face (half width 0.1 m)
+        return H(X_box, poses([-0.1 - 0.03 + depth, 0.0])).item()
+
+    assert pressed(0.0) < bound < pressed(0.002)
+    assert abs(pressed(0.0005) - bound) < 0.02 * bound
+    assert bound > 2e-5
+    with pytest.raises(ValueError, match="disc"):
+        face_contact_overlap(box)

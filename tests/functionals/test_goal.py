@@ -28,3 +28,17 @@ def test_zero_well_inside_and_area_outside_otherwise(box, region):
     assert abs(half - 0.5 * box.area) < 0.05 * box.area  # half the box crosses x = 0.2
     assert abs(out - box.area) < 0.05 * box.area
     assert inside < half < out
+
+
+def test_inset_measures_against_the_shrunk_region(box, region):
+    wide = Quadrature.box((0.0, 0.0), (1.0, 1.0), 0.002)
+    plain = GoalRegion(box, region, wide, a=100.0)
+    inset = GoalRegion(box, region, wide, a=100.0, inset=0.03)
+    X = torch.tensor([[0.0, 0.0, 0.0], [0.07, 0.0, 0.0]], dtype=F64)  # centre; 3 cm to edge
+    centre, near_edge = inset(X)[:, 0].tolist()
+    assert centre < 1e-3 * box.area  # 4 cm of room on the tight side: still inside
+    outside = plain(X)[1, 0].item()
+    assert outside < 0.02 * box.area  # inside the region itself (up to the sigmoid tail) …
+    assert near_edge > 5 * outside  # … but much more outside the inset one
+    windowed = GoalRegion(box, region, a=100.0, inset=0.03)  # the fast path agrees
+    assert torch.allclose(windowed(X), inset(X), rtol=0.02, atol=1e-4 * box.area)

@@ -1,0 +1,67 @@
+"""Functionals (torch, batched over steps) as Drake constraints and costs.
+
+Drake calls an evaluator with floats or with ``AutoDiffXd``; a functional here answers
+``fn(x, jac) → (values, J | None)`` with exact Jacobians, and :func:`bridge` turns that into
+what Drake wants, timing each call. :func:`stepwise` builds such an ``fn`` from a per-step
+functional and the arrays of decision variables that feed its steps.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import torch
+from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoDiff
+
+__all__ = ["bridge", "stepwise"]
+
+
+def bridge(fn, timings: dict[str, float] | None = None, name: str = ""):
+    """Drake calls constraints with floats or AutoDiffXd; answer both from fn (and add the
+    seconds spent to ``timings[name]``)."""
+
+    def wrapped(x: np.ndarray) -> np.ndarray:
+        t0 = time.perf_counter()
+        if x.dtype != object:
+            out = fn(np.asarray(x, dtype=float), False)[0]
+        else:
+            values, J = fn(ExtractValue(x).ravel(), True)
+            out = InitializeAutoDiff(values.reshape(-1, 1), J @ ExtractGradient(x)).ravel()
+        if timings is not None:
+            timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
+        return out
+
+    return wrapped
+
+
+def stepwise(H, blocks: list[np.ndarray], scale: float):
+    """Bridge a per-step functional to Drake: ``blocks`` are variable arrays ``(n, d_i)``,
+    row t of each feeding step t of ``H``. Returns ``fn(x, jac) → (r (n·m,), J)`` over the
+    unique variables (a variable may appear in several blocks) and those variables."""
+    n = blocks[0].shape[0]
+    flat = np.concatenate([b.ravel() for b in blocks])
+    _, first, inverse = np.unique([v.get_id() for v in flat], return_index=True,
+                                  return_inverse=True)
+    dims = [b.shape[1] for b in blocks]
+
+    def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
+        values, tensors, off = x[inverse], [], 0
+        for d in dims:
+            tensors.append(torch.from_numpy(values[off:off + n * d].reshape(n, d)))
+            off += n * d
+        if not jac:
+            return H(*tensors).numpy().ravel() * scale, None
+        r, Js = H.jacobians(*tensors)
+        m = r.shape[1]
+        rows = (np.arange(n)[:, None] * m + np.arange(m))[:, :, None]  # (n, m, 1)
+        J_flat, off = np.zeros((n * m, len(flat))), 0
+        for Ji, d in zip(Js, dims, strict=True):
+            cols = (off + np.arange(n)[:, None] * d + np.arange(d))[:, None, :]  # (n, 1, d)
+            J_flat[rows, cols] = Ji.numpy()
+            off += n * d
+        J = np.zeros((n * m, len(first)))
+        np.add.at(J.T, inverse, J_flat.T)
+        return r.numpy().ravel() * scale, J * scale
+
+    return fn, flat[first]

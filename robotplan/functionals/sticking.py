@@ -1,0 +1,81 @@
+"""Analytic pieces of a push, beside the learned dynamics.
+
+A kinematic model of a quasi-static push, used to warm-start the learned program: the
+contact point sticks to the object (:class:`StickingContact`) and the pusher moves into the
+object, never pulls it (:class:`PushingDirection`). Cheap, exact gradients, no physics; the
+learned H_F (eq. 5) decides the real motion afterwards. :class:`PushLever` prefers pushes
+whose line of force passes through the object's centroid: they translate the object with
+little turning, the motions the model predicts best and that open-loop execution repeats.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from torch import Tensor
+
+from robotplan.functionals.base import Functional
+
+__all__ = ["PushLever", "PushingDirection", "StickingContact", "centroid"]
+
+
+def centroid(outline: np.ndarray) -> np.ndarray:
+    """Area centroid ``(2,)`` of a simple polygon ``(V, 2)`` (shoelace formula)."""
+    x, y = outline[:, 0], outline[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    area = cross.sum() / 2
+    return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6 * area)
+
+
+def _in_body_frame(X_WB: Tensor, p_W: Tensor) -> Tensor:
+    """p_B = R(θ)ᵀ (p_W − o): ``X_WB (T, 3)``, ``p_W (T, 2)`` → ``(T, 2)``."""
+    c, s = torch.cos(X_WB[:, 2]), torch.sin(X_WB[:, 2])
+    d = p_W - X_WB[:, :2]
+    return torch.stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]), dim=-1)
+
+
+class StickingContact(Functional):
+    """The contact point does not slide on the object between two push steps.
+
+    ``residual(X_WB_prev (T, 3), p_W_prev (T, 2), X_WB (T, 3), p_W (T, 2)) → (T, 2)`` in m:
+    the contact point in the object frame B at t minus the same at t − 1.
+    """
+
+    def residual(self, X_prev: Tensor, p_prev: Tensor, X: Tensor, p: Tensor) -> Tensor:
+        return _in_body_frame(X, p) - _in_body_frame(X_prev, p_prev)
+
+
+class PushingDirection(Functional):
+    """The pusher's step along the contact normal, ≥ 0 when it pushes.
+
+    ``residual(x_prev (T, 2), x (T, 2), p_W (T, 2)) → (T, 1)`` in m: (x − x_prev) · n with
+    n = (p − x)/|p − x| pointing from the pusher's centre x to the contact point p.
+    """
+
+    def residual(self, x_prev: Tensor, x: Tensor, p: Tensor) -> Tensor:
+        n = p - x
+        n = n / n.norm(dim=-1, keepdim=True).clamp_min(1e-9)
+        return ((x - x_prev) * n).sum(-1, keepdim=True)
+
+
+class PushLever(Functional):
+    """Lever arm of the push about the object's centroid: the distance (m, signed) from the
+    centroid to the line through the contact point p along the contact normal
+    n = (p − x)/|p − x|.
+
+    ``residual(X_WB (T, 3), x (T, 2), p_W (T, 2)) → (T, 1) = n × (c_W − p)`` with
+    ``c_W = o + R(θ) c_B`` and ``c_B`` the centroid in the body frame.
+    """
+
+    def __init__(self, centroid_B: np.ndarray):
+        self.c_B = torch.as_tensor(np.asarray(centroid_B, dtype=float))
+
+    def residual(self, X_WB: Tensor, x: Tensor, p: Tensor) -> Tensor:
+        c, s = torch.cos(X_WB[:, 2]), torch.sin(X_WB[:, 2])
+        cB = self.c_B.to(X_WB)
+        c_W = X_WB[:, :2] + torch.stack((c * cB[0] - s * cB[1], s * cB[0] + c * cB[1]), -1)
+        n = p - x
+        n = n / n.norm(dim=-1, keepdim=True).clamp_min(1e-9)
+        d = c_W - p
+        return (n[:, 0] * d[:, 1] - n[:, 1] * d[:, 0])[:, None]

@@ -1,0 +1,89 @@
+"""The initial guess of a push program (paper app. I.2): the pusher circles the object to
+the phase's fixed init point, steps into contact and pushes towards the goal."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+import torch
+
+if TYPE_CHECKING:
+    from robotplan.program import PushProgram
+
+__all__ = ["contact_offset", "init_point", "initial_guess"]
+
+
+def init_point(prog: PushProgram, index: int, center: np.ndarray) -> np.ndarray:
+    """The phase's fixed init point ``index`` around an object centred at ``center``."""
+    goal = prog.region.pose[:2] if prog.region is not None else None
+    ang = prog.space.init_angle(index, prog.obj.pose[:2], goal)
+    dist = (prog.obj.shape.bound_radius + prog.pusher.shape.radius
+            + prog.space.init_clearance)
+    return center + dist * np.array([math.cos(ang), math.sin(ang)])
+
+
+def contact_offset(prog: PushProgram, X_obj: np.ndarray, direction: np.ndarray,
+                   depth: float = 0.001) -> np.ndarray:
+    """Where along ``direction`` from the object's origin the pusher touches it (its
+    centre at φ_obj = radius − depth), by bisection on the ray."""
+    u = direction / max(float(np.linalg.norm(direction)), 1e-9)
+    target = prog.pusher.shape.radius - depth
+    lo, hi = 0.0, prog.obj.shape.bound_radius + prog.pusher.shape.radius
+    X = torch.as_tensor(X_obj, dtype=torch.float64)[None]
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        point = torch.as_tensor(X_obj[:2] + mid * u, dtype=torch.float64)[None]
+        if prog.obj.sdf(point, X).item() < target:
+            lo = mid
+        else:
+            hi = mid
+    return hi * u
+
+
+def initial_guess(prog: PushProgram) -> dict[str, np.ndarray]:
+    """Paper app. I.2: the pusher moves on a circle around the object to the phase's
+    init point, then pushes; the object slides towards the goal in push phases."""
+    T, N = prog.T, prog.N
+    start = np.array(prog.obj.pose, dtype=float)
+    goal = (np.array(prog.region.pose[:2]) if prog.region is not None else start[:2])
+    q1 = np.tile(start, (N + 1, 1))
+    q2 = np.zeros((N + 1, 2))
+    q2[0] = prog.pusher.pose[:2]
+    n_push = prog.skeleton.pushes
+    speed = prog.settings.guess_speed  # per step and axis
+    done = 0
+    for k, ph in enumerate(prog.skeleton.phases):
+        a, b = k * T, (k + 1) * T
+        center = q1[a, :2]
+        target = init_point(prog, ph.init, center)
+        if ph.mode == "reach":
+            r0 = q2[a] - center
+            r1 = target - center
+            ang0, ang1 = math.atan2(r0[1], r0[0]), math.atan2(r1[1], r1[0])
+            dang = (ang1 - ang0 + math.pi) % (2 * math.pi) - math.pi
+            rad0, rad1 = np.linalg.norm(r0), np.linalg.norm(r1)
+            for s in range(1, T + 1):
+                u = s / T
+                ang, rad = ang0 + u * dang, rad0 + u * (rad1 - rad0)
+                q2[a + s] = center + rad * np.array([math.cos(ang), math.sin(ang)])
+            q1[a + 1:b + 1] = q1[a]
+        else:  # the pusher steps into contact, then the two move towards the goal
+            done += 1
+            end = start[:2] + (goal - start[:2]) * done / n_push
+            offset = contact_offset(prog, q1[a], q2[a] - q1[a, :2])
+            contact = q1[a, :2] + offset
+            k = min(T - 1, math.ceil(np.abs(contact - q2[a]).max() / speed))
+            for s in range(1, k + 1):  # approach, the object still
+                q2[a + s] = q2[a] + (contact - q2[a]) * s / k
+                q1[a + s] = q1[a]
+            # push at most at the data's speeds (the goal constraint asks for the rest)
+            travel = end - q1[a, :2]
+            travel *= min(1.0, (T - k) * speed / max(np.abs(travel).max(), 1e-9))
+            for s in range(k + 1, T + 1):
+                q1[a + s] = q1[a]
+                q1[a + s, :2] = q1[a, :2] + travel * (s - k) / (T - k)
+                q2[a + s] = q1[a + s, :2] + offset
+    p = np.array([0.5 * (q1[t, :2] + q2[t]) for t in prog.push_steps]).reshape(-1, 2)
+    return {"q_obj": q1, "q_pusher": q2, "p": p}
