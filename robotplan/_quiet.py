@@ -43,3 +43,17 @@ def connect_direct() -> int:
     pb = import_pybullet()
     with c_output_silenced():
         return pb.connect(pb.DIRECT)
+
+
+@contextlib.contextmanager
+def drake_quiet() -> Iterator[None]:
+    """Drake's parser warnings (e.g. the massless base link of pybullet's iiwa) off."""
+    import logging
+
+    logger = logging.getLogger("drake")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)

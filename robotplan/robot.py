@@ -17,7 +17,7 @@ import yaml
 
 from robotplan.scene.reader import read
 
-__all__ = ["ROBOTS_DIR", "RobotModel", "available_models", "load_robot_model"]
+__all__ = ["ROBOTS_DIR", "DrakeArm", "RobotModel", "available_models", "load_robot_model"]
 
 ROBOTS_DIR = Path(__file__).resolve().parents[1] / "robots"
 
@@ -128,3 +128,60 @@ def _tip_position(model: RobotModel, q: tuple[float, ...],
     c, s = np.cos(base[3]), np.sin(base[3])
     R_base = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
     return R_base @ p_base + np.asarray(base[:3])
+
+
+class DrakeArm:
+    """The same robot folder loaded into a Drake ``MultibodyPlant`` (base welded at ``base =
+    (x, y, z, yaw)``): forward kinematics of the tip with exact gradients, for the programs
+    over joint angles. Agrees with pybullet's kinematics (tests/test_robot.py)."""
+
+    def __init__(self, model: RobotModel, base: tuple[float, float, float, float]
+                 = (0.0, 0.0, 0.0, 0.0)) -> None:
+        from pydrake.math import RigidTransform, RollPitchYaw
+        from pydrake.multibody.parsing import Parser
+        from pydrake.multibody.plant import MultibodyPlant
+
+        from robotplan._quiet import drake_quiet
+
+        self.model = model
+        plant = MultibodyPlant(0.0)
+        with drake_quiet():  # the URDF's massless base link warns; it is welded anyway
+            (instance,) = Parser(plant).AddModels(str(model.urdf_path))
+        root = plant.GetBodyByName(_root_link(model), instance).body_frame()
+        X_WB = RigidTransform(RollPitchYaw(0.0, 0.0, base[3]), list(base[:3]))
+        plant.WeldFrames(plant.world_frame(), root, X_WB)
+        plant.Finalize()
+        self.plant = plant
+        self.context = plant.CreateDefaultContext()
+        self.tip_frame = plant.GetBodyByName(model.tip.link, instance).body_frame()
+        if plant.num_positions() != model.dof:
+            raise ValueError(f"{model.name}: Drake sees {plant.num_positions()} joints, "
+                             f"robot.yaml {model.dof}")
+
+    def tip_position(self, q: np.ndarray) -> np.ndarray:
+        """Tip-sphere centre ``p_WT (3,)`` at joint angles ``q (dof,)``."""
+        self.plant.SetPositions(self.context, np.asarray(q, dtype=float))
+        offset = np.asarray(self.model.tip.offset, dtype=float).reshape(3, 1)
+        return self.plant.CalcPointsPositions(self.context, self.tip_frame, offset,
+                                              self.plant.world_frame())[:, 0]
+
+    def tip_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """∂p_WT/∂q ``(3, dof)`` (translational Jacobian of the tip centre)."""
+        from pydrake.multibody.tree import JacobianWrtVariable
+
+        self.plant.SetPositions(self.context, np.asarray(q, dtype=float))
+        return self.plant.CalcJacobianTranslationalVelocity(
+            self.context, JacobianWrtVariable.kQDot, self.tip_frame,
+            np.asarray(self.model.tip.offset, dtype=float), self.plant.world_frame(),
+            self.plant.world_frame())
+
+
+@cache
+def _root_link(model: RobotModel) -> str:
+    """The URDF's root link: the one that is no joint's child."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(model.urdf_path).getroot()
+    children = {j.find("child").get("link") for j in root.iter("joint")}
+    return next(link.get("name") for link in root.iter("link")
+                if link.get("name") not in children)
