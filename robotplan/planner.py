@@ -17,13 +17,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from robotplan.program import ProgramSettings, Solution, solve_skeleton
+from robotplan.program import FEASIBLE, ProgramSettings, Solution, solve_skeleton
 from robotplan.scene import Scene
 from robotplan.skeleton import Skeleton, load_skeleton_space
 
 __all__ = ["SearchResult", "search_push"]
 
-FEASIBLE = 1e-2  # largest scaled constraint violation that counts as solved
 GOOD_RMS_MM = 5.0  # H_F residual (RMS over steps) good enough to stop: F_flow errs ~4.2 mm
 
 _worker: dict = {}

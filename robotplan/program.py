@@ -89,7 +89,10 @@ class ProgramSettings:
     # no H_F: milliseconds per iteration) and start the learned program from its solution
     warm_start: bool = True
     warm_iterations: int = 300
-    warm_max_step: float = 0.03  # m per step and axis for the pusher (data: ≤ 2.9 cm)
+    warm_max_step: float = 0.03  # m per push step and axis, pusher and object (data ≤ 2.9 cm)
+    # rad per push step: sticking alone let the object spin about the pusher, its centre
+    # sweeping faster than any push moves it
+    warm_max_turn: float = 0.1
     object_motion_weight: float = 1.0  # kinematic stage: Σ|Δq_obj|² (yaw in 10 cm units)
     # cost per cm² of the push's lever arm about the centroid (PushLever), both stages: an
     # off-centre push on a long face turned the box in pybullet, not in the plan
@@ -118,6 +121,12 @@ class Solution:
 
 
 WARM_USABLE = 0.1  # largest violation of a kinematic solution worth starting from
+FEASIBLE = 1e-2  # largest scaled constraint violation that counts as solved
+
+
+def _rank(violations: dict[str, float], cost: float) -> tuple[float, float]:
+    """Order of plans: the least violation (all within FEASIBLE tie), then the least cost."""
+    return max(max(violations.values(), default=0.0), FEASIBLE), cost
 
 
 class PushProgram:
@@ -144,6 +153,7 @@ class PushProgram:
         self.Q2 = prog.NewContinuousVariables(N + 1, 2, "q_pusher")
         self.P = prog.NewContinuousVariables(len(self.push_steps), 2, "p")
         self.guess = guess if guess is not None else initial_guess(self)
+        self.keep_start = guess is not None  # a given start is a plan worth keeping
         # state 0 is the scene's start
         prog.AddBoundingBoxConstraint(np.array(self.obj.pose), np.array(self.obj.pose),
                                       self.Q1[0])
@@ -162,7 +172,10 @@ class PushProgram:
             self._add_dynamics(model)
         else:
             self._add_kinematic_pushing()
-        self._add_step_limits(settings.warm_max_step if model is None else settings.max_step)
+        if model is None:
+            self._add_step_limits(settings.warm_max_step, settings.warm_max_turn)
+        else:
+            self._add_step_limits(settings.max_step, settings.max_turn)
         self._add_collision()
         self._add_contact()
         self._add_goal()
@@ -226,11 +239,10 @@ class PushProgram:
                     np.hstack((np.eye(3), -np.eye(3))), np.zeros(3),
                     np.concatenate((self.Q1[t], self.Q1[t - 1])))
 
-    def _add_step_limits(self, max_step: float | None) -> None:
+    def _add_step_limits(self, max_step: float | None, max_turn: float | None) -> None:
         """Travel per push step and axis ≤ ``max_step`` for the pusher (and the object, with
         its rotation ≤ ``max_turn`` if set): the speeds of the push data. Reach steps move
         through free space and are not limited."""
-        s = self.settings
         if max_step is None:
             return
 
@@ -245,8 +257,8 @@ class PushProgram:
 
         if len(self.push_steps):
             differences(self.Q2, [max_step] * 2)
-            if s.max_turn is not None:
-                differences(self.Q1, [max_step, max_step, s.max_turn])
+            if max_turn is not None:
+                differences(self.Q1, [max_step, max_step, max_turn])
 
     def _add_rows(self, H, blocks: list[np.ndarray], m: int, scale: float, lb: float,
                   ub: float, name: str) -> None:
@@ -389,15 +401,25 @@ class PushProgram:
             status = f"snopt info {info}"
         else:
             status = str(result.get_solution_result())
-        q1 = result.GetSolution(self.Q1)
-        q2 = result.GetSolution(self.Q2)
-        p = result.GetSolution(self.P) if len(self.P) else np.zeros((0, 2))
-        violations = self.violations(result)
+        x = result.GetSolution(prog.decision_variables())
+        violations, cost = self.evaluate(x)
+        if self.keep_start:
+            # SNOPT returns its last iterate; from a warm start the start itself may be better
+            start = prog.GetInitialGuess(prog.decision_variables())
+            start_violations, start_cost = self.evaluate(start)
+            if _rank(start_violations, start_cost) < _rank(violations, cost):
+                x, violations, cost = start, start_violations, start_cost
+                status += ", kept the start"
+        q1, q2, p = (self._values(x, V) for V in (self.Q1, self.Q2, self.P))
         violation = max(violations.values(), default=0.0)
-        cost = float(result.get_optimal_cost()) if np.isfinite(
-            result.get_optimal_cost()) else float("inf")
-        return Solution(self.skeleton, violation < 1e-2, status, violation, cost, seconds,
-                        q1, q2, p, self.dynamics_mm2(q1, q2), timings, violations)
+        return Solution(self.skeleton, violation <= FEASIBLE, status, violation, cost, seconds,
+                        q1, q2, p.reshape(-1, 2), self.dynamics_mm2(q1, q2), timings,
+                        violations)
+
+    def _values(self, x: np.ndarray, V: np.ndarray) -> np.ndarray:
+        """The entries of the full decision vector ``x`` for the variable array ``V``."""
+        index = [self.prog.FindDecisionVariableIndex(v) for v in V.ravel()]
+        return x[index].reshape(V.shape)
 
     def as_guess(self, sol: Solution) -> dict[str, np.ndarray]:
         """A solution of this program as the initial guess of another on the same skeleton."""
@@ -418,19 +440,20 @@ class PushProgram:
         area = float(self.scene.workspace.size[0] * self.scene.workspace.size[1])
         return H.double().numpy() * 1e6 / area
 
-    def violations(self, result) -> dict[str, float]:
-        """Largest violation of each named constraint (linear ones under "linear"), each in
-        its own scaled units."""
+    def evaluate(self, x: np.ndarray) -> tuple[dict[str, float], float]:
+        """At the full decision vector ``x``: the largest violation of each named constraint
+        (linear ones under "linear"), each in its own scaled units, and the total cost."""
         worst: dict[str, float] = {}
+        cost = sum(float(self.prog.EvalBinding(b, x)[0]) for b in self.prog.GetAllCosts())
         for binding in self.prog.GetAllConstraints():
             c = binding.evaluator()
-            v = np.asarray(result.EvalBinding(binding), dtype=float).ravel()
+            v = np.asarray(self.prog.EvalBinding(binding, x), dtype=float).ravel()
             lb, ub = c.lower_bound(), c.upper_bound()
             name = c.get_description() or "linear"
             worst[name] = max(worst.get(name, 0.0),
                               float(np.max(np.maximum(lb - v, 0.0), initial=0.0)),
                               float(np.max(np.maximum(v - ub, 0.0), initial=0.0)))
-        return worst
+        return worst, cost if np.isfinite(cost) else float("inf")
 
 
 def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space: SkeletonSpace,
@@ -443,8 +466,12 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
         kin = PushProgram(scene, skeleton, None, space, settings)
         warm = kin.solve()
         warm_seconds = warm.seconds
-        if warm.violation <= WARM_USABLE:  # else the circle-and-push guess
-            guess = kin.as_guess(warm)
+        if warm.violation > WARM_USABLE:
+            # not even the kinematics can do it at the data's speeds: the learned program
+            # would only wander (measured: 80–230 mm H_F residuals after 100 iterations)
+            warm.status = f"kinematic stage infeasible ({warm.status})"
+            return warm
+        guess = kin.as_guess(warm)
     sol = PushProgram(scene, skeleton, model, space, settings, guess=guess).solve()
     if settings.warm_start:
         sol.seconds += warm_seconds

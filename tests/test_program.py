@@ -10,14 +10,14 @@ from robotplan import load_scene
 from robotplan.learned.dynamics import DynamicsSpec, PushDynamics
 from robotplan.program import ProgramSettings, PushProgram
 from robotplan.skeleton import load_skeleton_space, parse_skeleton
-from tests.conftest import TASKS
+from tests.conftest import DATA, TASKS
 
 TINY = {"channels": (2, 2, 2), "sdf_features": 8, "point_features": 8, "hidden": (16, 16)}
 
 
-def build(text="push@2", kinematic=False, **settings):
+def build(text="push@2", kinematic=False, scene_file=TASKS / "box_push.yaml", **settings):
     torch.manual_seed(0)
-    scene = load_scene(TASKS / "box_push.yaml")
+    scene = load_scene(scene_file)
     space = load_skeleton_space()
     model = None if kinematic else PushDynamics(DynamicsSpec(**TINY)).double()  # float64
     return PushProgram(scene, parse_skeleton(text, "pusher", "box"), model, space,
@@ -47,7 +47,7 @@ def test_program_shape_and_initial_guess():
 
 
 def test_kinematic_program_replaces_h_f_by_sticking_contact():
-    prog = build(kinematic=True)
+    prog = build(kinematic=True, scene_file=DATA / "box_push_near.yaml")
     names = {b.evaluator().get_description() for b in prog.prog.GetAllConstraints()}
     assert {"H_coll", "H_PoC", "H_g", "sticking", "pushing"} <= names
     costs = {b.evaluator().get_description() for b in prog.prog.GetAllCosts()}
@@ -104,3 +104,17 @@ def test_constraint_gradients_match_finite_differences(weight):
             fd = (b.evaluator().Eval(x + e) - b.evaluator().Eval(x - e)) / 2e-6
             scale = max(np.abs(fd).max(), np.abs(J[:, c]).max(), 1e-8)
             assert np.abs(fd - J[:, c]).max() / scale < 2e-2, (name, c)
+
+
+def test_solve_skeleton_stops_where_the_kinematics_cannot_push():
+    """box_push's goal is 0.36 m away: more than one push covers at the data's speeds, so the
+    kinematic stage fails and the learned program is never started."""
+    from robotplan.program import FEASIBLE, solve_skeleton
+
+    torch.manual_seed(0)
+    scene = load_scene(TASKS / "box_push.yaml")
+    model = PushDynamics(DynamicsSpec(**TINY))
+    sol = solve_skeleton(scene, parse_skeleton("push@2", "pusher", "box"), model,
+                         load_skeleton_space(), ProgramSettings())
+    assert sol.violation > FEASIBLE and "kinematic stage infeasible" in sol.status
+    assert "H_F" not in sol.timings and sol.dynamics_mm2.size == 0

@@ -1,8 +1,9 @@
 import math
 
+import numpy as np
 import torch
 
-from robotplan.functionals.sticking import PushingDirection, StickingContact
+from robotplan.functionals.sticking import PushingDirection, PushLever, StickingContact
 from tests.functionals.conftest import F64, central_difference_jacobian
 
 
@@ -44,4 +45,17 @@ def test_pushing_direction_sign_and_jacobians():
     _, Js = S.jacobians(*inputs)
     for which in range(4):
         fd = central_difference_jacobian(S, inputs, which)
+        assert torch.allclose(Js[which], fd, rtol=1e-5, atol=1e-9)
+
+
+def test_push_lever_is_the_distance_of_the_force_line_from_the_centroid():
+    H = PushLever(np.array([0.02, 0.0]))  # centroid 2 cm along the body's x axis
+    X = torch.tensor([[0.0, 0.0, math.pi / 2]], dtype=F64)  # → centroid at (0, 0.02)
+    x = torch.tensor([[-0.1, 0.05]], dtype=F64)
+    p = torch.tensor([[-0.07, 0.05]], dtype=F64)  # pushing along +x at y = 0.05
+    assert abs(H(X, x, p).item() - (0.02 - 0.05)) < 1e-12
+    inputs = (X + 0.1, x, p + 0.01)
+    _, Js = H.jacobians(*inputs)
+    for which in range(3):
+        fd = central_difference_jacobian(H, inputs, which)
         assert torch.allclose(Js[which], fd, rtol=1e-5, atol=1e-9)
