@@ -79,7 +79,9 @@ class ProgramSettings:
     solver: str = "snopt"
     optimality_tol: float = 2e-3
     feasibility_tol: float = 1e-4
-    iterations: int = 100  # SNOPT major iterations; the best point so far is kept
+    # SNOPT major iterations of the learned stage (it starts from the kinematic plan and keeps
+    # it when it ends worse; 100 took 40–260 s a program and rarely beat 50)
+    iterations: int = 50
     # SNOPT "Major step limit" r: a line search moves x by at most r (1 + |x|); the learned
     # stage only refines the kinematic plan, and long steps land where the model knows nothing
     step_limit: float = 2.0
@@ -89,10 +91,10 @@ class ProgramSettings:
     # no H_F: milliseconds per iteration) and start the learned program from its solution
     warm_start: bool = True
     warm_iterations: int = 300
-    warm_max_step: float = 0.03  # m per push step and axis, pusher and object (data ≤ 2.9 cm)
+    warm_max_step: float = 0.03  # m per push step and axis for the pusher (data: ≤ 2.9 cm)
     # rad per push step: sticking alone let the object spin about the pusher, its centre
     # sweeping faster than any push moves it
-    warm_max_turn: float = 0.1
+    warm_max_turn: float = 0.2
     object_motion_weight: float = 1.0  # kinematic stage: Σ|Δq_obj|² (yaw in 10 cm units)
     # cost per cm² of the push's lever arm about the centroid (PushLever), both stages: an
     # off-centre push on a long face turned the box in pybullet, not in the plan
@@ -240,11 +242,9 @@ class PushProgram:
                     np.concatenate((self.Q1[t], self.Q1[t - 1])))
 
     def _add_step_limits(self, max_step: float | None, max_turn: float | None) -> None:
-        """Travel per push step and axis ≤ ``max_step`` for the pusher (and the object, with
-        its rotation ≤ ``max_turn`` if set): the speeds of the push data. Reach steps move
-        through free space and are not limited."""
-        if max_step is None:
-            return
+        """Pusher travel per push step and axis ≤ ``max_step`` (the speeds of the push data)
+        and object rotation per push step ≤ ``max_turn``. Reach steps move through free space
+        and are not limited."""
 
         def differences(Q: np.ndarray, limits: list[float]) -> None:
             d, n = len(limits), len(self.push_steps)
@@ -255,10 +255,10 @@ class PushProgram:
             lim = np.tile(limits, n)
             self.prog.AddLinearConstraint(D, -lim, lim, Q.ravel())
 
-        if len(self.push_steps):
+        if len(self.push_steps) and max_step is not None:
             differences(self.Q2, [max_step] * 2)
-            if max_turn is not None:
-                differences(self.Q1, [max_step, max_step, max_turn])
+        if len(self.push_steps) and max_turn is not None:
+            differences(self.Q1[:, 2:], [max_turn])
 
     def _add_rows(self, H, blocks: list[np.ndarray], m: int, scale: float, lb: float,
                   ub: float, name: str) -> None:

@@ -17,8 +17,9 @@ MODEL = ROOT / "learned" / "push_flow"
 @pytest.mark.skipif(not (MODEL / "weights.pt").exists(), reason="push_flow not shipped")
 def test_search_solves_box_push_and_the_plan_works_in_pybullet():
     scene = load_scene(DATA / "box_push_near.yaml")  # one push at the data's speeds
-    # the goal is east of the box: the push from the west (init 2, 180°) is tried first
-    skeletons = [parse_skeleton(s, "pusher", "box") for s in ("push@0", "push@2")]
+    # the goal is east of the box: the push from straight behind (init 0 in the goal frame,
+    # from the west) is tried first
+    skeletons = [parse_skeleton(s, "pusher", "box") for s in ("push@2", "push@0")]
     result = search_push(scene, MODEL, skeletons, ProgramSettings(iterations=40), workers=1,
                          progress=False)
     assert len(result.candidates) == 1, "stops at the first good-enough plan"
