@@ -1,5 +1,7 @@
 """Skeleton search (paper §4, app. I.2): solve one program per candidate skeleton in parallel
-processes, keep the one with the least constraint violation, then the least cost.
+processes, keep the one with the least constraint violation, then the least learned-dynamics
+residual H_F, then the least cost. A plan is *solved* when it meets the constraints and its
+H_F residual stays below the no-motion baseline (``PLAUSIBLE_RMS_MM``).
 
 Candidates are tried most promising first (init points behind the object as seen from the
 goal) and the search stops at the first one that is *good enough*: feasible, with the
@@ -24,6 +26,9 @@ from robotplan.skeleton import Skeleton, load_skeleton_space
 __all__ = ["SearchResult", "search_push"]
 
 GOOD_RMS_MM = 5.0  # H_F residual (RMS over steps) good enough to stop: F_flow errs ~4.2 mm
+# a plan whose H_F residual exceeds the no-motion baseline (10.8 mm) is one the learned
+# dynamics call impossible: it breaks the dynamics, however well it meets the constraints
+PLAUSIBLE_RMS_MM = 10.0
 
 _worker: dict = {}
 
@@ -36,7 +41,8 @@ class SearchResult:
 
     @property
     def solved(self) -> bool:
-        return self.best is not None and self.best.violation <= FEASIBLE
+        return (self.best is not None and self.best.violation <= FEASIBLE
+                and self.best.dynamics_rms_mm <= PLAUSIBLE_RMS_MM)
 
 
 def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings) -> None:
@@ -52,8 +58,11 @@ def _solve(skeleton: Skeleton) -> Solution:
     return solve_skeleton(w["scene"], skeleton, w["model"], w["space"], w["settings"])
 
 
-def _rank(s: Solution) -> tuple[float, float]:
-    return (max(s.violation, FEASIBLE), s.cost)
+def _rank(s: Solution) -> tuple[float, float, float]:
+    """The least constraint violation, then the least H_F residual (ties below the noise
+    floor GOOD_RMS_MM), then the least cost."""
+    rms = s.dynamics_rms_mm if s.dynamics_mm2.size else float("inf")
+    return (max(s.violation, FEASIBLE), max(rms, GOOD_RMS_MM), s.cost)
 
 
 def good_enough(s: Solution) -> bool:

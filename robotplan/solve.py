@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from robotplan.execute import execute_push
-from robotplan.planner import FEASIBLE, SearchResult, search_push
+from robotplan.planner import FEASIBLE, PLAUSIBLE_RMS_MM, SearchResult, search_push
 from robotplan.program import ProgramSettings
 from robotplan.render import write_atomically
 from robotplan.scene import Scene
@@ -91,6 +91,7 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                        {obj: ex.object_poses, pusher: ex.pusher_positions})
         doc["playback"] = "playback.html"
     doc["feasibility_threshold"] = FEASIBLE
+    doc["plausible_dynamics_rms_mm"] = PLAUSIBLE_RMS_MM
     write_atomically(out / "result.json",
                      lambda tmp: tmp.write_text(json.dumps(doc, indent=1, default=_json)))
     return doc

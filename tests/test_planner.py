@@ -31,3 +31,22 @@ def test_search_solves_box_push_and_the_plan_works_in_pybullet():
     assert 0 < sum(best.timings.values()) <= 1.01 * best.seconds + 0.01
     ex = execute_push(scene, "box", "pusher", best.q_pusher)
     assert ex.coverage >= 0.95
+
+
+def test_ranking_prefers_plans_the_learned_dynamics_believe():
+    """Feasible plans rank by their H_F residual (ties below the noise floor), then cost; a
+    feasible plan the model calls impossible is not solved."""
+    from robotplan.planner import PLAUSIBLE_RMS_MM, SearchResult, _rank
+    from robotplan.program import Solution
+
+    sk = parse_skeleton("push@0", "pusher", "box")
+
+    def plan(violation, rms_mm, cost):
+        return Solution(sk, True, "", violation, cost, 1.0, np.zeros((21, 3)),
+                        np.zeros((21, 2)), dynamics_mm2=np.full(20, rms_mm**2))
+
+    believed, doubted, broken = plan(1e-4, 3.0, 9.0), plan(1e-4, 8.0, 1.0), plan(0.5, 1.0, 0.1)
+    assert sorted([broken, doubted, believed], key=_rank) == [believed, doubted, broken]
+    assert _rank(plan(1e-4, 2.0, 5.0)) < _rank(plan(1e-4, 4.0, 6.0))  # both at the floor
+    assert SearchResult(doubted).solved
+    assert not SearchResult(plan(1e-4, PLAUSIBLE_RMS_MM + 1, 1.0)).solved

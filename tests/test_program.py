@@ -121,3 +121,18 @@ def test_solve_skeleton_stops_where_the_kinematics_cannot_push():
                          ProgramSettings(warm_max_step=0.01, warm_max_turn=0.02))
     assert sol.violation > FEASIBLE and "kinematic stage infeasible" in sol.status
     assert "H_F" not in sol.timings and sol.dynamics_mm2.size == 0
+
+
+def test_learned_program_never_ends_worse_than_its_warm_start():
+    from robotplan.program import _rank
+
+    kin = build(kinematic=True, scene_file=DATA / "box_push_near.yaml")
+    warm = kin.solve()
+    torch.manual_seed(0)
+    learned = PushProgram(kin.scene, kin.skeleton, PushDynamics(DynamicsSpec(**TINY)),
+                          kin.space, ProgramSettings(iterations=3), guess=kin.as_guess(warm))
+    assert learned.keep_start and not kin.keep_start
+    start = learned.prog.GetInitialGuess(learned.prog.decision_variables())
+    sol = learned.solve()
+    assert _rank(sol.violations, sol.cost) <= _rank(*learned.evaluate(start))
+    assert sol.q_obj.shape == (learned.N + 1, 3) and sol.contact.shape == (10, 2)
