@@ -138,7 +138,6 @@ class DrakeArm:
     def __init__(self, model: RobotModel, base: tuple[float, float, float, float]
                  = (0.0, 0.0, 0.0, 0.0)) -> None:
         from pydrake.math import RigidTransform, RollPitchYaw
-        from pydrake.multibody.parsing import Parser
         from pydrake.multibody.plant import MultibodyPlant
 
         from robotplan._quiet import drake_quiet
@@ -146,7 +145,7 @@ class DrakeArm:
         self.model = model
         plant = MultibodyPlant(0.0)
         with drake_quiet():  # the URDF's massless base link warns; it is welded anyway
-            (instance,) = Parser(plant).AddModels(str(model.urdf_path))
+            (instance,) = _offline_parser(plant).AddModels(str(model.urdf_path))
         root = plant.GetBodyByName(_root_link(model), instance).body_frame()
         X_WB = RigidTransform(RollPitchYaw(0.0, 0.0, base[3]), list(base[:3]))
         plant.WeldFrames(plant.world_frame(), root, X_WB)
@@ -174,6 +173,31 @@ class DrakeArm:
             self.context, JacobianWrtVariable.kQDot, self.tip_frame,
             np.asarray(self.model.tip.offset, dtype=float), self.plant.world_frame(),
             self.plant.world_frame())
+
+
+def _offline_parser(plant):
+    """A Drake ``Parser`` whose package map holds local packages only. Its default map names
+    the remote ``drake_models``, which Drake refuses to construct while networking is limited
+    (``DRAKE_ALLOW_NETWORK=meshcat``, set by robotplan.viewer): allow the map's construction,
+    then drop the remote entry, so nothing can be fetched."""
+    import os
+
+    from pydrake.multibody.parsing import Parser
+
+    key = "DRAKE_ALLOW_NETWORK"
+    saved = os.environ.get(key)
+    if saved is not None and "package_map" not in saved.split(":"):
+        os.environ[key] = f"{saved}:package_map" if saved and saved != "none" else "package_map"
+    try:
+        parser = Parser(plant)
+    finally:
+        if saved is not None:
+            os.environ[key] = saved
+    packages = parser.package_map()
+    for name in packages.GetPackageNames():
+        if name.startswith("drake_models"):
+            packages.Remove(name)
+    return parser
 
 
 @cache

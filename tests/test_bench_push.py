@@ -61,16 +61,17 @@ def test_candidates_behind_the_object_come_first():
     skeletons = load_skeleton_space().candidates("pusher", "object")
     ordered = order_candidates(scene, skeletons)
     assert sorted(map(id, ordered)) == sorted(map(id, skeletons))
-    # init 2 (180° in the table frame, the paper's) is west of the object: behind it
+    # init 0, measured from the direction away from the goal (the default frame), is west of
+    # the object: behind it
     first = ordered[0]
-    assert first.pushes == 1 and first.phases[1].init == 2
-    assert [p.init for p in ordered[1].phases if p.mode == "push"] == [2, 2]
+    assert first.pushes == 1 and first.phases[1].init == 0
+    assert [p.init for p in ordered[1].phases if p.mode == "push"] == [0, 0]
     space = load_skeleton_space()
-    assert space.init_frame == "table"
-    assert space.init_angle(1, (0.0, 0.0), (0.35, 0.0)) == pytest.approx(math.pi / 2)
-    # measured from the direction away from the goal, init 0 is behind the object
-    by_goal = dataclasses.replace(space, init_frame="goal")
-    assert math.cos(by_goal.init_angle(0, (0.0, 0.0), (0.35, 0.0))) == pytest.approx(-1.0)
+    assert space.init_frame == "goal"
+    assert math.cos(space.init_angle(0, (0.0, 0.0), (0.35, 0.0))) == pytest.approx(-1.0)
+    # in the table frame (the paper's), init 1 is north whatever the goal
+    by_table = dataclasses.replace(space, init_frame="table")
+    assert by_table.init_angle(1, (0.0, 0.0), (0.35, 0.0)) == pytest.approx(math.pi / 2)
 
 
 def test_bench_push_refuses_bad_options(tmp_path):
