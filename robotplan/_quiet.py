@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import logging
 import os
 import sys
 from collections.abc import Iterator
@@ -46,14 +47,13 @@ def connect_direct() -> int:
 
 
 @contextlib.contextmanager
-def drake_quiet() -> Iterator[None]:
-    """Drake's parser warnings (e.g. the massless base link of pybullet's iiwa) off."""
-    import logging
-
+def drake_quiet(level: int = logging.ERROR) -> Iterator[None]:
+    """Drake's log messages below ``level`` off (default ERROR: e.g. the parser's warning on
+    the massless base link of pybullet's iiwa)."""
     logger = logging.getLogger("drake")
-    level = logger.level
-    logger.setLevel(logging.ERROR)
+    saved = logger.level
+    logger.setLevel(level)
     try:
         yield
     finally:
-        logger.setLevel(level)
+        logger.setLevel(saved)

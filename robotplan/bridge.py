@@ -44,24 +44,22 @@ def stepwise(H, blocks: list[np.ndarray], scale: float):
     _, first, inverse = np.unique([v.get_id() for v in flat], return_index=True,
                                   return_inverse=True)
     dims = [b.shape[1] for b in blocks]
+    # per block: the column of each (step, coordinate) among the unique variables
+    columns, off = [], 0
+    for d in dims:
+        columns.append(inverse[off:off + n * d].reshape(n, 1, d))
+        off += n * d
 
     def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
-        values, tensors, off = x[inverse], [], 0
-        for d in dims:
-            tensors.append(torch.from_numpy(values[off:off + n * d].reshape(n, d)))
-            off += n * d
+        tensors = [torch.from_numpy(x[c[:, 0]]) for c in columns]
         if not jac:
             return H(*tensors).numpy().ravel() * scale, None
         r, Js = H.jacobians(*tensors)
         m = r.shape[1]
         rows = (np.arange(n)[:, None] * m + np.arange(m))[:, :, None]  # (n, m, 1)
-        J_flat, off = np.zeros((n * m, len(flat))), 0
-        for Ji, d in zip(Js, dims, strict=True):
-            cols = (off + np.arange(n)[:, None] * d + np.arange(d))[:, None, :]  # (n, 1, d)
-            J_flat[rows, cols] = Ji.numpy()
-            off += n * d
         J = np.zeros((n * m, len(first)))
-        np.add.at(J.T, inverse, J_flat.T)
+        for Ji, cols in zip(Js, columns, strict=True):
+            J[rows, cols] += Ji.numpy()  # a block holds each variable once; blocks may share
         return r.numpy().ravel() * scale, J * scale
 
     return fn, flat[first]

@@ -82,10 +82,6 @@ class ProgramSettings:
     # SNOPT major iterations of the learned stage (it starts from the kinematic plan and keeps
     # it when it ends worse; 100 took 40–260 s a program and rarely beat 50)
     iterations: int = 50
-    # SNOPT "Major step limit" r: a line search moves x by at most r (1 + |x|); the learned
-    # stage only refines the kinematic plan, and long steps land where the model knows nothing
-    step_limit: float = 2.0
-    warm_step_limit: float = 2.0
     quad_coarse: float = 0.14  # H_F quadrature (see phase_quadrature)
     # warm start: first solve the kinematic program (sticking contact, pushing direction,
     # no H_F: milliseconds per iteration) and start the learned program from its solution
@@ -172,12 +168,10 @@ class PushProgram:
         self.dynamics = None
         if model is not None:
             self._add_dynamics(model)
+            self._add_step_limits(settings.max_step, settings.max_turn)
         else:
             self._add_kinematic_pushing()
-        if model is None:
             self._add_step_limits(settings.warm_max_step, settings.warm_max_turn)
-        else:
-            self._add_step_limits(settings.max_step, settings.max_turn)
         self._add_collision()
         self._add_contact()
         self._add_goal()
@@ -221,8 +215,7 @@ class PushProgram:
                 return (np.array([w * values.sum()]),
                         None if J is None else w * J.sum(axis=0, keepdims=True))
 
-            bridged = bridge(total, self.timings, "H_F")
-            self.prog.AddCost(lambda x: bridged(x)[0], variables, description="H_F")
+            self._add_cost(total, variables, "H_F")
             return
         bound = (s.dynamics_rmse * 1e3) ** 2
         self.prog.AddConstraint(bridge(fn, self.timings, "H_F"), np.zeros(N), np.full(N, bound),
@@ -260,14 +253,19 @@ class PushProgram:
         if len(self.push_steps) and max_turn is not None:
             differences(self.Q1[:, 2:], [max_turn])
 
-    def _add_rows(self, H, blocks: list[np.ndarray], m: int, scale: float, lb: float,
-                  ub: float, name: str) -> None:
+    def _add_rows(self, H, blocks: list[np.ndarray], m: int, scale: float,
+                  lb: float | np.ndarray, ub: float | np.ndarray, name: str) -> None:
         """Constraint lb ≤ scale · H(row t) ≤ ub (m residuals each) for every row t of the
-        variable blocks."""
+        variable blocks; bounds are scalars or one per row."""
         fn, variables = stepwise(H, blocks, scale)
-        n = blocks[0].shape[0] * m
-        self.prog.AddConstraint(bridge(fn, self.timings, name), np.full(n, lb),
-                                np.full(n, ub), variables, name)
+        n = blocks[0].shape[0]
+        lb, ub = (np.repeat(np.broadcast_to(b, n), m) for b in (lb, ub))
+        self.prog.AddConstraint(bridge(fn, self.timings, name), lb, ub, variables, name)
+
+    def _add_cost(self, total, variables: np.ndarray, name: str) -> None:
+        """A scalar cost ``total(x, jac) → ((1,), J (1, n) | None)`` on ``variables``."""
+        bridged = bridge(total, self.timings, name)
+        self.prog.AddCost(lambda x: bridged(x)[0], variables, description=name)
 
     def _add_collision(self) -> None:
         """H_coll in every step: at most a pressed-in face contact in push steps, and
@@ -279,9 +277,8 @@ class PushProgram:
         clear = face_contact_overlap(self.pusher, s.a_coll, -s.reach_clearance)
         ub = np.full(self.N, clear)
         ub[self.push_steps - 1] = touch
-        fn, variables = stepwise(H, [self.Q1[1:], self.Q2[1:]], 1e4)  # in cm²
-        self.prog.AddConstraint(bridge(fn, self.timings, "H_coll"), np.zeros(self.N),
-                                ub * 1e4, variables, "H_coll")
+        self._add_rows(H, [self.Q1[1:], self.Q2[1:]], 1, 1e4, 0.0, ub * 1e4,
+                       "H_coll")  # in cm²
 
     def _add_contact(self) -> None:
         if len(self.push_steps):
@@ -303,8 +300,7 @@ class PushProgram:
             r, J = fn(x, jac)
             return np.array([w * r @ r]), None if J is None else (2 * w * r @ J)[None]
 
-        bridged = bridge(total, self.timings, "lever")
-        self.prog.AddCost(lambda x: bridged(x)[0], variables, description="lever")
+        self._add_cost(total, variables, "lever")
 
     def _add_kinematic_pushing(self) -> None:
         """The kinematic stand-in for H_F: in push steps the contact point sticks to the
@@ -385,8 +381,6 @@ class PushProgram:
             opts.SetOption(solver.id(), "Major optimality tolerance", s.optimality_tol)
             opts.SetOption(solver.id(), "Major feasibility tolerance", s.feasibility_tol)
             opts.SetOption(solver.id(), "Major iterations limit", iterations)
-            opts.SetOption(solver.id(), "Major step limit",
-                           s.step_limit if self.dynamics is not None else s.warm_step_limit)
         else:
             solver = IpoptSolver()
             opts.SetOption(solver.id(), "tol", s.optimality_tol)
@@ -418,8 +412,7 @@ class PushProgram:
 
     def _values(self, x: np.ndarray, V: np.ndarray) -> np.ndarray:
         """The entries of the full decision vector ``x`` for the variable array ``V``."""
-        index = [self.prog.FindDecisionVariableIndex(v) for v in V.ravel()]
-        return x[index].reshape(V.shape)
+        return x[self.prog.FindDecisionVariableIndices(V.ravel())].reshape(V.shape)
 
     def as_guess(self, sol: Solution) -> dict[str, np.ndarray]:
         """A solution of this program as the initial guess of another on the same skeleton."""

@@ -54,15 +54,11 @@ def write_playback(scene: Scene, path: Path, plan: dict[str, np.ndarray],
 
     from pydrake.geometry import Box, Meshcat, MeshcatAnimation, Rgba, Sphere
 
+    from robotplan._quiet import drake_quiet
     from robotplan.render import write_atomically
 
-    drake_log = logging.getLogger("drake")
-    level = drake_log.level
-    drake_log.setLevel(logging.WARNING)  # no "Meshcat listening at …": nothing is served
-    try:
+    with drake_quiet(logging.WARNING):  # no "Meshcat listening at …": nothing is served
         meshcat = Meshcat()
-    finally:
-        drake_log.setLevel(level)
     meshcat.SetProperty("/Grid", "visible", False)
     meshcat.SetProperty("/Axes", "visible", False)
     meshcat.SetCameraPose(np.array([0.0, -1.25, 1.05]), np.array([0.0, 0.0, 0.0]))

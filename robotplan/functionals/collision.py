@@ -55,14 +55,13 @@ class Collision(Functional):
 
 
 def face_contact_overlap(body: Body, a: float = 500.0, depth: float = 0.0) -> float:
-    """H_coll (m²) between ``body`` and a flat face it presses ``depth`` into (its extent
-    along x measured by its SDF): what touching itself costs. The sigmoids' tails make it
+    """H_coll (m²) between the disc ``body`` and a flat face it presses ``depth`` into: what
+    touching itself costs. The sigmoids' tails make it
     large (a 2.7 cm disc touching a face: 0.49 cm² at a = 500), so a collision bound below
     it forbids the contact that H_PoC asks for."""
     if not isinstance(body.shape, Circle):
         raise ValueError("face_contact_overlap: defined for disc bodies (pushers, tips)")
     wall = Body("wall", "obstacle", Box((1.0, 1.0)), (0.0, 0.0, 0.0), 0.0, 1.0)
-    reach = body.shape.radius
     X_wall = torch.zeros(1, 3, dtype=torch.float64)
-    X_body = torch.tensor([[0.5 + reach - depth, 0.0, 0.0]], dtype=torch.float64)
+    X_body = torch.tensor([[0.5 + body.shape.radius - depth, 0.0, 0.0]], dtype=torch.float64)
     return float(Collision(wall, body, a=a)(X_wall, X_body)[0, 0])
