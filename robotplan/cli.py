@@ -290,7 +290,7 @@ def _parser() -> argparse.ArgumentParser:
     bf.add_argument("--model", default=str(Path(__file__).resolve().parents[1] / "learned"
                                            / "push_flow"), metavar="DIR")
     bf.add_argument("--threads", type=int, default=1)
-    bf.add_argument("--configurations", type=int, default=12,
+    bf.add_argument("--configurations", type=int, default=24,
                     help="realistic pushes for the accuracy check")
     bf.add_argument("--repeats", type=int, default=20)
     bf.add_argument("--no-naive", action="store_true", help="skip the slow naive timing")

@@ -15,6 +15,7 @@ the point part once per quadrature point.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import warnings
 from dataclasses import asdict, dataclass, field
@@ -159,7 +160,9 @@ class PushDynamics(nn.Module):
         y = grids
         for j, conv in enumerate(convs):
             if j == 0:
-                with _no_onednn():  # see _ConvWithoutOneDNN
+                # oneDNN is slower for one input channel (the shared encoder), faster for 3
+                single = conv.in_channels == 1
+                with _no_onednn() if single else contextlib.nullcontext():
                     y = nn.functional.conv2d(y, conv.weight * enc.scale, conv.bias, conv.stride)
             else:
                 y = nn.functional.conv2d(y, conv.weight, conv.bias, conv.stride)
@@ -197,6 +200,43 @@ class PushDynamics(nn.Module):
                     g = nn.grad.conv2d_input((g.shape[0], conv.in_channels, *self.spec.grid),
                                              conv.weight * enc.scale, g, conv.stride)
         return g
+
+    @torch.no_grad()
+    def head_with_masks(self, sdf_term: Tensor, point_term: Tensor,
+                        matmul_dtype: torch.dtype | None = None
+                        ) -> tuple[Tensor, list[Tensor]]:
+        """:meth:`from_terms` without autograd, keeping the head's ReLU masks for
+        :meth:`head_input_grad`. The hidden-to-hidden products run in ``matmul_dtype``
+        (default the model's; bfloat16 halves their cost on CPUs with AVX512-BF16, where
+        they accumulate in float32); everything else stays in the model's dtype."""
+        dtype = matmul_dtype or sdf_term.dtype
+        layers = [mod for mod in self.head if isinstance(mod, nn.Linear)]
+        x = (sdf_term[:, None, :] + point_term).clamp_min_(0.0)  # (B, P, H1)
+        masks = [x > 0]
+        for lin in layers[:-1]:
+            x = torch.matmul(x.to(dtype), lin.weight.to(dtype).T).to(sdf_term.dtype)
+            x = x.add_(lin.bias).clamp_min_(0.0)
+            masks.append(x > 0)
+        last = layers[-1]
+        out = (torch.matmul(x, last.weight[0]) + last.bias[0]) * self.spec.out_scale
+        return out, masks
+
+    @torch.no_grad()
+    def head_input_grad(self, masks: list[Tensor], grad_out: Tensor,
+                        matmul_dtype: torch.dtype | None = None) -> Tensor:
+        """Reverse mode through the head: ``∂(Σ grad_out · output) / ∂sdf_term``.
+
+        ``masks`` from :meth:`head_with_masks`, ``grad_out (B, P)`` → ``(B, H1)``; the
+        point term is fixed, so its gradient is summed away at once. Exact (piecewise
+        linear), in ``matmul_dtype`` as the forward pass.
+        """
+        dtype = matmul_dtype or grad_out.dtype
+        layers = [mod for mod in self.head if isinstance(mod, nn.Linear)]
+        g = (grad_out * self.spec.out_scale)[..., None] * layers[-1].weight[0]  # (B, P, H)
+        for j in range(len(layers) - 2, -1, -1):
+            g = torch.where(masks[j + 1], g, 0.0)
+            g = torch.matmul(g.to(dtype), layers[j].weight.to(dtype)).to(grad_out.dtype)
+        return torch.where(masks[0], g, 0.0).sum(1)
 
     def sdf_term(self, features: Tensor) -> Tensor:
         """``(B, 3 · sdf_features)`` (φ1_{t−1}, φ2_{t−1}, φ2_t) → first-layer term ``(B, H1)``."""

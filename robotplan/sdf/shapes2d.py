@@ -73,6 +73,12 @@ class Shape2D:
             (g,) = torch.autograd.grad(phi.sum(), p)
         return phi.detach(), g
 
+    def sdf_and_grad_planes(self, px: Tensor, py: Tensor) -> tuple[Tensor, Tensor, Tensor]:
+        """:meth:`sdf_and_grad` on coordinate planes ``px, py (...)`` → φ, ∂φ/∂x, ∂φ/∂y, each
+        ``(...)`` and contiguous (the fast path of grid rendering)."""
+        phi, g = self.sdf_and_grad(torch.stack((px, py), dim=-1))
+        return phi, g[..., 0], g[..., 1]
+
     def outline(self, n_arc: int = 720) -> np.ndarray:
         """Boundary polygon ``(V, 2)`` in the shape frame, counter-clockwise (exact for
         polygonal shapes; ``n_arc`` vertices for a circle)."""
@@ -135,6 +141,29 @@ def _box_sdf(px: Tensor, py: Tensor, cx: float, cy: float, hx: float, hy: float)
     return safe_hypot(qx.clamp_min(0.0), qy.clamp_min(0.0)) + torch.maximum(qx, qy).clamp_max(0.0)
 
 
+def _box_sdf_and_grad(px: Tensor, py: Tensor, cx: float, cy: float, hx: float, hy: float
+                      ) -> tuple[Tensor, Tensor, Tensor]:
+    """:func:`_box_sdf` and its gradient ``(φ, ∂φ/∂x, ∂φ/∂y)``, branch-free: outside, the
+    unit vector from the nearest boundary point; inside, the normal of the nearest face."""
+    dx, dy = px - cx, py - cy
+    sx, sy = torch.sign(dx), torch.sign(dy)
+    qx, qy = dx.abs() - hx, dy.abs() - hy
+    ox, oy = qx.clamp_min(0.0), qy.clamp_min(0.0)
+    out = safe_hypot(ox, oy)
+    inv = out.clamp_min(1e-30).reciprocal()  # ox, oy are 0 wherever out is
+    deepest = torch.maximum(qx, qy)
+    inner = (deepest <= 0).to(px.dtype)
+    x_face = inner * (qx > qy).to(px.dtype)
+    gx = sx * (ox * inv + x_face)
+    gy = sy * (oy * inv + (inner - x_face))
+    return out + deepest.clamp_max(0.0), gx, gy
+
+
+def _select(first: Tensor, a: tuple[Tensor, ...], b: tuple[Tensor, ...]) -> tuple[Tensor, ...]:
+    """Per element, the tuple ``a`` where ``first`` is 1 and ``b`` where it is 0."""
+    return tuple(y + first * (x - y) for x, y in zip(a, b, strict=True))
+
+
 def lshape_sdf(px: Tensor, py: Tensor, w: Tensor | float, h: Tensor | float,
                t: Tensor | float) -> Tensor:
     """Exact SDF of the L-shape with half sizes ``(w, h)`` and thickness ``t`` (see
@@ -169,18 +198,11 @@ class Box(Shape2D):
         return _box_sdf(p_B[..., 0], p_B[..., 1], 0.0, 0.0, self.size[0] / 2, self.size[1] / 2)
 
     def sdf_and_grad(self, p_B: Tensor) -> tuple[Tensor, Tensor]:
-        px, py = p_B[..., 0], p_B[..., 1]
-        qx, qy = px.abs() - self.size[0] / 2, py.abs() - self.size[1] / 2
-        ox, oy = qx.clamp_min(0.0), qy.clamp_min(0.0)
-        out = safe_hypot(ox, oy)
-        inner = torch.maximum(qx, qy).clamp_max(0.0)
-        sx, sy = torch.sign(px), torch.sign(py)
-        outside = out > 0
-        safe = torch.where(outside, out, torch.ones_like(out))
-        x_face = qx > qy
-        gx = torch.where(outside, sx * ox / safe, torch.where(x_face, sx, torch.zeros_like(sx)))
-        gy = torch.where(outside, sy * oy / safe, torch.where(x_face, torch.zeros_like(sy), sy))
-        return out + inner, torch.stack((gx, gy), dim=-1)
+        phi, gx, gy = self.sdf_and_grad_planes(p_B[..., 0], p_B[..., 1])
+        return phi, torch.stack((gx, gy), dim=-1)
+
+    def sdf_and_grad_planes(self, px: Tensor, py: Tensor) -> tuple[Tensor, Tensor, Tensor]:
+        return _box_sdf_and_grad(px, py, 0.0, 0.0, self.size[0] / 2, self.size[1] / 2)
 
     def outline(self, n_arc: int = 720) -> np.ndarray:
         w, h = self.size[0] / 2, self.size[1] / 2
@@ -204,6 +226,11 @@ class Circle(Shape2D):
     def sdf_and_grad(self, p_B: Tensor) -> tuple[Tensor, Tensor]:
         norm = safe_hypot(p_B[..., 0], p_B[..., 1])
         return norm - self.radius, p_B / norm.clamp_min(1e-12)[..., None]
+
+    def sdf_and_grad_planes(self, px: Tensor, py: Tensor) -> tuple[Tensor, Tensor, Tensor]:
+        norm = safe_hypot(px, py)
+        inv = norm.clamp_min(1e-12).reciprocal()
+        return norm - self.radius, px * inv, py * inv
 
     def outline(self, n_arc: int = 720) -> np.ndarray:
         ang = np.linspace(0.0, 2 * math.pi, n_arc, endpoint=False)
@@ -251,6 +278,23 @@ class LShape(_PolygonalShape):
     def sdf(self, p_B: Tensor) -> Tensor:
         return lshape_sdf(p_B[..., 0], p_B[..., 1], self.size[0] / 2, self.size[1] / 2,
                           self.thickness)
+
+    def sdf_and_grad(self, p_B: Tensor) -> tuple[Tensor, Tensor]:
+        phi, gx, gy = self.sdf_and_grad_planes(p_B[..., 0], p_B[..., 1])
+        return phi, torch.stack((gx, gy), dim=-1)
+
+    def sdf_and_grad_planes(self, px: Tensor, py: Tensor) -> tuple[Tensor, Tensor, Tensor]:
+        """Closed form from the boxes of :func:`lshape_sdf`: outside, the nearer strip;
+        inside, the bounding box or the notch (its negated SDF), whichever is larger."""
+        w, h, t = self.size[0] / 2, self.size[1] / 2, self.thickness
+        bottom = _box_sdf_and_grad(px, py, 0.0, t / 2 - h, w, t / 2)
+        left = _box_sdf_and_grad(px, py, t / 2 - w, 0.0, t / 2, h)
+        outside = _select((bottom[0] < left[0]).to(px.dtype), bottom, left)
+        box = _box_sdf_and_grad(px, py, 0.0, 0.0, w, h)
+        notch = _box_sdf_and_grad(px, py, t / 2, t / 2, w - t / 2, h - t / 2)
+        notch = (-notch[0], -notch[1], -notch[2])
+        inside = _select((box[0] > notch[0]).to(px.dtype), box, notch)
+        return _select((outside[0] < 0).to(px.dtype), inside, outside)
 
     def outline(self, n_arc: int = 720) -> np.ndarray:
         w, h, t = self.size[0] / 2, self.size[1] / 2, self.thickness

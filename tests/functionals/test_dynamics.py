@@ -4,7 +4,12 @@ import pytest
 import torch
 
 from robotplan.functionals import Quadrature
-from robotplan.functionals.dynamics import LearnedDynamics, grid_with_tangents, phase_quadrature
+from robotplan.functionals.dynamics import (
+    LearnedDynamics,
+    grid_with_tangents,
+    phase_quadrature,
+    render_on_grid,
+)
 from robotplan.learned.dynamics import DynamicsSpec, PushDynamics
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape, Workspace
@@ -107,3 +112,19 @@ def test_phase_quadrature_weights_sum_to_the_workspace_area():
     close = torch.cdist(q.points, centers).amin(1) < 0.12
     assert torch.allclose(q.weights[close], torch.tensor(0.035**2))
     assert 100 < len(q.points) < 1000
+
+
+@pytest.mark.parametrize("shape", [Box((0.2, 0.12)), LShape((0.24, 0.18), 0.07), Circle(0.05)],
+                         ids=["box", "lshape", "disc"])
+def test_render_on_grid_matches_the_pointwise_rendering(shape):
+    body = Body("b", "object", shape, (0, 0, 0), 0.0, 0.06)
+    ws = Workspace()
+    X = torch.tensor([[0.02, -0.01, 0.3], [0.1, 0.05, -1.0]], dtype=F64)
+    phi, dphi = render_on_grid(body, X, ws)
+    phi_p, dphi_p = grid_with_tangents(body, X, ws.points(F64).reshape(-1, 2), False)
+    assert phi.shape == (2, 19600) and dphi.shape == (2, 3, 19600)
+    assert (phi - phi_p).abs().max() < 1e-12
+    assert (dphi - dphi_p).abs().max() < 1e-9
+    values, none = render_on_grid(body, X[:, :2], ws, tangents=False)
+    expected = body.sdf(ws.points(F64).reshape(-1, 2), X[:, :2])
+    assert none is None and (values - expected).abs().max() < 1e-12
