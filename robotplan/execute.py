@@ -5,7 +5,7 @@ ones, in the same world as the push data; the result comes from the simulator al
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -13,7 +13,7 @@ from robotplan.coverage import coverage
 from robotplan.scene import Scene
 from robotplan.sim import PHYSICS, Physics, PushWorld
 
-__all__ = ["Execution", "execute_push"]
+__all__ = ["Execution", "execute_arms", "execute_push"]
 
 
 @dataclass
@@ -23,6 +23,8 @@ class Execution:
     final_pose: np.ndarray  # (3,)
     coverage: float | None
     touch_distance: float | None
+    tips: dict = field(default_factory=dict)  # robot → (N+1, 3) tip centres
+    joints: dict = field(default_factory=dict)  # robot → (N+1, dof) measured joint angles
 
 
 def execute_push(scene: Scene, obj: str, pusher: str, q_pusher: np.ndarray,
@@ -39,12 +41,60 @@ def execute_push(scene: Scene, obj: str, pusher: str, q_pusher: np.ndarray,
                 world.step(tuple(a + (b - a) * s / physics.keep_every))
             poses.append(world.object_pose()[0])
             pushers.append(world.pusher_position())
+    cov, touch = _outcome(scene, body, poses[-1], pushers[-1], tool.shape.radius)
+    return Execution(np.array(poses), np.array(pushers), poses[-1], cov, touch)
+
+
+def _outcome(scene: Scene, body, final: np.ndarray, tip_xy: np.ndarray, radius: float
+             ) -> tuple[float | None, float | None]:
+    """Coverage of the goal region, or the gap (m) between the touching tip and the object."""
+    if scene.goal_region is not None:
+        return coverage(body, final, scene.goal_region), None
+    import torch
+
+    gap = body.sdf(torch.tensor(np.asarray(tip_xy, dtype=float)[None]),
+                   torch.tensor(np.asarray(final, dtype=float)))
+    return None, max(0.0, float(gap[0]) - radius)
+
+
+def execute_arms(scene: Scene, obj: str, q_joints: dict[str, np.ndarray],
+                 step_substeps: list[int], physics: Physics = PHYSICS) -> Execution:
+    """Run planned joint trajectories ``q_joints[robot] (N+1, dof)`` open loop: every arm's
+    joint targets move linearly from state t−1 to t over ``step_substeps[t−1]`` simulation
+    steps (20 for a push step, as the data). ``pusher_positions`` are the tips of the arm
+    that touches the object last (the touch goal's, else the one nearest at the end)."""
+    from robotplan.sim_arms import add_arm
+
+    body = scene.bodies[obj]
+    spec = next(o for o in scene.objects if o.name == obj)
+    with PushWorld(physics) as world:
+        world.reset(body.shape, spec.height, body.pose, None)
+        arms = {r.name: add_arm(world, r) for r in scene.robots}
+        poses = [world.object_pose()[0]]
+        tips = {name: [arm.tip_position()] for name, arm in arms.items()}
+        angles = {name: [arm.joint_angles()] for name, arm in arms.items()}
+        for t, substeps in enumerate(step_substeps, start=1):
+            for s in range(1, substeps + 1):
+                for name, arm in arms.items():
+                    a, b = q_joints[name][t - 1], q_joints[name][t]
+                    arm.drive(a + (b - a) * s / substeps)
+                world.pb.stepSimulation(physicsClientId=world.client)
+            poses.append(world.object_pose()[0])
+            for name, arm in arms.items():
+                tips[name].append(arm.tip_position())
+                angles[name].append(arm.joint_angles())
     final = poses[-1]
-    cov = coverage(body, final, scene.goal_region) if scene.goal_region is not None else None
-    touch = None
-    if scene.goal_region is None:
+    tips = {k: np.array(v) for k, v in tips.items()}
+    goal = scene.goal
+    if goal.type == "touch":
+        last = goal.actor
+    else:
         import torch
 
-        gap = body.sdf(torch.tensor([pushers[-1]]), torch.tensor(final))
-        touch = max(0.0, float(gap[0]) - tool.shape.radius)
-    return Execution(np.array(poses), np.array(pushers), final, cov, touch)
+        gaps = {k: float(body.sdf(torch.tensor(v[-1:, :2]), torch.tensor(final))[0])
+                for k, v in tips.items()}
+        last = min(gaps, key=gaps.get)
+    radius = scene.bodies[last].shape.radius
+    cov, touch = _outcome(scene, body, final, tips[last][-1, :2], radius)
+    return Execution(np.array(poses), tips[last][:, :2], final, cov, touch, tips,
+                     {k: np.array(v) for k, v in angles.items()})

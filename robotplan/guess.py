@@ -12,13 +12,14 @@ import torch
 if TYPE_CHECKING:
     from robotplan.program import PushProgram
 
-__all__ = ["contact_offset", "init_point", "initial_guess"]
+__all__ = ["contact_offset", "guess_goal", "init_point", "initial_guess"]
 
 
 def init_point(prog: PushProgram, index: int, center: np.ndarray) -> np.ndarray:
     """The phase's fixed init point ``index`` around an object centred at ``center``."""
-    goal = prog.region.pose[:2] if prog.region is not None else None
-    ang = prog.space.init_angle(index, prog.obj.pose[:2], goal)
+    start = np.array(prog.obj.pose[:2], dtype=float)
+    goal = guess_goal(prog, start)
+    ang = prog.space.init_angle(index, start, None if np.allclose(goal, start) else goal)
     dist = (prog.obj.shape.bound_radius + prog.pusher.shape.radius
             + prog.space.init_clearance)
     return center + dist * np.array([math.cos(ang), math.sin(ang)])
@@ -42,12 +43,29 @@ def contact_offset(prog: PushProgram, X_obj: np.ndarray, direction: np.ndarray,
     return hi * u
 
 
+TOUCH_DISTANCE = 0.6  # m from the touching arm's base where the guess brings the object
+
+
+def guess_goal(prog: PushProgram, start: np.ndarray) -> np.ndarray:
+    """Where the guess pushes the object: the goal region's centre, or for a touch goal by
+    an arm, towards that arm until it is ``TOUCH_DISTANCE`` from its base."""
+    if prog.region is not None:
+        return np.array(prog.region.pose[:2], dtype=float)
+    goal = prog.scene.goal
+    robot = next((r for r in prog.scene.robots if r.name == getattr(goal, "robot", None)), None)
+    if robot is None or not prog.skeleton.pushes:
+        return start
+    away = start - np.array(robot.base[:2])
+    dist = float(np.linalg.norm(away))
+    return start - away / max(dist, 1e-9) * max(0.0, dist - TOUCH_DISTANCE)
+
+
 def initial_guess(prog: PushProgram) -> dict[str, np.ndarray]:
     """Paper app. I.2: the pusher moves on a circle around the object to the phase's
     init point, then pushes; the object slides towards the goal in push phases."""
     T, N = prog.T, prog.N
     start = np.array(prog.obj.pose, dtype=float)
-    goal = (np.array(prog.region.pose[:2]) if prog.region is not None else start[:2])
+    goal = guess_goal(prog, start[:2])
     q1 = np.tile(start, (N + 1, 1))
     q2 = np.zeros((N + 1, 2))
     q2[0] = prog.pusher.pose[:2]
@@ -59,7 +77,9 @@ def initial_guess(prog: PushProgram) -> dict[str, np.ndarray]:
         center = q1[a, :2]
         target = init_point(prog, ph.init, center)
         if ph.mode == "reach":
-            r0 = q2[a] - center
+            # a new actor starts where it waited (its own start), not at the last tip
+            switched = k > 0 and ph.actor != prog.skeleton.phases[k - 1].actor
+            r0 = (np.array(prog.scene.bodies[ph.actor].pose[:2]) if switched else q2[a]) - center
             r1 = target - center
             ang0, ang1 = math.atan2(r0[1], r0[0]), math.atan2(r1[1], r1[0])
             dang = (ang1 - ang0 + math.pi) % (2 * math.pi) - math.pi

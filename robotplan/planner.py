@@ -21,7 +21,7 @@ import torch
 
 from robotplan.program import FEASIBLE, ProgramSettings, Solution, solve_skeleton
 from robotplan.scene import Scene
-from robotplan.skeleton import Skeleton, load_skeleton_space
+from robotplan.skeleton import Skeleton, space_for
 
 __all__ = ["SearchResult", "search_push"]
 
@@ -50,7 +50,7 @@ def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings) -> Non
 
     torch.set_num_threads(1)  # one thread per process (DESIGN §4)
     _worker.update(scene=scene, model=load_model(model_dir), settings=settings,
-                   space=load_skeleton_space())
+                   space=space_for(scene))
 
 
 def _solve(skeleton: Skeleton) -> Solution:
@@ -72,7 +72,7 @@ def good_enough(s: Solution) -> bool:
 def order_candidates(scene: Scene, skeletons: list[Skeleton]) -> list[Skeleton]:
     """Most promising first: pushes from init points behind the object (seen from the goal),
     then fewer pushes. Stable for ties."""
-    space = load_skeleton_space()
+    space = space_for(scene)
     region = scene.goal_region
     if region is None:
         return list(skeletons)

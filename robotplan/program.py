@@ -38,8 +38,10 @@ from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
 from robotplan.functionals.sticking import (
     PushingDirection,
     PushLever,
+    QuasiStaticPush,
     StickingContact,
     centroid,
+    limit_surface_radius,
 )
 from robotplan.guess import initial_guess
 from robotplan.learned.dynamics import PushDynamics
@@ -95,6 +97,10 @@ class ProgramSettings:
     # cost per cm² of the push's lever arm about the centroid (PushLever), both stages: an
     # off-centre push on a long face turned the box in pybullet, not in the plan
     lever_weight: float = 0.01
+    # kinematic stage: quasi-static sticking pushes (QuasiStaticPush) with this pusher–object
+    # friction (pybullet's is 0.5 × 0.3 = 0.15; a margin keeps execution off the cone's edge);
+    # ≤ 0 leaves the object's motion free apart from sticking
+    push_friction: float = 0.0
 
 
 @dataclass
@@ -111,6 +117,7 @@ class Solution:
     dynamics_mm2: np.ndarray = field(default_factory=lambda: np.zeros(0))  # H_F per step
     timings: dict = field(default_factory=dict)  # seconds per functional; "solver": the rest
     violations: dict = field(default_factory=dict)  # worst violation per constraint name
+    q_joints: dict = field(default_factory=dict)  # robot name → (N+1, dof) joint angles
 
     @property
     def dynamics_rms_mm(self) -> float:
@@ -150,6 +157,7 @@ class PushProgram:
         self.Q1 = prog.NewContinuousVariables(N + 1, 3, "q_obj")
         self.Q2 = prog.NewContinuousVariables(N + 1, 2, "q_pusher")
         self.P = prog.NewContinuousVariables(len(self.push_steps), 2, "p")
+        self.P_touch: np.ndarray | None = None
         self.guess = guess if guess is not None else initial_guess(self)
         self.keep_start = guess is not None  # a given start is a plan worth keeping
         # state 0 is the scene's start
@@ -256,10 +264,12 @@ class PushProgram:
     def _add_rows(self, H, blocks: list[np.ndarray], m: int, scale: float,
                   lb: float | np.ndarray, ub: float | np.ndarray, name: str) -> None:
         """Constraint lb ≤ scale · H(row t) ≤ ub (m residuals each) for every row t of the
-        variable blocks; bounds are scalars or one per row."""
+        variable blocks; bounds are scalars, one per row ``(n,)`` or one per residual
+        ``(1, m)``."""
         fn, variables = stepwise(H, blocks, scale)
         n = blocks[0].shape[0]
-        lb, ub = (np.repeat(np.broadcast_to(b, n), m) for b in (lb, ub))
+        lb, ub = (np.broadcast_to(b[:, None] if b.ndim == 1 else b, (n, m)).ravel()
+                  for b in (np.asarray(lb, dtype=float), np.asarray(ub, dtype=float)))
         self.prog.AddConstraint(bridge(fn, self.timings, name), lb, ub, variables, name)
 
     def _add_cost(self, total, variables: np.ndarray, name: str) -> None:
@@ -317,6 +327,13 @@ class PushProgram:
             self._add_rows(PushingDirection(), [self.Q2[self.push_steps - 1],
                                                 self.Q2[self.push_steps], self.P],
                            1, 100, 0.0, np.inf, "pushing")
+        if steps and self.settings.push_friction > 0:
+            shape = self.obj.shape
+            H = QuasiStaticPush(centroid(shape.outline()), limit_surface_radius(shape),
+                                self.settings.push_friction)
+            k = self.push_steps
+            self._add_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P], 3, 100,
+                           np.zeros((1, 3)), np.array([[0.0, np.inf, np.inf]]), "quasi_static")
         w = self.settings.object_motion_weight
         scale = np.array([1.0, 1.0, 0.1])
         for t in range(1, self.N + 1):
@@ -326,6 +343,13 @@ class PushProgram:
                                        is_convex=True)
 
     def _add_goal(self) -> None:
+        if self.scene.goal.type == "touch":
+            # the touching tip is the last phase's actor; it ends on the object (H_PoC)
+            self.P_touch = self.prog.NewContinuousVariables(1, 2, "p_touch")
+            H = ContactPoint(self.obj, self.scene.bodies[self.scene.goal.actor])
+            self._add_rows(H, [self.Q1[-1:], self.Q2[-1:], self.P_touch], 2, 100, 0.0, 0.0,
+                           "H_touch")  # cm
+            return
         if self.region is None:
             return
         origin = torch.zeros(1, 2, dtype=torch.float64)
@@ -370,10 +394,9 @@ class PushProgram:
     def solve(self) -> Solution:
         s = self.settings
         prog = self.prog
-        prog.SetInitialGuess(self.Q1, self.guess["q_obj"])
-        prog.SetInitialGuess(self.Q2, self.guess["q_pusher"])
-        if len(self.P):
-            prog.SetInitialGuess(self.P, self.guess["p"])
+        for V, value in self._guess_pairs():
+            if V.size:
+                prog.SetInitialGuess(V, value)
         iterations = s.iterations if self.dynamics is not None else s.warm_iterations
         opts = SolverOptions()
         if s.solver == "snopt":
@@ -408,7 +431,19 @@ class PushProgram:
         violation = max(violations.values(), default=0.0)
         return Solution(self.skeleton, violation <= FEASIBLE, status, violation, cost, seconds,
                         q1, q2, p.reshape(-1, 2), self.dynamics_mm2(q1, q2), timings,
-                        violations)
+                        violations, self._joint_values(x))
+
+    def _guess_pairs(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """(variables, initial values) for SetInitialGuess."""
+        pairs = [(self.Q1, self.guess["q_obj"]), (self.Q2, self.guess["q_pusher"]),
+                 (self.P, self.guess["p"])]
+        if self.P_touch is not None:
+            pairs.append((self.P_touch, self.guess.get("p_touch", self.guess["q_pusher"][-1:])))
+        return pairs
+
+    def _joint_values(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """Joint trajectories by robot (none for free pushers; see ArmPushProgram)."""
+        return {}
 
     def _values(self, x: np.ndarray, V: np.ndarray) -> np.ndarray:
         """The entries of the full decision vector ``x`` for the variable array ``V``."""
@@ -453,10 +488,15 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
                    settings: ProgramSettings = ProgramSettings()) -> Solution:
     """Solve one skeleton: the kinematic program first (``warm_start``), then the learned
     program from its solution; seconds and timings cover both (``"warm_start"``: stage 1)."""
+    program = PushProgram
+    if scene.robots:  # the pushers are arm tips: the program over joints
+        from robotplan.arm_program import ArmPushProgram
+
+        program = ArmPushProgram
     guess = None
     warm_seconds = 0.0
     if settings.warm_start:
-        kin = PushProgram(scene, skeleton, None, space, settings)
+        kin = program(scene, skeleton, None, space, settings)
         warm = kin.solve()
         warm_seconds = warm.seconds
         if warm.violation > WARM_USABLE:
@@ -465,7 +505,7 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
             warm.status = f"kinematic stage infeasible ({warm.status})"
             return warm
         guess = kin.as_guess(warm)
-    sol = PushProgram(scene, skeleton, model, space, settings, guess=guess).solve()
+    sol = program(scene, skeleton, model, space, settings, guess=guess).solve()
     if settings.warm_start:
         sol.seconds += warm_seconds
         sol.timings = {"warm_start": round(warm_seconds, 3), **sol.timings}

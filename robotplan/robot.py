@@ -41,6 +41,9 @@ class RobotModel:
     velocity_limits: tuple[float, ...] = field(metadata={"positive": True})
     tip: TipMount
     home: tuple[float, ...]
+    # horizontal distance (m) from the base axis at which the tip reaches push height with
+    # the flange and links above the objects (measured by inverse kinematics)
+    reach: tuple[float, float] = (0.0, float("inf"))
     description: str = ""
     folder: Path = field(default=ROBOTS_DIR, compare=False, init=False)
 

@@ -87,8 +87,10 @@ class PushWorld:
         self.close()
 
     def reset(self, shape: Shape2D, height: float, pose: tuple[float, float, float],
-              pusher_radius: float, pusher_xy: tuple[float, float]) -> None:
-        """Place a new object (footprint ``shape``) at ``pose`` and a pusher at ``pusher_xy``."""
+              pusher_radius: float | None, pusher_xy: tuple[float, float] = (0.0, 0.0)
+              ) -> None:
+        """Place a new object (footprint ``shape``) at ``pose`` and a pusher at ``pusher_xy``
+        (none if ``pusher_radius`` is None: arms push, see robotplan.sim_arms)."""
         pb, c, ph = self.pb, self.client, self.physics
         pb.resetSimulation(physicsClientId=c)  # a clean world: no ids reused across scenes
         pb.setGravity(0, 0, -ph.gravity, physicsClientId=c)
@@ -119,6 +121,9 @@ class PushWorld:
             baseOrientation=pb.getQuaternionFromEuler([0, 0, yaw]), physicsClientId=c)
         pb.changeDynamics(self.object, -1, lateralFriction=ph.object_friction,
                           restitution=ph.restitution, physicsClientId=c)
+        if pusher_radius is None:
+            self._settle()
+            return
         sphere = pb.createCollisionShape(pb.GEOM_SPHERE, radius=pusher_radius, physicsClientId=c)
         self.pusher_radius = pusher_radius
         start = [pusher_xy[0], pusher_xy[1], pusher_radius]
@@ -131,9 +136,12 @@ class PushWorld:
                                                physicsClientId=c)
         pb.changeConstraint(self._constraint, start, maxForce=ph.pusher_max_force,
                             physicsClientId=c)
-        # let the object settle onto the table
+        self._settle()
+
+    def _settle(self) -> None:
+        """Let the object settle onto the table."""
         for _ in range(10):
-            pb.stepSimulation(physicsClientId=c)
+            self.pb.stepSimulation(physicsClientId=self.client)
 
     def step(self, pusher_target: tuple[float, float]) -> bool:
         """Drive the pusher to ``pusher_target`` for one time step; True if it touches the

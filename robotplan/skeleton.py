@@ -15,7 +15,8 @@ from typing import Literal
 
 import yaml
 
-__all__ = ["Phase", "Skeleton", "SkeletonSpace", "load_skeleton_space", "parse_skeleton"]
+__all__ = ["Phase", "Skeleton", "SkeletonSpace", "actor_candidates", "load_skeleton_space",
+           "parse_skeleton", "space_for"]
 
 SKELETONS_DIR = Path(__file__).resolve().parents[1] / "skeletons"
 
@@ -82,6 +83,35 @@ class SkeletonSpace:
         return out
 
 
+def actor_candidates(space: SkeletonSpace, actors: list[str], obj: str, max_pushes: int = 2,
+                     touch_actor: str | None = None) -> list[Skeleton]:
+    """Every template with up to ``max_pushes`` pushes, every choice of the actor of each
+    push (its reach phase goes with it) and every init; with a ``touch_actor`` (touch goal)
+    a final reach phase of that actor, from each init, ends on the object, and zero pushes
+    is a template too."""
+    templates = list(space.templates.values())
+    if touch_actor is not None:
+        templates = [(), *templates]
+    out = []
+    inits = range(len(space.init_directions_deg))
+    for modes in templates:
+        n_push = sum(m == "push" for m in modes)
+        if n_push > max_pushes:
+            continue
+        extra = 1 if touch_actor is not None else 0
+        for who in itertools.product(actors, repeat=n_push):
+            for choice in itertools.product(inits, repeat=n_push + extra):
+                phases = []
+                for i, mode in enumerate(modes):
+                    # a reach belongs to the push after it
+                    k_push = sum(m == "push" for m in modes[:i + (mode == "reach")])
+                    phases.append(Phase(mode, who[k_push], obj, choice[k_push]))
+                if touch_actor is not None:
+                    phases.append(Phase("reach", touch_actor, obj, choice[-1]))
+                out.append(Skeleton(tuple(phases)))
+    return out
+
+
 def load_skeleton_space(path: Path = SKELETONS_DIR / "push.yaml") -> SkeletonSpace:
     data = yaml.safe_load(path.read_text())
     return SkeletonSpace(int(data["steps_per_phase"]),
@@ -90,12 +120,26 @@ def load_skeleton_space(path: Path = SKELETONS_DIR / "push.yaml") -> SkeletonSpa
                          float(data["init_clearance"]), data.get("init_frame", "table"))
 
 
+def space_for(scene) -> SkeletonSpace:
+    """The skeleton choices of a scene: ``arms.yaml`` when robot arms push, else
+    ``push.yaml``."""
+    return load_skeleton_space(SKELETONS_DIR / ("arms.yaml" if scene.robots else "push.yaml"))
+
+
 def parse_skeleton(text: str, actor: str, obj: str) -> Skeleton:
-    """``"push@2"`` (one push from init 2) or ``"push@0,push@3"`` (two pushes)."""
+    """``"push@2"`` (one push from init 2), ``"push@0,push@3"`` (two pushes); an item may
+    name its actor, ``"left:push@1,right:push@3"``, and a touch goal ends with
+    ``"right:touch@2"`` (the arm reaches the object from init 2)."""
     phases = []
     for item in text.replace(" ", "").split(","):
-        mode, _, init = item.partition("@")
-        if mode != "push" or not init.isdigit():
-            raise ValueError(f"skeleton item {item!r}: expected push@<init index>")
-        phases += [Phase("reach", actor, obj, int(init)), Phase("push", actor, obj, int(init))]
+        who, _, rest = item.rpartition(":")
+        mode, _, init = rest.partition("@")
+        if mode not in ("push", "touch") or not init.isdigit():
+            raise ValueError(f"skeleton item {item!r}: expected [actor:]push@<init index> "
+                             "or [actor:]touch@<init index>")
+        name = who or actor
+        if mode == "touch":
+            phases.append(Phase("reach", name, obj, int(init)))
+        else:
+            phases += [Phase("reach", name, obj, int(init)), Phase("push", name, obj, int(init))]
     return Skeleton(tuple(phases))

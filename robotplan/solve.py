@@ -7,12 +7,13 @@ from pathlib import Path
 
 import numpy as np
 
-from robotplan.execute import execute_push
+from robotplan.execute import execute_arms, execute_push
 from robotplan.planner import FEASIBLE, PLAUSIBLE_RMS_MM, SearchResult, search_push
 from robotplan.program import ProgramSettings
 from robotplan.render import write_atomically
 from robotplan.scene import Scene
-from robotplan.skeleton import load_skeleton_space, parse_skeleton
+from robotplan.sim import PHYSICS
+from robotplan.skeleton import actor_candidates, parse_skeleton, space_for
 
 __all__ = ["UnsupportedScene", "candidate_table", "solve_scene"]
 
@@ -21,18 +22,40 @@ class UnsupportedScene(ValueError):
     """The scene is valid but needs a planner feature that is not built yet."""
 
 
-def _check_supported(scene: Scene) -> tuple[str, str]:
-    if scene.robots:
-        raise UnsupportedScene("robots: scenes with robot arms are not planned yet")
-    if len(scene.objects) != 1 or scene.obstacles or len(scene.pushers) != 1:
-        raise UnsupportedScene("objects: only one object, one pusher and no obstacles are "
-                               "planned yet")
-    if scene.goal.type != "region":
-        raise UnsupportedScene("goal: only region goals are planned yet")
+def _check_supported(scene: Scene) -> tuple[str, list[str]]:
+    """The object and the actors (pushers or arms) of a scene the planner handles."""
+    if len(scene.objects) != 1 or scene.obstacles:
+        raise UnsupportedScene("objects: only one object and no obstacles are planned yet")
+    if scene.robots and scene.pushers:
+        raise UnsupportedScene("pushers: free pushers beside robot arms are not planned yet")
+    if not scene.robots and len(scene.pushers) != 1:
+        raise UnsupportedScene("pushers: only one free pusher is planned yet")
+    if scene.goal.type != "region" and not scene.robots:
+        raise UnsupportedScene("goal: touch goals are planned for robot arms only")
     shape = scene.objects[0].shape.type
     if shape not in ("box", "lshape"):
         raise UnsupportedScene(f"objects[0].shape: {shape} footprints are not simulated yet")
-    return scene.objects[0].name, scene.pushers[0].name
+    actors = [r.name for r in scene.robots] or [scene.pushers[0].name]
+    return scene.objects[0].name, actors
+
+
+def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
+               max_pushes: int, quiet: bool) -> list:
+    """The candidates: one given skeleton, or the search space (arms: every choice of arm,
+    pruned by reach before any program is solved)."""
+    space = space_for(scene)
+    if skeleton:
+        return [parse_skeleton(skeleton, actors[0], obj)]
+    if not scene.robots:
+        return space.candidates(actors[0], obj, max_pushes)
+    from robotplan.arm_program import reach_check
+
+    touch = scene.goal.actor if scene.goal.type == "touch" else None
+    every = actor_candidates(space, actors, obj, max_pushes, touch)
+    kept = [sk for sk in every if reach_check(scene, sk, space) is None]
+    if not quiet:
+        print(f"skeletons: {len(kept)} of {len(every)} within the arms' reach")
+    return kept
 
 
 def candidate_table(result: SearchResult) -> str:
@@ -50,19 +73,14 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                 workers: int = 2, skeleton: str | None = None, max_pushes: int = 2,
                 progress: bool = True, exhaustive: bool = False, quiet: bool = False,
                 time_budget: float | None = None) -> dict:
-    from robotplan.viewer import write_playback
-
-    obj, pusher = _check_supported(scene)
-    space = load_skeleton_space()
-    skeletons = ([parse_skeleton(skeleton, pusher, obj)] if skeleton
-                 else space.candidates(pusher, obj, max_pushes))
+    obj, actors = _check_supported(scene)
+    skeletons = _skeletons(scene, obj, actors, skeleton, max_pushes, quiet)
     settings = ProgramSettings(solver=solver)
     result = search_push(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
                          time_budget)
     if not quiet:
         print(candidate_table(result))
     best = result.best
-    dt = 1.0 / 12.0  # a kept step of the push data: 20 × 1/240 s
     doc: dict = {"scene": scene.name, "status": "solved" if result.solved else "no_solution",
                  "skeleton": best.skeleton.as_rows() if best else [],
                  "plan_seconds": round(result.seconds, 2),
@@ -71,29 +89,54 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                  "cost": float(best.cost) if best else None,
                  "dynamics_rms_mm": round(best.dynamics_rms_mm, 3) if best else None}
     if best is not None:
-        ex = execute_push(scene, obj, pusher, best.q_pusher)
-        doc["execution"] = {"simulator": "pybullet", "coverage": ex.coverage,
-                            "final_poses": {obj: [float(v) for v in ex.final_pose]},
-                            "touch_distance": ex.touch_distance}
-        doc["trajectory"] = {"t": [round(k * dt, 6) for k in range(len(best.q_pusher))],
-                             "pusher": best.q_pusher.tolist(),
-                             "objects": {obj: best.q_obj.tolist()},
-                             "contact_points": best.contact.tolist(), "joints": {}}
-        doc["executed"] = {"pusher": ex.pusher_positions.tolist(),
-                           "objects": {obj: ex.object_poses.tolist()}}
+        doc.update(_execute_and_show(scene, obj, best, out))
         doc["candidates"] = [{"skeleton": s.skeleton.describe(), "violation": s.violation,
                               "cost": s.cost, "seconds": round(s.seconds, 2),
                               "dynamics_rms_mm": round(s.dynamics_rms_mm, 3),
                               "timings": s.timings,
                               "status": s.status} for s in result.candidates]
-        write_playback(scene, out / "playback.html",
-                       {obj: best.q_obj, pusher: best.q_pusher},
-                       {obj: ex.object_poses, pusher: ex.pusher_positions})
-        doc["playback"] = "playback.html"
     doc["feasibility_threshold"] = FEASIBLE
     doc["plausible_dynamics_rms_mm"] = PLAUSIBLE_RMS_MM
     write_atomically(out / "result.json",
                      lambda tmp: tmp.write_text(json.dumps(doc, indent=1, default=_json)))
+    return doc
+
+
+def _execute_and_show(scene: Scene, obj: str, best, out: Path) -> dict:
+    """Execute the plan in pybullet, write the playback; the result.json entries."""
+    from robotplan.viewer import write_playback
+
+    dt = 1.0 / 12.0  # a kept step of the push data: 20 × 1/240 s
+    steps = len(best.q_pusher) - 1
+    if scene.robots:
+        from robotplan.arm_program import ARM_SETTINGS
+
+        T = steps // len(best.skeleton.phases)
+        slow = [1 if best.skeleton.phases[t // T].mode == "push"
+                else round(ARM_SETTINGS.reach_slowdown) for t in range(steps)]
+        ex = execute_arms(scene, obj, best.q_joints, [PHYSICS.keep_every * k for k in slow])
+        t = np.concatenate(([0.0], np.cumsum(slow) * dt))
+    else:
+        ex = execute_push(scene, obj, scene.pushers[0].name, best.q_pusher)
+        t = np.arange(steps + 1) * dt
+    doc = {"execution": {"simulator": "pybullet", "coverage": ex.coverage,
+                         "final_poses": {obj: [float(v) for v in ex.final_pose]},
+                         "touch_distance": ex.touch_distance},
+           "trajectory": {"t": [round(float(v), 6) for v in t],
+                          "pusher": best.q_pusher.tolist(),
+                          "objects": {obj: best.q_obj.tolist()},
+                          "contact_points": best.contact.tolist(),
+                          "joints": {k: v.tolist() for k, v in best.q_joints.items()}},
+           "executed": {"pusher": ex.pusher_positions.tolist(),
+                        "objects": {obj: ex.object_poses.tolist()},
+                        "joints": {k: v.tolist() for k, v in ex.joints.items()},
+                        "tips": {k: v.tolist() for k, v in ex.tips.items()}}}
+    actor = scene.pushers[0].name if scene.pushers else None
+    plan = {obj: best.q_obj, **({actor: best.q_pusher} if actor else {})}
+    executed = {obj: ex.object_poses, **({actor: ex.pusher_positions} if actor else {})}
+    write_playback(scene, out / "playback.html", plan, executed,
+                   joints=(best.q_joints, ex.joints), times=t)
+    doc["playback"] = "playback.html"
     return doc
 
 

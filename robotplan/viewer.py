@@ -47,9 +47,13 @@ def _pose(x: float, y: float, yaw: float, z: float = 0.0):
 
 
 def write_playback(scene: Scene, path: Path, plan: dict[str, np.ndarray],
-                   executed: dict[str, np.ndarray], fps: float = 12.0) -> None:
+                   executed: dict[str, np.ndarray], fps: float = 12.0,
+                   joints: tuple[dict, dict] | None = None,
+                   times: np.ndarray | None = None) -> None:
     """``plan`` and ``executed`` map body names to trajectories ``(N+1, 3)`` (objects) or
-    ``(N+1, 2)`` (pushers). Writes ``path`` whole or not at all."""
+    ``(N+1, 2)`` (pushers); ``joints`` = (planned, executed) joint trajectories of the
+    arms, ``(N+1, dof)`` by robot; ``times`` (s) of the states (default 1/fps apart).
+    Writes ``path`` whole or not at all."""
     import logging
 
     from pydrake.geometry import Box, Meshcat, MeshcatAnimation, Rgba, Sphere
@@ -88,15 +92,22 @@ def write_playback(scene: Scene, path: Path, plan: dict[str, np.ndarray],
                               Rgba(c.r(), c.g(), c.b(), alpha))
             meshcat.SetTransform(f"/{layer}/{p.name}", _pose(*p.position, 0.0, p.radius))
     animation = MeshcatAnimation(fps)
+    n = len(next(iter(plan.values())))
+    frames = (np.arange(n) if times is None
+              else np.round(np.asarray(times) * fps).astype(int))
     for layer, trajs in (("plan", plan), ("executed", executed)):
         for name, traj in trajs.items():
             body = scene.bodies[name]
-            for k, q in enumerate(np.asarray(traj)):
+            for k, q in zip(frames, np.asarray(traj), strict=True):
                 if body.role == "pusher":
                     X = _pose(q[0], q[1], 0.0, body.top / 2)
                 else:
                     X = _pose(q[0], q[1], q[2])
-                animation.SetTransform(k, f"/{layer}/{name}", X)
+                animation.SetTransform(int(k), f"/{layer}/{name}", X)
+    if joints is not None:
+        from robotplan.viewer_arms import add_arms
+
+        add_arms(meshcat, animation, scene, joints, frames)
     meshcat.SetAnimation(animation)
     html = meshcat.StaticHtml()
     write_atomically(path, lambda tmp: tmp.write_text(html))

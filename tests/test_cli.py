@@ -98,8 +98,8 @@ def test_bench_functional_refuses_a_non_model(tmp_path):
 
 
 def test_solve_refuses_unsupported_scenes_and_used_folders(tmp_path):
-    res = run("solve", str(TASKS / "two_arm_touch.yaml"), "--out", str(tmp_path / "a"))
-    assert res.returncode == 2 and "robots" in res.stderr and "Traceback" not in res.stderr
+    res = run("solve", str(TASKS / "three_objects.yaml"), "--out", str(tmp_path / "a"))
+    assert res.returncode == 2 and "objects" in res.stderr and "Traceback" not in res.stderr
     used = tmp_path / "b"
     used.mkdir()
     (used / "mine.txt").write_text("keep me")

@@ -38,3 +38,36 @@ def test_playback_is_one_self_contained_page(tmp_path):
     assert html.startswith("<!DOCTYPE html>") or "<html" in html[:200]
     assert "src=\"http" not in html and len(html) > 100_000
     assert "Animation" in html  # the timeline is embedded (as packed MeshCat commands)
+
+
+def test_arm_execution_tracks_the_plan_and_pushes_with_its_tip(tmp_path):
+    """The left iiwa follows an IK'd push path under position control: its tip stays on
+    Drake's forward kinematics of the planned angles, the box moves, the idle right arm
+    holds still; the playback draws both arms."""
+    from robotplan.arm_program import _kinematics
+    from robotplan.arms import track_tip_path
+    from robotplan.execute import execute_arms
+
+    scene = load_scene(TASKS / "two_arm_left_only.yaml")
+    left, right = (next(r for r in scene.robots if r.name == n) for n in ("left", "right"))
+    kin = _kinematics(left)
+    above = np.array([[-0.45, -0.37, 0.12]])
+    down = np.array([[-0.45, -0.37, 0.03]])
+    push = np.stack([np.full(12, -0.45), np.linspace(-0.37, -0.10, 12), np.full(12, 0.03)], 1)
+    Q = track_tip_path(kin, np.vstack([above, down, push[1:]]), kin.q0, 0.07, 0.12)
+    Q = np.vstack([kin.q0, Q])
+    q_right = np.tile(_kinematics(right).q0, (len(Q), 1))
+    substeps = [60, 60] + [20] * (len(Q) - 3)
+    ex = execute_arms(scene, "box", {"left": Q, "right": q_right}, substeps)
+    planned = np.array([kin.tip(q) for q in Q])
+    assert np.abs(ex.tips["left"][:3] - planned[:3]).max() < 2e-3  # before contact
+    assert np.abs(ex.joints["right"] - q_right).max() < 1e-3
+    moved = ex.final_pose[:2] - np.asarray(scene.bodies["box"].pose[:2])
+    assert moved[1] > 0.1, f"the box moved {moved} m"
+    assert ex.coverage is not None and ex.touch_distance is None
+    page = tmp_path / "playback.html"
+    plain = tmp_path / "plain.html"
+    write_playback(scene, plain, {"box": ex.object_poses}, {"box": ex.object_poses})
+    write_playback(scene, page, {"box": ex.object_poses}, {"box": ex.object_poses},
+                   joints=({"left": Q, "right": q_right}, ex.joints))
+    assert page.stat().st_size > plain.stat().st_size + 100_000  # the arm meshes

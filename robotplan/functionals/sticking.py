@@ -16,7 +16,8 @@ from torch import Tensor
 
 from robotplan.functionals.base import Functional
 
-__all__ = ["PushLever", "PushingDirection", "StickingContact", "centroid"]
+__all__ = ["PushLever", "PushingDirection", "QuasiStaticPush", "StickingContact", "centroid",
+           "limit_surface_radius"]
 
 
 def centroid(outline: np.ndarray) -> np.ndarray:
@@ -26,6 +27,20 @@ def centroid(outline: np.ndarray) -> np.ndarray:
     cross = x * yn - xn * y
     area = cross.sum() / 2
     return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6 * area)
+
+
+def limit_surface_radius(shape, spacing: float = 0.004) -> float:
+    """Characteristic length ``c = m_max / f_max`` (m) of the ellipsoidal limit surface for
+    a uniform support pressure: the mean distance of the footprint's points from its
+    centroid."""
+    ring = shape.outline()
+    c = centroid(ring)
+    lo, hi = ring.min(0), ring.max(0)
+    xs = np.arange(lo[0] + spacing / 2, hi[0], spacing)
+    ys = np.arange(lo[1] + spacing / 2, hi[1], spacing)
+    pts = np.stack(np.meshgrid(xs, ys, indexing="ij"), -1).reshape(-1, 2)
+    inside = shape.sdf(torch.as_tensor(pts)).numpy() < 0
+    return float(np.linalg.norm(pts[inside] - c, axis=1).mean())
 
 
 def _in_body_frame(X_WB: Tensor, p_W: Tensor) -> Tensor:
@@ -79,3 +94,37 @@ class PushLever(Functional):
         n = n / n.norm(dim=-1, keepdim=True).clamp_min(1e-9)
         d = c_W - p
         return (n[:, 0] * d[:, 1] - n[:, 1] * d[:, 0])[:, None]
+
+
+class QuasiStaticPush(Functional):
+    """Quasi-static pushing with a sticking point contact (ellipsoidal limit surface of
+    characteristic length ``c``, pusher–object friction ``μ``): the object's centroid moves
+    along the pushing force, which lies in the friction cone about the contact normal, and
+    the object turns by the force's moment, ``c² Δθ = r × Δc``.
+
+    ``residual(X_prev (T, 3), X (T, 3), x (T, 2), p_W (T, 2)) → (T, 3)``:
+    ``[c Δθ − (r × Δc)/c (= 0), μ Δc·n − Δc × n (≥ 0), μ Δc·n + Δc × n (≥ 0)]`` in m
+    with ``Δc`` the centroid's step, ``r = p − c_W`` and ``n = (p − x)/|p − x|``. Pushes
+    outside this cone slide along the face and turn the object in pybullet in ways the
+    sticking model (and often the learned H_F's tolerance) does not see.
+    """
+
+    def __init__(self, centroid_B: np.ndarray, radius: float, mu: float) -> None:
+        self.c_B = torch.as_tensor(np.asarray(centroid_B, dtype=float))
+        self.c, self.mu = radius, mu
+
+    def _centroid(self, X: Tensor) -> Tensor:
+        c, s = torch.cos(X[:, 2]), torch.sin(X[:, 2])
+        cB = self.c_B.to(X)
+        return X[:, :2] + torch.stack((c * cB[0] - s * cB[1], s * cB[0] + c * cB[1]), -1)
+
+    def residual(self, X_prev: Tensor, X: Tensor, x: Tensor, p: Tensor) -> Tensor:
+        c_W = self._centroid(X)
+        d = c_W - self._centroid(X_prev)
+        r = p - c_W
+        n = p - x
+        n = n / n.norm(dim=-1, keepdim=True).clamp_min(1e-9)
+        turn = self.c * (X[:, 2] - X_prev[:, 2]) - (r[:, 0] * d[:, 1] - r[:, 1] * d[:, 0]) / self.c
+        along = (d * n).sum(-1)
+        across = d[:, 0] * n[:, 1] - d[:, 1] * n[:, 0]
+        return torch.stack((turn, self.mu * along - across, self.mu * along + across), -1)
