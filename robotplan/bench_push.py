@@ -28,14 +28,61 @@ from robotplan.learned.push_data import PushDataSpec, draw_shape
 from robotplan.render import write_atomically
 from robotplan.scene import parse_scene
 
-__all__ = ["draw_scene", "run_bench_push", "summarize"]
+__all__ = ["OOD_FAMILIES", "draw_ood_shape", "draw_scene", "run_bench_push", "summarize"]
 
 GOAL_DISTANCE = 0.35  # m from the object to the goal centre
 GOAL_NOISE = 0.02  # m, standard deviation per axis
 CENTER_NOISE = 0.03  # m
 
 
+OOD_FAMILIES = ("triangle", "pentagon", "hexagon", "circle", "T", "cross", "U", "trapezoid")
+"""Footprints never seen in training (``--shapes ood``, paper Figs. 2 and 7); T, cross and
+U are concave. Scene ``i`` draws family ``i mod 8``, so 16 scenes hold each twice."""
+
+
+def draw_ood_shape(rng: np.random.Generator, family: str):
+    """A random footprint of ``family`` with bounding sides of 0.10–0.26 m (the push
+    data's range), centred near its frame's origin."""
+    from robotplan.sdf import Circle, Polygon
+
+    u = rng.uniform
+    if family == "circle":
+        return Circle(round(float(u(0.05, 0.10)), 4))
+    if family in ("pentagon", "hexagon"):
+        n, r = (5 if family == "pentagon" else 6), u(0.07, 0.12)
+        a = np.arange(n) * 2 * math.pi / n + math.pi / 2
+        pts = r * np.stack((np.cos(a), np.sin(a)), 1)
+    elif family == "triangle":
+        b, h = u(0.14, 0.24), u(0.12, 0.22)
+        pts = np.array([[-b / 2, -h / 3], [b / 2, -h / 3], [0.0, 2 * h / 3]])
+    elif family == "trapezoid":
+        b, h = u(0.16, 0.26), u(0.10, 0.18)
+        top = b * u(0.4, 0.8)
+        pts = np.array([[-b / 2, -h / 2], [b / 2, -h / 2], [top / 2, h / 2], [-top / 2, h / 2]])
+    elif family == "T":
+        w, h, t = u(0.16, 0.26), u(0.14, 0.24), u(0.05, 0.08)
+        pts = np.array([[-t / 2, -h / 2], [t / 2, -h / 2], [t / 2, h / 2 - t], [w / 2, h / 2 - t],
+                        [w / 2, h / 2], [-w / 2, h / 2], [-w / 2, h / 2 - t],
+                        [-t / 2, h / 2 - t]])
+    elif family == "cross":
+        a, t = u(0.16, 0.26) / 2, u(0.05, 0.08) / 2
+        pts = np.array([[t, -a], [t, -t], [a, -t], [a, t], [t, t], [t, a], [-t, a], [-t, t],
+                        [-a, t], [-a, -t], [-t, -t], [-t, -a]])
+    elif family == "U":
+        w, h, t = u(0.16, 0.26), u(0.12, 0.20), u(0.04, 0.07)
+        pts = np.array([[-w / 2, -h / 2], [w / 2, -h / 2], [w / 2, h / 2], [w / 2 - t, h / 2],
+                        [w / 2 - t, -h / 2 + t], [-w / 2 + t, -h / 2 + t], [-w / 2 + t, h / 2],
+                        [-w / 2, h / 2]])
+    else:
+        raise ValueError(f"unknown footprint family {family!r}")
+    return Polygon(tuple((round(float(x), 4), round(float(y), 4)) for x, y in pts))
+
+
 def _shape_doc(shape) -> dict:
+    if shape.type == "circle":
+        return {"type": "circle", "radius": float(shape.radius)}
+    if shape.type == "polygon":
+        return {"type": "polygon", "vertices": [list(v) for v in shape.vertices]}
     if shape.type == "box":
         return {"type": "box", "size": [round(float(v), 4) for v in shape.size]}
     return {"type": "lshape", "size": [round(float(v), 4) for v in shape.size],
@@ -44,8 +91,11 @@ def _shape_doc(shape) -> dict:
 
 def draw_scene(index: int, seed: int, kind: str) -> dict:
     """The scene document (the YAML schema) of benchmark scene ``index`` for ``seed``."""
-    rng = np.random.default_rng([seed, index, 0 if kind == "box" else 1])
-    shape = draw_shape(rng, PushDataSpec(), kind)
+    rng = np.random.default_rng([seed, index, {"box": 0, "lshape": 1}.get(kind, 2)])
+    if kind == "ood":
+        shape = draw_ood_shape(rng, family_of(index, kind))
+    else:
+        shape = draw_shape(rng, PushDataSpec(), kind)
     r_obj = shape.bound_radius
     center = rng.normal(0.0, CENTER_NOISE, 2)
     yaw = rng.uniform(-math.pi, math.pi)
@@ -71,6 +121,10 @@ def draw_scene(index: int, seed: int, kind: str) -> dict:
     }
 
 
+def family_of(index: int, kind: str) -> str:
+    return OOD_FAMILIES[index % len(OOD_FAMILIES)] if kind == "ood" else kind
+
+
 def _quartiles(values: list[float]) -> dict:
     if not values:
         return {"n": 0}
@@ -86,6 +140,11 @@ def summarize(rows: list[dict]) -> dict:
         out["coverage"][kind] = _quartiles([r["coverage"] for r in sel])
         out["plan_seconds"][kind] = _quartiles([r["plan_seconds"] for r in sel])
     out["plan_seconds"]["all"] = _quartiles([r["plan_seconds"] for r in rows])
+    ood = [r for r in rows if r["shape"] == "ood"]
+    if ood:
+        out["coverage_by_family"] = {
+            fam: _quartiles([r["coverage"] for r in ood if r.get("family") == fam])
+            for fam in sorted({r.get("family") for r in ood})}
     return out
 
 
@@ -143,7 +202,8 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: Path, workers: 
                              progress=False, exhaustive=exhaustive, quiet=True,
                              time_budget=time_budget)
         ex = result.get("execution") or {}
-        row = {"scene": name, "shape": kind, "status": result["status"],
+        row = {"scene": name, "shape": kind, "family": family_of(i, kind),
+               "status": result["status"],
                "coverage": float(ex.get("coverage") or 0.0),
                "plan_seconds": result["plan_seconds"], "total_seconds": round(time.time() - t0, 1),
                "programs": result["programs_solved"],

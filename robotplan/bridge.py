@@ -14,7 +14,7 @@ import numpy as np
 import torch
 from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoDiff
 
-__all__ = ["bridge", "stepwise"]
+__all__ = ["bridge", "stepwise", "stepwise_sparsity"]
 
 
 def bridge(fn, timings: dict[str, float] | None = None, name: str = ""):
@@ -62,4 +62,16 @@ def stepwise(H, blocks: list[np.ndarray], scale: float):
             J[rows, cols] += Ji.numpy()  # a block holds each variable once; blocks may share
         return r.numpy().ravel() * scale, J * scale
 
+    fn.columns = columns  # for stepwise_sparsity
     return fn, flat[first]
+
+
+def stepwise_sparsity(fn, m: int) -> list[tuple[int, int]]:
+    """The (row, column) pairs a :func:`stepwise` ``fn`` with ``m`` residuals per step can
+    make non-zero: step t's rows depend on step t's variables only. Given to Drake, SNOPT
+    works with these instead of dense rows over every variable of the trajectory."""
+    pairs = set()
+    for cols in fn.columns:
+        for t, c in enumerate(cols[:, 0]):
+            pairs.update((t * m + k, int(j)) for k in range(m) for j in c)
+    return sorted(pairs)

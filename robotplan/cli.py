@@ -138,9 +138,9 @@ def _cmd_bench_push(args: argparse.Namespace) -> int:
     if args.scenes < 1:
         print("error: --scenes: must be at least 1", file=sys.stderr)
         return EXIT_BAD_INPUT
-    bad = set(args.shapes.split(",")) - {"box", "lshape"}
+    bad = set(args.shapes.split(",")) - {"box", "lshape", "ood"}
     if bad:
-        print(f"error: --shapes: unknown shape type {sorted(bad)[0]!r} (box, lshape)",
+        print(f"error: --shapes: unknown shape type {sorted(bad)[0]!r} (box, lshape, ood)",
               file=sys.stderr)
         return EXIT_BAD_INPUT
     out = Path(args.out)
@@ -303,7 +303,9 @@ def _parser() -> argparse.ArgumentParser:
                     help="scenes, per-scene results, CSV, box plot (continues a partial run)")
     bp.add_argument("--model", default=str(Path(__file__).resolve().parents[1] / "learned"
                                            / "push_flow"), metavar="DIR")
-    bp.add_argument("--shapes", default="box,lshape", help="comma-separated: box, lshape")
+    bp.add_argument("--shapes", default="box,lshape",
+                    help="comma-separated: box, lshape, ood (unseen footprints: triangle, "
+                    "pentagon, hexagon, circle, T, cross, U, trapezoid)")
     bp.add_argument("--workers", type=int, default=2)
     bp.add_argument("--exhaustive", action="store_true", help="solve every skeleton")
     bp.add_argument("--time-budget", type=float, default=None, metavar="S",

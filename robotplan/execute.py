@@ -15,6 +15,8 @@ from robotplan.sim import PHYSICS, Physics, PushWorld
 
 __all__ = ["Execution", "execute_arms", "execute_push"]
 
+OBSTACLE_GAP = 0.001  # m: closer than this counts as the object touching an obstacle
+
 
 @dataclass
 class Execution:
@@ -25,6 +27,11 @@ class Execution:
     touch_distance: float | None
     tips: dict = field(default_factory=dict)  # robot → (N+1, 3) tip centres
     joints: dict = field(default_factory=dict)  # robot → (N+1, dof) measured joint angles
+    obstacle_contact: bool = False  # the object touched an obstacle (within 1 mm) at any step
+
+
+def _obstacles(scene: Scene) -> list:
+    return [(o.shape, o.height, o.pose) for o in scene.obstacles]
 
 
 def execute_push(scene: Scene, obj: str, pusher: str, q_pusher: np.ndarray,
@@ -33,16 +40,20 @@ def execute_push(scene: Scene, obj: str, pusher: str, q_pusher: np.ndarray,
     body, tool = scene.bodies[obj], scene.bodies[pusher]
     spec = next(o for o in scene.objects if o.name == obj)
     with PushWorld(physics) as world:
-        world.reset(body.shape, spec.height, body.pose, tool.shape.radius, tool.pose[:2])
+        world.reset(body.shape, spec.height, body.pose, tool.shape.radius, tool.pose[:2],
+                    _obstacles(scene))
         poses = [world.object_pose()[0]]
         pushers = [world.pusher_position()]
+        hit = False
         for a, b in itertools.pairwise(q_pusher):
             for s in range(1, physics.keep_every + 1):
                 world.step(tuple(a + (b - a) * s / physics.keep_every))
+                hit = hit or world.touches_obstacle(OBSTACLE_GAP)
             poses.append(world.object_pose()[0])
             pushers.append(world.pusher_position())
     cov, touch = _outcome(scene, body, poses[-1], pushers[-1], tool.shape.radius)
-    return Execution(np.array(poses), np.array(pushers), poses[-1], cov, touch)
+    return Execution(np.array(poses), np.array(pushers), poses[-1], cov, touch,
+                     obstacle_contact=hit)
 
 
 def _outcome(scene: Scene, body, final: np.ndarray, tip_xy: np.ndarray, radius: float
@@ -68,7 +79,8 @@ def execute_arms(scene: Scene, obj: str, q_joints: dict[str, np.ndarray],
     body = scene.bodies[obj]
     spec = next(o for o in scene.objects if o.name == obj)
     with PushWorld(physics) as world:
-        world.reset(body.shape, spec.height, body.pose, None)
+        world.reset(body.shape, spec.height, body.pose, None, obstacles=_obstacles(scene))
+        hit = False
         arms = {r.name: add_arm(world, r) for r in scene.robots}
         poses = [world.object_pose()[0]]
         tips = {name: [arm.tip_position()] for name, arm in arms.items()}
@@ -79,6 +91,7 @@ def execute_arms(scene: Scene, obj: str, q_joints: dict[str, np.ndarray],
                     a, b = q_joints[name][t - 1], q_joints[name][t]
                     arm.drive(a + (b - a) * s / substeps)
                 world.pb.stepSimulation(physicsClientId=world.client)
+                hit = hit or world.touches_obstacle(OBSTACLE_GAP)
             poses.append(world.object_pose()[0])
             for name, arm in arms.items():
                 tips[name].append(arm.tip_position())
@@ -97,4 +110,4 @@ def execute_arms(scene: Scene, obj: str, q_joints: dict[str, np.ndarray],
     radius = scene.bodies[last].shape.radius
     cov, touch = _outcome(scene, body, final, tips[last][-1, :2], radius)
     return Execution(np.array(poses), tips[last][:, :2], final, cov, touch, tips,
-                     {k: np.array(v) for k, v in angles.items()})
+                     {k: np.array(v) for k, v in angles.items()}, hit)

@@ -12,14 +12,15 @@ import torch
 if TYPE_CHECKING:
     from robotplan.program import PushProgram
 
-__all__ = ["contact_offset", "guess_goal", "init_point", "initial_guess"]
+__all__ = ["contact_offset", "guess_goal", "init_point", "initial_guess", "object_route"]
 
 
 def init_point(prog: PushProgram, index: int, center: np.ndarray) -> np.ndarray:
     """The phase's fixed init point ``index`` around an object centred at ``center``."""
     start = np.array(prog.obj.pose[:2], dtype=float)
     goal = guess_goal(prog, start)
-    ang = prog.space.init_angle(index, start, None if np.allclose(goal, start) else goal)
+    ang = prog.space.init_angle(index, start, None if np.allclose(goal, start) else goal,
+                                prog.obj.pose[2])
     dist = (prog.obj.shape.bound_radius + prog.pusher.shape.radius
             + prog.space.init_clearance)
     return center + dist * np.array([math.cos(ang), math.sin(ang)])
@@ -60,16 +61,87 @@ def guess_goal(prog: PushProgram, start: np.ndarray) -> np.ndarray:
     return start - away / max(dist, 1e-9) * max(0.0, dist - TOUCH_DISTANCE)
 
 
+def object_route(prog: PushProgram, start: np.ndarray, goal: np.ndarray,
+                 clearance: float = 0.03) -> np.ndarray:
+    """Waypoints ``(W, 2)`` of the object's centre from ``start`` to ``goal``: straight, or
+    around every obstacle whose disc (bound radius + the object's + ``clearance``) the
+    straight line crosses, by the side nearer to the line."""
+    points = [start]
+    u = goal - start
+    length = float(np.linalg.norm(u))
+    if length < 1e-9:
+        return np.array([start, goal])
+    u = u / length
+    normal = np.array([-u[1], u[0]])
+    detours = []
+    for spec in prog.scene.obstacles:
+        wall = prog.scene.bodies[spec.name]
+        c = np.array(wall.pose[:2], dtype=float)
+        reach = wall.shape.bound_radius + prog.obj.shape.bound_radius + clearance
+        along, side = float((c - start) @ u), float((c - start) @ normal)
+        if 0.0 < along < length and abs(side) < reach:
+            sign = -1.0 if side >= 0 else 1.0
+            detours.append((along, c + sign * reach * normal))
+    points += [via for _, via in sorted(detours, key=lambda d: d[0])]
+    return np.array([*points, goal])
+
+
+def face_push_lengths(directions: np.ndarray, travel: np.ndarray) -> tuple[np.ndarray, float]:
+    """Non-negative lengths ``a (K,)`` of straight pushes along unit ``directions (K, 2)``
+    whose sum best matches ``travel (2,)``, and the distance (m) they leave to it (every
+    subset of pushes solved by least squares; K ≤ 3 in practice)."""
+    K = len(directions)
+    best, best_gap = np.zeros(K), float(np.linalg.norm(travel))
+    # larger subsets first, so that equal fits share the travel (least-norm lengths)
+    for mask in sorted(range(1, 2**K), key=lambda m: -bin(m).count("1")):
+        idx = [k for k in range(K) if mask >> k & 1]
+        A = directions[idx].T
+        a, *_ = np.linalg.lstsq(A, travel, rcond=None)
+        if (a < -1e-9).any():
+            continue
+        gap = float(np.linalg.norm(A @ a - travel))
+        if gap < best_gap - 1e-6:
+            best, best_gap = np.zeros(K), gap
+            best[idx] = np.maximum(a, 0.0)
+    return best, best_gap
+
+
+def push_ends(prog: PushProgram, start: np.ndarray, goal: np.ndarray) -> np.ndarray:
+    """Where the guess leaves the object after each push ``(K, 2)``: along the route
+    (:func:`object_route`), or, with init points in the object's frame (face normals of a
+    box), by straight pushes away from each push's init point (:func:`face_push_lengths`)."""
+    pushes = [ph for ph in prog.skeleton.phases if ph.mode == "push"]
+    if prog.space.init_frame == "object":
+        yaw = prog.obj.pose[2]
+        angles = [prog.space.init_angle(ph.init, start, goal, yaw) + math.pi for ph in pushes]
+        dirs = np.array([[math.cos(a), math.sin(a)] for a in angles]).reshape(-1, 2)
+        lengths, _ = face_push_lengths(dirs, goal - start)
+        return start + np.cumsum(lengths[:, None] * dirs, axis=0)
+    route = object_route(prog, start, goal)
+    return np.array([_along(route, (k + 1) / len(pushes)) for k in range(len(pushes))])
+
+
+def _along(route: np.ndarray, fraction: float) -> np.ndarray:
+    """The point at ``fraction`` of the route's length."""
+    seg = np.linalg.norm(np.diff(route, axis=0), axis=1)
+    target = fraction * seg.sum()
+    for k, d in enumerate(seg):
+        if target <= d or k == len(seg) - 1:
+            return route[k] + (route[k + 1] - route[k]) * min(1.0, target / max(d, 1e-12))
+        target -= d
+    return route[-1]
+
+
 def initial_guess(prog: PushProgram) -> dict[str, np.ndarray]:
     """Paper app. I.2: the pusher moves on a circle around the object to the phase's
     init point, then pushes; the object slides towards the goal in push phases."""
     T, N = prog.T, prog.N
     start = np.array(prog.obj.pose, dtype=float)
     goal = guess_goal(prog, start[:2])
+    ends = push_ends(prog, start[:2], goal) if prog.skeleton.pushes else None
     q1 = np.tile(start, (N + 1, 1))
     q2 = np.zeros((N + 1, 2))
     q2[0] = prog.pusher.pose[:2]
-    n_push = prog.skeleton.pushes
     speed = prog.settings.guess_speed  # per step and axis
     done = 0
     for k, ph in enumerate(prog.skeleton.phases):
@@ -91,7 +163,7 @@ def initial_guess(prog: PushProgram) -> dict[str, np.ndarray]:
             q1[a + 1:b + 1] = q1[a]
         else:  # the pusher steps into contact, then the two move towards the goal
             done += 1
-            end = start[:2] + (goal - start[:2]) * done / n_push
+            end = ends[done - 1]
             offset = contact_offset(prog, q1[a], q2[a] - q1[a, :2])
             contact = q1[a, :2] + offset
             k = min(T - 1, math.ceil(np.abs(contact - q2[a]).max() / speed))

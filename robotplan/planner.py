@@ -21,9 +21,9 @@ import torch
 
 from robotplan.program import FEASIBLE, ProgramSettings, Solution, solve_skeleton
 from robotplan.scene import Scene
-from robotplan.skeleton import Skeleton, space_for
+from robotplan.skeleton import Skeleton, SkeletonSpace, space_for
 
-__all__ = ["SearchResult", "search_push"]
+__all__ = ["SearchResult", "merge_results", "search_push"]
 
 GOOD_RMS_MM = 5.0  # H_F residual (RMS over steps) good enough to stop: F_flow errs ~4.2 mm
 # a plan whose H_F residual exceeds the no-motion baseline (10.8 mm) is one the learned
@@ -45,12 +45,13 @@ class SearchResult:
                 and self.best.dynamics_rms_mm <= PLAUSIBLE_RMS_MM)
 
 
-def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings) -> None:
+def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings,
+                 space: SkeletonSpace) -> None:
     from robotplan.learned.dynamics import load_model
 
     torch.set_num_threads(1)  # one thread per process (DESIGN §4)
     _worker.update(scene=scene, model=load_model(model_dir), settings=settings,
-                   space=space_for(scene))
+                   space=space)
 
 
 def _solve(skeleton: Skeleton) -> Solution:
@@ -69,10 +70,11 @@ def good_enough(s: Solution) -> bool:
     return s.violation <= FEASIBLE and s.dynamics_rms_mm <= GOOD_RMS_MM
 
 
-def order_candidates(scene: Scene, skeletons: list[Skeleton]) -> list[Skeleton]:
+def order_candidates(scene: Scene, skeletons: list[Skeleton],
+                     space: SkeletonSpace | None = None) -> list[Skeleton]:
     """Most promising first: pushes from init points behind the object (seen from the goal),
     then fewer pushes. Stable for ties."""
-    space = space_for(scene)
+    space = space or space_for(scene)
     region = scene.goal_region
     if region is None:
         return list(skeletons)
@@ -81,7 +83,8 @@ def order_candidates(scene: Scene, skeletons: list[Skeleton]) -> list[Skeleton]:
         obj = scene.bodies[sk.phases[0].object]
         away = np.array(obj.pose[:2]) - np.array(region.pose[:2])
         away = away / max(float(np.linalg.norm(away)), 1e-9)
-        dirs = [space.init_angle(p.init, obj.pose[:2], region.pose[:2]) for p in sk.phases
+        dirs = [space.init_angle(p.init, obj.pose[:2], region.pose[:2], obj.pose[2])
+                for p in sk.phases
                 if p.mode == "push"]
         align = np.mean([away @ np.array([math.cos(a), math.sin(a)]) for a in dirs])
         return (-round(float(align), 6), sk.pushes)
@@ -92,7 +95,8 @@ def order_candidates(scene: Scene, skeletons: list[Skeleton]) -> list[Skeleton]:
 def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
                 settings: ProgramSettings | None = None, workers: int = 2,
                 progress: bool = True, exhaustive: bool = False,
-                time_budget: float | None = None) -> SearchResult:
+                time_budget: float | None = None,
+                space: SkeletonSpace | None = None) -> SearchResult:
     """Solve the skeletons (a process per core), most promising first, and pick the best;
     stop at the first good-enough plan unless ``exhaustive``, and start no program after
     ``time_budget`` seconds (the best so far wins)."""
@@ -100,8 +104,9 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
 
     settings = settings or ProgramSettings()
     t0 = time.time()
-    args = (scene, str(model_dir), settings)
-    queue = order_candidates(scene, skeletons)
+    space = space or space_for(scene)
+    args = (scene, str(model_dir), settings, space)
+    queue = order_candidates(scene, skeletons, space)
     solutions: list[Solution] = []
     bar = tqdm(total=len(queue), unit="program", desc="skeletons", disable=not progress)
 
@@ -128,3 +133,10 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
     solutions.sort(key=lambda s: order[s.skeleton])
     best = min(solutions, key=_rank) if solutions else None
     return SearchResult(best, solutions, time.time() - t0)
+
+
+def merge_results(a: SearchResult, b: SearchResult) -> SearchResult:
+    """One result from two searches run one after the other."""
+    every = a.candidates + b.candidates
+    best = min(every, key=_rank) if every else None
+    return SearchResult(best, every, a.seconds + b.seconds)

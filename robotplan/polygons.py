@@ -12,6 +12,7 @@ import numpy as np
 __all__ = [
     "as_ccw",
     "clip_convex",
+    "convex_parts",
     "intersection_area",
     "is_convex",
     "is_simple",
@@ -180,3 +181,41 @@ def intersection_area(poly_a: np.ndarray, poly_b: np.ndarray) -> float:
         if len(piece) >= 3:
             total += abs(signed_area(piece))
     return total
+
+
+def convex_parts(poly: np.ndarray) -> list[np.ndarray]:
+    """Convex pieces ``[(V_i, 2)]`` (CCW) whose union is the simple polygon ``poly``: the
+    polygon itself when convex, else its ear-clipping triangles merged greedily across
+    shared edges while the union stays convex (Hertel–Mehlhorn style)."""
+    poly = as_ccw(poly)
+    if is_convex(poly):
+        return [poly]
+    parts = [t.copy() for t in triangulate(poly)]
+    merged = True
+    while merged:
+        merged = False
+        for i in range(len(parts)):
+            for j in range(i + 1, len(parts)):
+                union = _merge_on_shared_edge(parts[i], parts[j])
+                if union is not None and is_convex(union):
+                    parts[i] = union
+                    parts.pop(j)
+                    merged = True
+                    break
+            if merged:
+                break
+    return parts
+
+
+def _merge_on_shared_edge(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    """The polygon a ∪ b when they share an edge (a's u→v is b's v→u), else None."""
+    n, m = len(a), len(b)
+    for i in range(n):
+        u, v = a[i], a[(i + 1) % n]
+        for j in range(m):
+            if np.allclose(b[j], v) and np.allclose(b[(j + 1) % m], u):
+                # walk a from v round to u, then b from u (after j+1) round to v
+                ring = [a[(i + 1 + k) % n] for k in range(n)]
+                ring += [b[(j + 2 + k) % m] for k in range(m - 2)]
+                return np.array(ring)
+    return None

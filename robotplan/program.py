@@ -31,9 +31,9 @@ import numpy as np
 import torch
 from pydrake.solvers import IpoptSolver, MathematicalProgram, SnoptSolver, SolverOptions
 
-from robotplan.bridge import bridge, stepwise
+from robotplan.bridge import bridge, stepwise, stepwise_sparsity
 from robotplan.functionals import Collision, ContactPoint, GoalRegion
-from robotplan.functionals.collision import face_contact_overlap
+from robotplan.functionals.collision import FixedCollision, face_contact_overlap
 from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
 from robotplan.functionals.sticking import (
     PushingDirection,
@@ -46,6 +46,7 @@ from robotplan.functionals.sticking import (
 from robotplan.guess import initial_guess
 from robotplan.learned.dynamics import PushDynamics
 from robotplan.scene import Scene
+from robotplan.sim import support_corners
 from robotplan.skeleton import Skeleton, SkeletonSpace
 
 __all__ = ["ProgramSettings", "PushProgram", "Solution", "solve_skeleton"]
@@ -71,6 +72,9 @@ class ProgramSettings:
     # H_coll and H_PoC fought and SNOPT stopped with both violated by ~1 mm
     coll_area: float = 2e-5
     coll_depth: float = 0.0005
+    # m² of smoothed overlap allowed between the object and an obstacle (a = 500, a 12 cm
+    # box beside a wall: 8.5e-6 at 1 cm, 6e-8 at 2 cm, so ~1.3 cm of clearance)
+    obstacle_overlap: float = 1e-6
     reach_clearance: float = 0.01  # m between pusher and object outside push steps
     goal_tol: float = 0.003  # share of the object's area allowed outside the goal
     # plan into the region shrunk by this much (m), at most a third of the room the object
@@ -79,6 +83,11 @@ class ProgramSettings:
     accel_weight: float = 1.0  # larger weights kept SNOPT from certifying optimality
     contact_accel_weight: float = 0.1
     solver: str = "snopt"
+    # hand SNOPT the per-step sparsity of the stepwise constraints. Off for free pushers: on
+    # bench_box_003 (seed 0) push@0,push@1 the kinematic stage went from feasible (coverage
+    # 0.998) to infeasible; on for arms (ArmSettings), where the dense rows over every joint
+    # made one kinematic stage 30 s instead of 11 s
+    sparse_jacobians: bool = False
     optimality_tol: float = 2e-3
     feasibility_tol: float = 1e-4
     # SNOPT major iterations of the learned stage (it starts from the kinematic plan and keeps
@@ -93,7 +102,8 @@ class ProgramSettings:
     # rad per push step: sticking alone let the object spin about the pusher, its centre
     # sweeping faster than any push moves it
     warm_max_turn: float = 0.2
-    object_motion_weight: float = 1.0  # kinematic stage: Σ|Δq_obj|² (yaw in 10 cm units)
+    object_motion_weight: float = 1.0  # kinematic stage: Σ|Δq_obj|² (yaw in turn_length m)
+    turn_length: float = 0.1
     # cost per cm² of the push's lever arm about the centroid (PushLever), both stages: an
     # off-centre push on a long face turned the box in pybullet, not in the plan
     lever_weight: float = 0.01
@@ -270,7 +280,10 @@ class PushProgram:
         n = blocks[0].shape[0]
         lb, ub = (np.broadcast_to(b[:, None] if b.ndim == 1 else b, (n, m)).ravel()
                   for b in (np.asarray(lb, dtype=float), np.asarray(ub, dtype=float)))
-        self.prog.AddConstraint(bridge(fn, self.timings, name), lb, ub, variables, name)
+        binding = self.prog.AddConstraint(bridge(fn, self.timings, name), lb, ub, variables,
+                                          name)
+        if self.settings.sparse_jacobians:
+            binding.evaluator().SetGradientSparsityPattern(stepwise_sparsity(fn, m))
 
     def _add_cost(self, total, variables: np.ndarray, name: str) -> None:
         """A scalar cost ``total(x, jac) → ((1,), J (1, n) | None)`` on ``variables``."""
@@ -289,6 +302,12 @@ class PushProgram:
         ub[self.push_steps - 1] = touch
         self._add_rows(H, [self.Q1[1:], self.Q2[1:]], 1, 1e4, 0.0, ub * 1e4,
                        "H_coll")  # in cm²
+        for spec in self.scene.obstacles:
+            wall = self.scene.bodies[spec.name]
+            self._add_rows(FixedCollision(self.obj, wall, s.a_coll), [self.Q1[1:]], 1, 1e4,
+                           0.0, s.obstacle_overlap * 1e4, f"H_coll_{spec.name}")
+            self._add_rows(FixedCollision(self.pusher, wall, s.a_coll), [self.Q2[1:]], 1, 1e4,
+                           0.0, clear * 1e4, f"H_coll_{spec.name}_pusher")
 
     def _add_contact(self) -> None:
         if len(self.push_steps):
@@ -328,14 +347,14 @@ class PushProgram:
                                                 self.Q2[self.push_steps], self.P],
                            1, 100, 0.0, np.inf, "pushing")
         if steps and self.settings.push_friction > 0:
-            shape = self.obj.shape
-            H = QuasiStaticPush(centroid(shape.outline()), limit_surface_radius(shape),
-                                self.settings.push_friction)
+            c_B = centroid(self.obj.shape.outline())
+            radius = limit_surface_radius(support_corners(self.obj.shape), c_B)
+            H = QuasiStaticPush(c_B, radius, self.settings.push_friction)
             k = self.push_steps
             self._add_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P], 3, 100,
                            np.zeros((1, 3)), np.array([[0.0, np.inf, np.inf]]), "quasi_static")
         w = self.settings.object_motion_weight
-        scale = np.array([1.0, 1.0, 0.1])
+        scale = np.array([1.0, 1.0, self.settings.turn_length])
         for t in range(1, self.N + 1):
             D = np.hstack((np.diag(scale), -np.diag(scale)))
             self.prog.AddQuadraticCost(2 * w * D.T @ D, np.zeros(6),

@@ -14,8 +14,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from robotplan._quiet import c_output_silenced, connect_direct, import_pybullet
-from robotplan.polygons import signed_area
-from robotplan.sdf import Box, LShape, Shape2D
+from robotplan.polygons import convex_parts, signed_area
+from robotplan.sdf import Box, Circle, LShape, Shape2D
 
 __all__ = ["PHYSICS", "Physics", "PushWorld", "footprint_centroid"]
 
@@ -62,6 +62,36 @@ def _boxes_of(shape: Shape2D) -> list[tuple[tuple[float, float], tuple[float, fl
     raise NotImplementedError(f"no pybullet body for {shape.type} footprints yet")
 
 
+def _prism_obj(parts: list[np.ndarray], height: float) -> str:
+    """Wavefront OBJ text of convex prisms, one ``o`` group per footprint part: pybullet
+    loads each group as one convex hull of a compound shape (concave footprints)."""
+    lines, base = [], 1
+    for i, part in enumerate(parts):
+        n = len(part)
+        lines.append(f"o part{i}")
+        lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for z in (-height / 2, height / 2)
+                  for x, y in part]
+        lines.append("f " + " ".join(str(base + k) for k in reversed(range(n))))
+        lines.append("f " + " ".join(str(base + n + k) for k in range(n)))
+        lines += [f"f {base + k} {base + (k + 1) % n} {base + n + (k + 1) % n} {base + n + k}"
+                  for k in range(n)]
+        base += 2 * n
+    return "\n".join(lines) + "\n"
+
+
+def support_corners(shape: Shape2D) -> np.ndarray:
+    """Points ``(K, 2)`` of the simulated footprint's rim in the shape frame where
+    pybullet's contacts with the table carry the object (they set its limit surface):
+    the corners of its boxes or convex parts, 16 points round a disc."""
+    if isinstance(shape, Circle):
+        a = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+        return shape.radius * np.stack((np.cos(a), np.sin(a)), 1)
+    if isinstance(shape, Box | LShape):
+        signs = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]], dtype=float)
+        return np.vstack([np.asarray(c) + signs * np.asarray(h) for c, h in _boxes_of(shape)])
+    return np.vstack(convex_parts(shape.outline()))
+
+
 class PushWorld:
     """A pybullet DIRECT world with a table, one object and one spherical pusher."""
 
@@ -70,6 +100,7 @@ class PushWorld:
         self.physics = physics
         self.client = connect_direct()
         self.object: int | None = None
+        self.obstacles: list[int] = []
         self.pusher: int | None = None
         self.table: int | None = None
         self._constraint: int | None = None
@@ -87,10 +118,12 @@ class PushWorld:
         self.close()
 
     def reset(self, shape: Shape2D, height: float, pose: tuple[float, float, float],
-              pusher_radius: float | None, pusher_xy: tuple[float, float] = (0.0, 0.0)
+              pusher_radius: float | None, pusher_xy: tuple[float, float] = (0.0, 0.0),
+              obstacles: list[tuple[Shape2D, float, tuple[float, float, float]]] = ()
               ) -> None:
         """Place a new object (footprint ``shape``) at ``pose`` and a pusher at ``pusher_xy``
-        (none if ``pusher_radius`` is None: arms push, see robotplan.sim_arms)."""
+        (none if ``pusher_radius`` is None: arms push, see robotplan.sim_arms); fixed
+        ``obstacles`` as ``(footprint, height, pose)``."""
         pb, c, ph = self.pb, self.client, self.physics
         pb.resetSimulation(physicsClientId=c)  # a clean world: no ids reused across scenes
         pb.setGravity(0, 0, -ph.gravity, physicsClientId=c)
@@ -104,23 +137,9 @@ class PushWorld:
         pb.changeDynamics(self.table, -1, lateralFriction=ph.table_friction,
                           restitution=ph.restitution, physicsClientId=c)
         self._com = footprint_centroid(shape)
-        boxes = _boxes_of(shape)
-        col = pb.createCollisionShapeArray(
-            [pb.GEOM_BOX] * len(boxes),
-            halfExtents=[[hx, hy, height / 2] for _, (hx, hy) in boxes],
-            collisionFramePositions=[[cx - self._com[0], cy - self._com[1], 0.0]
-                                     for (cx, cy), _ in boxes],
-            physicsClientId=c)
-        # The base frame is the centre of mass; the shape frame sits at -com in it.
-        x, y, yaw = pose
-        cs, sn = np.cos(yaw), np.sin(yaw)
-        cx, cy = self._com
-        com_w = (x + cs * cx - sn * cy, y + sn * cx + cs * cy)
-        self.object = pb.createMultiBody(
-            ph.object_mass, col, basePosition=[com_w[0], com_w[1], height / 2 + 1e-4],
-            baseOrientation=pb.getQuaternionFromEuler([0, 0, yaw]), physicsClientId=c)
-        pb.changeDynamics(self.object, -1, lateralFriction=ph.object_friction,
-                          restitution=ph.restitution, physicsClientId=c)
+        self.object = self._footprint_body(shape, height, pose, ph.object_mass)
+        self.obstacles = [self._footprint_body(o_shape, o_height, o_pose, 0.0)
+                          for o_shape, o_height, o_pose in obstacles]
         if pusher_radius is None:
             self._settle()
             return
@@ -137,6 +156,53 @@ class PushWorld:
         pb.changeConstraint(self._constraint, start, maxForce=ph.pusher_max_force,
                             physicsClientId=c)
         self._settle()
+
+    def _footprint_body(self, shape: Shape2D, height: float, pose, mass: float) -> int:
+        """A footprint extruded to ``height`` at planar ``pose`` (mass 0: fixed). Its base
+        frame is the footprint's centroid (the centre of mass)."""
+        pb, c, ph = self.pb, self.client, self.physics
+        com = footprint_centroid(shape)
+        col = self._collision_shape(shape, height, com)
+        x, y, yaw = pose
+        cs, sn = np.cos(yaw), np.sin(yaw)
+        com_w = (x + cs * com[0] - sn * com[1], y + sn * com[0] + cs * com[1])
+        body = pb.createMultiBody(mass, col, basePosition=[com_w[0], com_w[1], height / 2 + 1e-4],
+                                  baseOrientation=pb.getQuaternionFromEuler([0, 0, yaw]),
+                                  physicsClientId=c)
+        pb.changeDynamics(body, -1, lateralFriction=ph.object_friction,
+                          restitution=ph.restitution, physicsClientId=c)
+        return body
+
+    def _collision_shape(self, shape: Shape2D, height: float, com: np.ndarray) -> int:
+        """The footprint extruded to ``height`` around its centroid ``com``: boxes for boxes
+        and L-shapes (as the push data), a cylinder for a disc, convex prisms (one per
+        :func:`convex_parts` piece) for polygons."""
+        pb, c = self.pb, self.client
+        if isinstance(shape, Box | LShape):
+            boxes = _boxes_of(shape)
+            return pb.createCollisionShapeArray(
+                [pb.GEOM_BOX] * len(boxes),
+                halfExtents=[[hx, hy, height / 2] for _, (hx, hy) in boxes],
+                collisionFramePositions=[[cx - com[0], cy - com[1], 0.0]
+                                         for (cx, cy), _ in boxes],
+                physicsClientId=c)
+        if isinstance(shape, Circle):
+            return pb.createCollisionShape(pb.GEOM_CYLINDER, radius=shape.radius,
+                                           height=height, physicsClientId=c)
+        import tempfile
+        from pathlib import Path
+
+        parts = [part - com for part in convex_parts(shape.outline())]
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp) / "footprint.obj"
+            path.write_text(_prism_obj(parts, height))
+            return pb.createCollisionShape(pb.GEOM_MESH, fileName=str(path),
+                                           physicsClientId=c)
+
+    def touches_obstacle(self, gap: float = 0.0) -> bool:
+        """Whether the object is within ``gap`` (m) of any obstacle."""
+        return any(self.pb.getClosestPoints(self.object, o, gap, physicsClientId=self.client)
+                   for o in self.obstacles)
 
     def _settle(self) -> None:
         """Let the object settle onto the table."""

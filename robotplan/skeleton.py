@@ -54,15 +54,19 @@ class SkeletonSpace:
     templates: dict[str, tuple[str, ...]]
     init_directions_deg: tuple[float, ...]
     init_clearance: float
-    init_frame: Literal["table", "goal"] = "table"
+    init_frame: Literal["table", "goal", "object"] = "table"
 
-    def init_angle(self, index: int, obj_xy, goal_xy) -> float:
+    def init_angle(self, index: int, obj_xy, goal_xy, yaw: float = 0.0) -> float:
         """Direction (rad, table frame) of init point ``index`` around an object at
-        ``obj_xy``: the table frame (paper Fig. 17), or measured from the direction away
-        from the goal (``init_frame: goal``, so init 0 is straight behind the object)."""
+        ``obj_xy`` with orientation ``yaw``: the table frame (paper Fig. 17), measured from
+        the direction away from the goal (``init_frame: goal``, so init 0 is straight
+        behind the object), or the object's own frame (``object``: for a box, the four
+        face normals at its start pose)."""
         base = 0.0
         if self.init_frame == "goal" and goal_xy is not None:
             base = math.atan2(obj_xy[1] - goal_xy[1], obj_xy[0] - goal_xy[0])
+        elif self.init_frame == "object":
+            base = yaw
         return base + math.radians(self.init_directions_deg[index])
 
     def candidates(self, actor: str, obj: str, max_pushes: int = 2) -> list[Skeleton]:

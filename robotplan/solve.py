@@ -3,17 +3,24 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from robotplan.execute import execute_arms, execute_push
-from robotplan.planner import FEASIBLE, PLAUSIBLE_RMS_MM, SearchResult, search_push
+from robotplan.planner import (
+    FEASIBLE,
+    PLAUSIBLE_RMS_MM,
+    SearchResult,
+    merge_results,
+    search_push,
+)
 from robotplan.program import ProgramSettings
 from robotplan.render import write_atomically
 from robotplan.scene import Scene
 from robotplan.sim import PHYSICS
-from robotplan.skeleton import actor_candidates, parse_skeleton, space_for
+from robotplan.skeleton import SkeletonSpace, actor_candidates, parse_skeleton, space_for
 
 __all__ = ["UnsupportedScene", "candidate_table", "solve_scene"]
 
@@ -24,38 +31,42 @@ class UnsupportedScene(ValueError):
 
 def _check_supported(scene: Scene) -> tuple[str, list[str]]:
     """The object and the actors (pushers or arms) of a scene the planner handles."""
-    if len(scene.objects) != 1 or scene.obstacles:
-        raise UnsupportedScene("objects: only one object and no obstacles are planned yet")
+    if len(scene.objects) != 1:
+        raise UnsupportedScene("objects: only one movable object is planned yet")
     if scene.robots and scene.pushers:
         raise UnsupportedScene("pushers: free pushers beside robot arms are not planned yet")
     if not scene.robots and len(scene.pushers) != 1:
         raise UnsupportedScene("pushers: only one free pusher is planned yet")
     if scene.goal.type != "region" and not scene.robots:
         raise UnsupportedScene("goal: touch goals are planned for robot arms only")
-    shape = scene.objects[0].shape.type
-    if shape not in ("box", "lshape"):
-        raise UnsupportedScene(f"objects[0].shape: {shape} footprints are not simulated yet")
     actors = [r.name for r in scene.robots] or [scene.pushers[0].name]
     return scene.objects[0].name, actors
 
 
 def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
-               max_pushes: int, quiet: bool) -> list:
-    """The candidates: one given skeleton, or the search space (arms: every choice of arm,
-    pruned by reach before any program is solved)."""
+               max_pushes: int, quiet: bool) -> tuple[list, SkeletonSpace]:
+    """The candidates and their space: one given skeleton, or the search space (arms: every
+    choice of arm, pruned by reach before any program is solved; init points on the
+    object's faces, or around it as seen from the goal when no face push is in reach)."""
     space = space_for(scene)
     if skeleton:
-        return [parse_skeleton(skeleton, actors[0], obj)]
+        return [parse_skeleton(skeleton, actors[0], obj)], space
     if not scene.robots:
-        return space.candidates(actors[0], obj, max_pushes)
+        return space.candidates(actors[0], obj, max_pushes), space
     from robotplan.arm_program import reach_check
 
     touch = scene.goal.actor if scene.goal.type == "touch" else None
-    every = actor_candidates(space, actors, obj, max_pushes, touch)
-    kept = [sk for sk in every if reach_check(scene, sk, space) is None]
-    if not quiet:
-        print(f"skeletons: {len(kept)} of {len(every)} within the arms' reach")
-    return kept
+    frames = [space.init_frame] + [f for f in ("goal",) if f != space.init_frame]
+    for frame in frames:
+        space = replace(space, init_frame=frame)
+        every = actor_candidates(space, actors, obj, max_pushes, touch)
+        kept = [sk for sk in every if reach_check(scene, sk, space) is None]
+        if not quiet:
+            print(f"skeletons: {len(kept)} of {len(every)} within the arms' reach "
+                  f"(init points in the {frame} frame)")
+        if kept:
+            break
+    return kept, space
 
 
 def candidate_table(result: SearchResult) -> str:
@@ -74,10 +85,19 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                 progress: bool = True, exhaustive: bool = False, quiet: bool = False,
                 time_budget: float | None = None) -> dict:
     obj, actors = _check_supported(scene)
-    skeletons = _skeletons(scene, obj, actors, skeleton, max_pushes, quiet)
+    skeletons, space = _skeletons(scene, obj, actors, skeleton, max_pushes, quiet)
     settings = ProgramSettings(solver=solver)
     result = search_push(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-                         time_budget)
+                         time_budget, space)
+    if not result.solved and scene.obstacles and skeleton is None and not scene.robots:
+        # around obstacles: three pushes when fewer fail (the object's route is longer)
+        more = [sk for sk in space_for(scene).candidates(actors[0], obj, 3) if sk.pushes == 3]
+        if not quiet:
+            print(f"no plan with up to {max_pushes} pushes; trying {len(more)} with three")
+        left = None if time_budget is None else max(0.0, time_budget - result.seconds)
+        extra = search_push(scene, model_dir, more, settings, workers, progress, exhaustive,
+                            left)
+        result = merge_results(result, extra)
     if not quiet:
         print(candidate_table(result))
     best = result.best
@@ -121,7 +141,8 @@ def _execute_and_show(scene: Scene, obj: str, best, out: Path) -> dict:
         t = np.arange(steps + 1) * dt
     doc = {"execution": {"simulator": "pybullet", "coverage": ex.coverage,
                          "final_poses": {obj: [float(v) for v in ex.final_pose]},
-                         "touch_distance": ex.touch_distance},
+                         "touch_distance": ex.touch_distance,
+                         "obstacle_contact": ex.obstacle_contact},
            "trajectory": {"t": [round(float(v), 6) for v in t],
                           "pusher": best.q_pusher.tolist(),
                           "objects": {obj: best.q_obj.tolist()},

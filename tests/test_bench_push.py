@@ -80,3 +80,27 @@ def test_bench_push_refuses_bad_options(tmp_path):
     assert res.returncode == 2 and res.stderr.count("\n") == 1 and "--shapes" in res.stderr
     res = run("bench", "push", "--scenes", "0", "--out", str(tmp_path / "b"))
     assert res.returncode == 2 and "--scenes" in res.stderr
+
+
+def test_unseen_shape_scenes_cover_eight_families_three_concave():
+    """``--shapes ood``: valid scenes, every family twice in 16, concave T, cross and U, in
+    the data's size range, with a goal region that holds them in any orientation."""
+    from robotplan.bench_push import OOD_FAMILIES, family_of
+    from robotplan.polygons import is_convex
+
+    docs = [draw_scene(i, 5, "ood") for i in range(16)]
+    assert docs[3] == draw_scene(3, 5, "ood") and docs[3] != draw_scene(3, 6, "ood")
+    seen = {}
+    for i, doc in enumerate(docs):
+        scene = parse_scene(doc, f"bench/{i}.yaml")
+        shape = scene.objects[0].shape
+        fam = family_of(i, "ood")
+        seen[fam] = seen.get(fam, 0) + 1
+        outline = shape.outline()
+        extent = np.ptp(outline, axis=0)
+        assert 0.08 <= extent.min() and extent.max() <= 0.30, (fam, extent)
+        assert is_convex(outline) == (fam not in ("T", "cross", "U")), fam
+        region, body = scene.goal_region, scene.bodies["object"]
+        for yaw in np.linspace(0, math.pi, 5):
+            assert coverage(body, (region.pose[0], region.pose[1], float(yaw)), region) > 0.999
+    assert seen == {f: 2 for f in OOD_FAMILIES}

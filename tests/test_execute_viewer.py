@@ -1,9 +1,12 @@
 """Open-loop execution in real pybullet physics, and the MeshCat playback page."""
 
 import numpy as np
+import pytest
 
 from robotplan import load_scene
 from robotplan.execute import execute_push
+from robotplan.scene.bodies import Body
+from robotplan.sdf import Circle, Polygon
 from robotplan.viewer import write_playback
 from tests.conftest import TASKS
 
@@ -71,3 +74,64 @@ def test_arm_execution_tracks_the_plan_and_pushes_with_its_tip(tmp_path):
     write_playback(scene, page, {"box": ex.object_poses}, {"box": ex.object_poses},
                    joints=({"left": Q, "right": q_right}, ex.joints))
     assert page.stat().st_size > plain.stat().st_size + 100_000  # the arm meshes
+
+
+def test_obstacles_are_fixed_bodies_and_contact_is_reported():
+    """Pushing the box straight east drives it into the wall: the wall holds, the contact
+    is reported; a short push that stops 8 cm before it is not."""
+    scene = load_scene(TASKS / "obstacle_push.yaml")
+    into = np.vstack([np.linspace([-0.40, 0.0], [-0.34, 0.0], 5),
+                      np.linspace([-0.34, 0.0], [0.0, 0.0], 16)[1:]])
+    ex = execute_push(scene, "box", "pusher", into)
+    assert ex.obstacle_contact
+    assert ex.final_pose[0] + 0.06 < 0.02 + 0.005  # the box's face stays at the wall's
+    short = execute_push(scene, "box", "pusher", into[:8])
+    assert not short.obstacle_contact and short.final_pose[0] > -0.25 + 0.01
+
+
+def test_guess_routes_the_object_around_the_obstacle():
+    from robotplan.guess import object_route
+    from robotplan.program import PushProgram
+    from robotplan.skeleton import parse_skeleton, space_for
+
+    scene = load_scene(TASKS / "obstacle_push.yaml")
+    prog = PushProgram(scene, parse_skeleton("push@0,push@0", "pusher", "box"), None,
+                       space_for(scene))
+    route = object_route(prog, np.array([-0.25, 0.0]), np.array([0.38, 0.0]))
+    assert len(route) == 3 and abs(route[1, 1]) > 0.15 + 0.08
+    wall = np.array(scene.bodies["wall"].pose[:2])
+    ends = prog.guess["q_obj"][[20, 40], :2]
+    assert np.linalg.norm(ends[0] - route[1]) < np.linalg.norm(ends[0] - wall)
+
+
+@pytest.mark.parametrize("shape", [
+    Polygon(((-0.12, 0.1), (-0.12, 0.04), (-0.03, 0.04), (-0.03, -0.12), (0.03, -0.12),
+             (0.03, 0.04), (0.12, 0.04), (0.12, 0.1))),  # a T: concave
+    Polygon(((-0.1, -0.08), (0.1, -0.08), (0.0, 0.11))),  # a triangle
+    Circle(0.07),
+])
+def test_unseen_footprints_are_simulated_as_their_outlines(shape, rng):
+    """pybullet's body of a polygon (convex pieces) or a disc (cylinder): the distance from
+    probe spheres around and inside its concavities matches the SDF to 2 mm."""
+    import torch
+
+    from robotplan.sim import PushWorld
+
+    pose = (0.1, -0.05, 0.7)
+    body = Body("o", "object", shape, pose, 0.0, 0.06)
+    with PushWorld() as world:
+        world.reset(shape, 0.06, pose, None)
+        assert np.abs(world.object_pose()[0] - pose).max() < 2e-3
+        pb, c = world.pb, world.client
+        probe = pb.createCollisionShape(pb.GEOM_SPHERE, radius=0.005, physicsClientId=c)
+        points = rng.uniform(-0.2, 0.2, (40, 2)) + np.array(pose[:2])
+        phi = body.sdf(torch.tensor(points), torch.tensor(pose, dtype=torch.float64)).numpy()
+        for p, d in zip(points, phi, strict=True):
+            if d < 0.003:  # distances are only reported outside the body
+                continue
+            ball = pb.createMultiBody(0, probe, basePosition=[p[0], p[1], 0.03],
+                                      physicsClientId=c)
+            found = pb.getClosestPoints(world.object, ball, 0.5, physicsClientId=c)
+            gap = min(f[8] for f in found) + 0.005
+            assert abs(gap - d) < 2e-3, (p, gap, d)
+            pb.removeBody(ball, physicsClientId=c)

@@ -45,3 +45,22 @@ def test_non_simple_polygons_are_refused(poly, reason):
 def test_concave_polygon_is_simple():
     ok, why = is_simple(np.array([[0, 0], [2, 0], [2, 2], [1, 1], [0, 2]], dtype=float))
     assert ok, why
+
+
+def test_convex_parts_cover_the_polygon_with_few_convex_pieces(rng):
+    from robotplan.polygons import convex_parts, is_convex
+
+    for _ in range(30):
+        poly = random_star_polygon(rng)
+        parts = convex_parts(poly)
+        assert all(is_convex(p) and signed_area(p) > 0 for p in parts)
+        assert sum(signed_area(p) for p in parts) == pytest.approx(abs(signed_area(poly)),
+                                                                 abs=1e-14)
+        union = shapely.unary_union([shapely.Polygon(p) for p in parts])
+        assert union.symmetric_difference(shapely.Polygon(poly)).area < 1e-10
+        assert len(parts) <= len(poly) - 2
+    cross = np.array([[1, -3], [1, -1], [3, -1], [3, 1], [1, 1], [1, 3], [-1, 3], [-1, 1],
+                      [-3, 1], [-3, -1], [-1, -1], [-1, -3]], dtype=float)
+    assert len(convex_parts(cross)) <= 5  # 10 triangles merge into a few convex pieces
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float)
+    assert len(convex_parts(square)) == 1

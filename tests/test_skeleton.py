@@ -1,3 +1,4 @@
+import numpy as np
 import pytest
 
 from robotplan.skeleton import (
@@ -5,7 +6,6 @@ from robotplan.skeleton import (
     actor_candidates,
     load_skeleton_space,
     parse_skeleton,
-    space_for,
 )
 from tests.conftest import TASKS
 
@@ -49,35 +49,48 @@ def test_parse_skeleton_with_actors_and_touch():
         ("reach", "left", 1), ("push", "left", 1), ("reach", "right", 2)]
 
 
-@pytest.mark.parametrize(("task", "expected"), [
-    ("two_arm_left_only", {("left",), ("left", "left")}),
-    ("two_arm_handover", {("left", "right")}),
+@pytest.mark.parametrize(("task", "expected", "frame"), [
+    ("two_arm_left_only", {("left", "left")}, "object"),
+    ("two_arm_handover", {("left", "right")}, "goal"),
 ])
-def test_reach_pruning_keeps_the_arms_that_can_reach(task, expected):
-    """Before any program: the left-only scene keeps left pushes only, the handover scene
-    left-then-right only (the box starts beyond the right arm's reach, the goal beyond the
-    left's)."""
+def test_reach_pruning_keeps_the_arms_that_can_reach(task, expected, frame):
+    """Before any program: the left-only scene keeps left pushes only, from faces of the
+    box whose straight pushes reach the goal; in the handover scene no face push is in
+    reach (the box sits too close to the left base to be pushed from behind), so the init
+    points around it seen from the goal are used, and only left-then-right remains."""
     from robotplan import load_scene
     from robotplan.arm_program import reach_check
+    from robotplan.solve import _skeletons
 
     scene = load_scene(TASKS / f"{task}.yaml")
-    space = space_for(scene)
-    every = actor_candidates(space, ["left", "right"], "box")
-    kept = [sk for sk in every if reach_check(scene, sk, space) is None]
+    kept, space = _skeletons(scene, "box", ["left", "right"], None, 2, quiet=True)
     assert kept, "pruning removed every skeleton"
+    assert space.init_frame == frame
     assert {tuple(p.actor for p in sk.phases if p.mode == "push") for sk in kept} <= expected
+    every = actor_candidates(space, ["left", "right"], "box")
     assert len(kept) < len(every) / 4
     why = next(reach_check(scene, sk, space) for sk in every if sk not in kept)
-    assert "reach" in why
+    assert "reach" in why or "goal" in why
 
 
 def test_touch_pruning_ends_with_the_touching_arm():
     from robotplan import load_scene
-    from robotplan.arm_program import reach_check
+    from robotplan.solve import _skeletons
 
     scene = load_scene(TASKS / "two_arm_touch.yaml")
-    space = space_for(scene)
+    kept, space = _skeletons(scene, "box", ["left", "right"], None, 2, quiet=True)
     every = actor_candidates(space, ["left", "right"], "box", touch_actor="right")
-    kept = [sk for sk in every if reach_check(scene, sk, space) is None]
     assert kept and len(kept) < len(every) / 4
     assert all(sk.phases[-1].actor == "right" and sk.phases[-1].mode == "reach" for sk in kept)
+
+
+def test_face_push_lengths_split_the_travel():
+    from robotplan.guess import face_push_lengths
+
+    dirs = np.array([[1.0, 0.0], [0.0, 1.0]])
+    a, gap = face_push_lengths(dirs, np.array([0.3, 0.2]))
+    assert np.allclose(a, [0.3, 0.2]) and gap < 1e-12
+    a, gap = face_push_lengths(dirs, np.array([0.3, -0.2]))  # no pulling: −y is unreachable
+    assert np.allclose(a, [0.3, 0.0]) and abs(gap - 0.2) < 1e-12
+    a, _ = face_push_lengths(np.array([[1.0, 0.0], [1.0, 0.0]]), np.array([0.8, 0.0]))
+    assert np.allclose(a, [0.4, 0.4])  # two pushes from one face share the travel

@@ -10,7 +10,7 @@ from robotplan.functionals.windows import body_aabb, margin, window_points
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle
 
-__all__ = ["Collision", "face_contact_overlap"]
+__all__ = ["Collision", "FixedCollision", "face_contact_overlap"]
 
 
 class Collision(Functional):
@@ -52,6 +52,19 @@ class Collision(Functional):
         inside1 = torch.sigmoid(-self.a * self.body1.sdf(x, X_W1[active]))  # (A, P)
         inside2 = torch.sigmoid(-self.a * self.body2.sdf(x, X_W2[active]))
         return out.index_put((active,), (inside1 * inside2 * w).sum(1, keepdim=True))
+
+
+class FixedCollision(Functional):
+    """H_coll between a moving body and a fixed one (an obstacle at its scene pose):
+    ``residual(X_W1 (T, 3|2)) → (T, 1)`` in m², :class:`Collision` with the second pose
+    held."""
+
+    def __init__(self, moving: Body, fixed: Body, a: float = 500.0) -> None:
+        self.pair = Collision(moving, fixed, a=a)
+        self.pose = torch.as_tensor(fixed.pose, dtype=torch.float64)
+
+    def residual(self, X_W1: Tensor) -> Tensor:
+        return self.pair(X_W1, self.pose.to(X_W1).expand(X_W1.shape[0], -1))
 
 
 def face_contact_overlap(body: Body, a: float = 500.0, depth: float = 0.0) -> float:

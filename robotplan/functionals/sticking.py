@@ -29,18 +29,11 @@ def centroid(outline: np.ndarray) -> np.ndarray:
     return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6 * area)
 
 
-def limit_surface_radius(shape, spacing: float = 0.004) -> float:
-    """Characteristic length ``c = m_max / f_max`` (m) of the ellipsoidal limit surface for
-    a uniform support pressure: the mean distance of the footprint's points from its
-    centroid."""
-    ring = shape.outline()
-    c = centroid(ring)
-    lo, hi = ring.min(0), ring.max(0)
-    xs = np.arange(lo[0] + spacing / 2, hi[0], spacing)
-    ys = np.arange(lo[1] + spacing / 2, hi[1], spacing)
-    pts = np.stack(np.meshgrid(xs, ys, indexing="ij"), -1).reshape(-1, 2)
-    inside = shape.sdf(torch.as_tensor(pts)).numpy() < 0
-    return float(np.linalg.norm(pts[inside] - c, axis=1).mean())
+def limit_surface_radius(support_B: np.ndarray, centroid_B: np.ndarray) -> float:
+    """Characteristic length ``c = m_max / f_max`` (m) of the ellipsoidal limit surface of an
+    object resting on the points ``support_B (K, 2)`` with equal loads: their mean distance
+    from the centroid."""
+    return float(np.linalg.norm(np.asarray(support_B) - centroid_B, axis=1).mean())
 
 
 def _in_body_frame(X_WB: Tensor, p_W: Tensor) -> Tensor:

@@ -4,6 +4,7 @@ import torch
 
 from robotplan.functionals import Collision, Quadrature
 from robotplan.functionals.collision import face_contact_overlap
+from robotplan.scene.bodies import Body
 from tests.functionals.conftest import F64, central_difference_jacobian
 
 
@@ -81,3 +82,17 @@ def test_face_contact_overlap_is_what_touching_costs(box, pusher, fine):
     assert bound > 2e-5
     with pytest.raises(ValueError, match="disc"):
         face_contact_overlap(box)
+
+
+def test_fixed_collision_is_the_pair_with_the_obstacle_held(box, ell):
+    from robotplan.functionals.collision import FixedCollision
+
+    wall = Body("wall", "obstacle", ell.shape, (0.12, 0.03, 0.4), 0.0, 0.06)
+    H = FixedCollision(box, wall, a=500.0)
+    X = poses([0.0, 0.0, 0.1], [0.02, 0.01, 0.5], [-0.3, 0.0, 0.0])
+    pair = Collision(box, wall, a=500.0)(X, torch.tensor([wall.pose] * 3, dtype=F64))
+    assert torch.allclose(H(X), pair) and pair[0, 0] > 1e-4 and pair[2, 0] == 0.0
+    _, (J,) = H.jacobians(X)
+    fd = central_difference_jacobian(H, (X,), 0)
+    assert torch.allclose(J, fd, rtol=1e-4, atol=1e-9), (J - fd).abs().max()
+    assert (J[:2].abs() > 1e-6).any()

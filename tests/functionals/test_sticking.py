@@ -59,3 +59,38 @@ def test_push_lever_is_the_distance_of_the_force_line_from_the_centroid():
     for which in range(3):
         fd = central_difference_jacobian(H, inputs, which)
         assert torch.allclose(Js[which], fd, rtol=1e-5, atol=1e-9)
+
+
+def test_quasi_static_push_turn_and_friction_cone():
+    """A push through the centroid along the normal translates the object (all rows
+    satisfied); the same push turning the object, or pushing 30° off the normal, violates
+    the turn equation or leaves the friction cone (μ = 0.15: ±8.5°)."""
+    from robotplan.functionals.sticking import QuasiStaticPush, limit_surface_radius
+
+    corners = np.array([[0.1, 0.05], [-0.1, 0.05], [-0.1, -0.05], [0.1, -0.05]])
+    c = limit_surface_radius(corners, np.zeros(2))
+    assert abs(c - math.hypot(0.1, 0.05)) < 1e-12
+    H = QuasiStaticPush(np.zeros(2), c, 0.15)
+    X0 = torch.tensor([[0.0, 0.0, 0.0]], dtype=F64)
+    x, p = torch.tensor([[-0.13, 0.0]], dtype=F64), torch.tensor([[-0.1, 0.0]], dtype=F64)
+    straight = H(X0, torch.tensor([[0.02, 0.0, 0.0]], dtype=F64), x, p)[0]
+    assert abs(straight[0]) < 1e-12 and (straight[1:] > 0).all()
+    turned = H(X0, torch.tensor([[0.02, 0.0, 0.1]], dtype=F64), x, p)[0]
+    assert abs(turned[0]) > 1e-3
+    a = math.radians(30)
+    off = H(X0, torch.tensor([[0.02 * math.cos(a), 0.02 * math.sin(a), 0.0]], dtype=F64),
+            x, p)[0]
+    assert min(off[1], off[2]) < 0
+    # an off-centre push turns the object by its moment: c² Δθ = r × Δc
+    p_off = torch.tensor([[-0.1, 0.03]], dtype=F64)
+    dth = (-0.1 * 0.0 - 0.03 * 0.02) / c**2
+    ok = H(X0, torch.tensor([[0.02, 0.0, dth]], dtype=F64), x + p_off - p, p_off)[0]
+    assert abs(ok[0]) < 1e-12
+    Xs = torch.tensor([[0.0, 0.0, 0.1], [0.01, -0.02, 0.5]], dtype=F64)
+    Xt = Xs + torch.tensor([[0.02, 0.005, 0.03], [0.0, 0.02, -0.05]], dtype=F64)
+    xs = torch.tensor([[-0.14, 0.01], [0.02, -0.12]], dtype=F64)
+    ps = torch.tensor([[-0.1, 0.02], [0.03, -0.08]], dtype=F64)
+    _, Js = H.jacobians(Xs, Xt, xs, ps)
+    for i, J in enumerate(Js):
+        fd = central_difference_jacobian(H, (Xs, Xt, xs, ps), i)
+        assert torch.allclose(J, fd, rtol=1e-5, atol=1e-9), (i, (J - fd).abs().max())
