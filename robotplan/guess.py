@@ -116,6 +116,9 @@ def push_ends(prog: PushProgram, start: np.ndarray, goal: np.ndarray) -> np.ndar
         angles = [prog.space.init_angle(ph.init, start, goal, yaw) + math.pi for ph in pushes]
         dirs = np.array([[math.cos(a), math.sin(a)] for a in angles]).reshape(-1, 2)
         lengths, _ = face_push_lengths(dirs, goal - start)
+        # no push travels further than a phase allows at the guess's speed (per axis)
+        longest = (prog.T - 2) * prog.settings.guess_speed / np.abs(dirs).max(axis=1)
+        lengths = np.minimum(lengths, longest)
         return start + np.cumsum(lengths[:, None] * dirs, axis=0)
     route = object_route(prog, start, goal)
     return np.array([_along(route, (k + 1) / len(pushes)) for k in range(len(pushes))])

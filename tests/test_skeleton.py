@@ -51,13 +51,12 @@ def test_parse_skeleton_with_actors_and_touch():
 
 @pytest.mark.parametrize(("task", "expected", "frame"), [
     ("two_arm_left_only", {("left", "left")}, "object"),
-    ("two_arm_handover", {("left", "right")}, "goal"),
+    ("two_arm_handover", {("left", "right")}, "object"),
 ])
 def test_reach_pruning_keeps_the_arms_that_can_reach(task, expected, frame):
     """Before any program: the left-only scene keeps left pushes only, from faces of the
-    box whose straight pushes reach the goal; in the handover scene no face push is in
-    reach (the box sits too close to the left base to be pushed from behind), so the init
-    points around it seen from the goal are used, and only left-then-right remains."""
+    box whose straight pushes reach the goal; the handover scene keeps left-then-right
+    only (the box starts beyond the right arm's reach, the goal beyond the left's)."""
     from robotplan import load_scene
     from robotplan.arm_program import reach_check
     from robotplan.solve import _skeletons
