@@ -52,9 +52,12 @@ class ArmSettings:
     tip_reach_step: float = 0.04
     joint_step_weight: float = 0.01  # cost per rad² of joint motion per step
     # the kinematic stage pushes quasi-statically inside this friction cone (ProgramSettings.
-    # push_friction): on two_arm_left_only, push@0, the executed coverage went 0.0 → 0.63
-    push_friction: float = 0.12
+    # push_friction), well inside pybullet's 0.15 (8.5°): the box arrives a few degrees off
+    # the plan, and a push at the plan's cone edge then slides. two_arm_handover, executed
+    # coverage: 0.67 with 0.12, 1.0 with 0.08; 0.05 left the program infeasible
+    push_friction: float = 0.08
     turn_length: float = 0.3  # kinematic stage: turning 1 rad costs like 0.3 m of travel
+    cone_in_learned: bool = True
 
 
 ARM_SETTINGS = ArmSettings()
@@ -81,7 +84,8 @@ class ArmPushProgram(PushProgram):
         self.QJ: dict[str, np.ndarray] = {}
         if settings.push_friction <= 0:  # the free pushers' defaults: the arms' own
             settings = replace(settings, push_friction=arm_settings.push_friction,
-                               turn_length=arm_settings.turn_length, sparse_jacobians=True)
+                               turn_length=arm_settings.turn_length, sparse_jacobians=True,
+                               cone_in_learned=arm_settings.cone_in_learned)
         super().__init__(scene, skeleton, model, space, settings, guess)
         N = self.N
         radii = {scene.bodies[name].shape.radius for name in self.kin}

@@ -151,6 +151,12 @@ def initial_guess(prog: PushProgram) -> dict[str, np.ndarray]:
         a, b = k * T, (k + 1) * T
         center = q1[a, :2]
         target = init_point(prog, ph.init, center)
+        touching = (ph.mode == "reach" and k == len(prog.skeleton.phases) - 1
+                    and prog.scene.goal.type == "touch")
+        if touching:  # the touch goal's reach ends on the object, not at the init point
+            target = center + contact_offset(prog, q1[a], target - center)
+            unit = (target - center) / max(float(np.linalg.norm(target - center)), 1e-9)
+            p_touch = target - prog.pusher.shape.radius * unit
         if ph.mode == "reach":
             # a new actor starts where it waited (its own start), not at the last tip
             switched = k > 0 and ph.actor != prog.skeleton.phases[k - 1].actor
@@ -181,4 +187,7 @@ def initial_guess(prog: PushProgram) -> dict[str, np.ndarray]:
                 q1[a + s, :2] = q1[a, :2] + travel * (s - k) / (T - k)
                 q2[a + s] = q1[a + s, :2] + offset
     p = np.array([0.5 * (q1[t, :2] + q2[t]) for t in prog.push_steps]).reshape(-1, 2)
-    return {"q_obj": q1, "q_pusher": q2, "p": p}
+    guess = {"q_obj": q1, "q_pusher": q2, "p": p}
+    if prog.scene.goal.type == "touch" and prog.skeleton.phases[-1].mode == "reach":
+        guess["p_touch"] = p_touch[None]
+    return guess

@@ -111,6 +111,7 @@ class ProgramSettings:
     # friction (pybullet's is 0.5 × 0.3 = 0.15; a margin keeps execution off the cone's edge);
     # ≤ 0 leaves the object's motion free apart from sticking
     push_friction: float = 0.0
+    cone_in_learned: bool = False  # keep the friction cone in the learned stage too
 
 
 @dataclass
@@ -187,6 +188,8 @@ class PushProgram:
         if model is not None:
             self._add_dynamics(model)
             self._add_step_limits(settings.max_step, settings.max_turn)
+            if settings.cone_in_learned and settings.push_friction > 0 and len(self.push_steps):
+                self._add_quasi_static(turn=False)
         else:
             self._add_kinematic_pushing()
             self._add_step_limits(settings.warm_max_step, settings.warm_max_turn)
@@ -331,6 +334,19 @@ class PushProgram:
 
         self._add_cost(total, variables, "lever")
 
+    def _add_quasi_static(self, turn: bool) -> None:
+        """QuasiStaticPush rows in every push step: the friction cone, and with ``turn`` the
+        limit surface's turning rate (the kinematic stage; the learned stage keeps the cone
+        only, H_F decides the motion)."""
+        c_B = centroid(self.obj.shape.outline())
+        radius = limit_surface_radius(support_corners(self.obj.shape), c_B)
+        H = QuasiStaticPush(c_B, radius, self.settings.push_friction, turn=turn)
+        k = self.push_steps
+        m = 3 if turn else 2
+        lb, ub = np.zeros((1, m)), np.array([[0.0, np.inf, np.inf][3 - m:]])
+        self._add_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P], m, 100, lb, ub,
+                       "quasi_static" if turn else "friction_cone")
+
     def _add_kinematic_pushing(self) -> None:
         """The kinematic stand-in for H_F: in push steps the contact point sticks to the
         object and the pusher moves into it; the object's travel is a small cost."""
@@ -347,12 +363,7 @@ class PushProgram:
                                                 self.Q2[self.push_steps], self.P],
                            1, 100, 0.0, np.inf, "pushing")
         if steps and self.settings.push_friction > 0:
-            c_B = centroid(self.obj.shape.outline())
-            radius = limit_surface_radius(support_corners(self.obj.shape), c_B)
-            H = QuasiStaticPush(c_B, radius, self.settings.push_friction)
-            k = self.push_steps
-            self._add_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P], 3, 100,
-                           np.zeros((1, 3)), np.array([[0.0, np.inf, np.inf]]), "quasi_static")
+            self._add_quasi_static(turn=True)
         w = self.settings.object_motion_weight
         scale = np.array([1.0, 1.0, self.settings.turn_length])
         for t in range(1, self.N + 1):

@@ -99,12 +99,14 @@ class QuasiStaticPush(Functional):
     ``[c Δθ − (r × Δc)/c (= 0), μ Δc·n − Δc × n (≥ 0), μ Δc·n + Δc × n (≥ 0)]`` in m
     with ``Δc`` the centroid's step, ``r = p − c_W`` and ``n = (p − x)/|p − x|``. Pushes
     outside this cone slide along the face and turn the object in pybullet in ways the
-    sticking model (and often the learned H_F's tolerance) does not see.
+    sticking model (and often the learned H_F's tolerance) does not see. ``turn=False``
+    keeps the two cone rows only, ``(T, 2)``.
     """
 
-    def __init__(self, centroid_B: np.ndarray, radius: float, mu: float) -> None:
+    def __init__(self, centroid_B: np.ndarray, radius: float, mu: float,
+                 turn: bool = True) -> None:
         self.c_B = torch.as_tensor(np.asarray(centroid_B, dtype=float))
-        self.c, self.mu = radius, mu
+        self.c, self.mu, self.turn = radius, mu, turn
 
     def _centroid(self, X: Tensor) -> Tensor:
         c, s = torch.cos(X[:, 2]), torch.sin(X[:, 2])
@@ -120,4 +122,5 @@ class QuasiStaticPush(Functional):
         turn = self.c * (X[:, 2] - X_prev[:, 2]) - (r[:, 0] * d[:, 1] - r[:, 1] * d[:, 0]) / self.c
         along = (d * n).sum(-1)
         across = d[:, 0] * n[:, 1] - d[:, 1] * n[:, 0]
-        return torch.stack((turn, self.mu * along - across, self.mu * along + across), -1)
+        rows = (turn, self.mu * along - across, self.mu * along + across)
+        return torch.stack(rows if self.turn else rows[1:], -1)
