@@ -129,6 +129,7 @@ class Solution:
     timings: dict = field(default_factory=dict)  # seconds per functional; "solver": the rest
     violations: dict = field(default_factory=dict)  # worst violation per constraint name
     q_joints: dict = field(default_factory=dict)  # robot name → (N+1, dof) joint angles
+    touch_point: np.ndarray | None = None  # (1, 2): the touch goal's contact point
 
     @property
     def dynamics_rms_mm(self) -> float:
@@ -303,6 +304,8 @@ class PushProgram:
         clear = face_contact_overlap(self.pusher, s.a_coll, -s.reach_clearance)
         ub = np.full(self.N, clear)
         ub[self.push_steps - 1] = touch
+        if self.scene.goal.type == "touch":
+            ub[-1] = touch  # the touch goal's last state is a contact, not a reach
         self._add_rows(H, [self.Q1[1:], self.Q2[1:]], 1, 1e4, 0.0, ub * 1e4,
                        "H_coll")  # in cm²
         for spec in self.scene.obstacles:
@@ -459,9 +462,10 @@ class PushProgram:
                 status += ", kept the start"
         q1, q2, p = (self._values(x, V) for V in (self.Q1, self.Q2, self.P))
         violation = max(violations.values(), default=0.0)
+        touch = None if self.P_touch is None else self._values(x, self.P_touch)
         return Solution(self.skeleton, violation <= FEASIBLE, status, violation, cost, seconds,
                         q1, q2, p.reshape(-1, 2), self.dynamics_mm2(q1, q2), timings,
-                        violations, self._joint_values(x))
+                        violations, self._joint_values(x), touch)
 
     def _guess_pairs(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """(variables, initial values) for SetInitialGuess."""
@@ -481,7 +485,10 @@ class PushProgram:
 
     def as_guess(self, sol: Solution) -> dict[str, np.ndarray]:
         """A solution of this program as the initial guess of another on the same skeleton."""
-        return {"q_obj": sol.q_obj, "q_pusher": sol.q_pusher, "p": sol.contact}
+        guess = {"q_obj": sol.q_obj, "q_pusher": sol.q_pusher, "p": sol.contact}
+        if sol.touch_point is not None:
+            guess["p_touch"] = sol.touch_point
+        return guess
 
     def _timing_report(self, seconds: float) -> dict:
         out = {k: round(v, 3) for k, v in self.timings.items()}

@@ -136,3 +136,24 @@ def test_learned_program_never_ends_worse_than_its_warm_start():
     sol = learned.solve()
     assert _rank(sol.violations, sol.cost) <= _rank(*learned.evaluate(start))
     assert sol.q_obj.shape == (learned.N + 1, 3) and sol.contact.shape == (10, 2)
+
+
+def test_arm_touch_program_ends_in_contact_and_hands_its_touch_point_on():
+    """The touch goal's last state is a contact (H_coll allows touching there, not the
+    reach clearance that contradicted H_touch), the kinematic stage of left-push,
+    right-touch solves, and its contact point goes into the next stage's guess."""
+    from robotplan.arm_program import ArmPushProgram
+    from robotplan.skeleton import space_for
+
+    scene = load_scene(TASKS / "two_arm_touch.yaml")
+    space = space_for(scene)
+    skeleton = parse_skeleton("left:push@2,right:touch@0", "left", "box")
+    prog = ArmPushProgram(scene, skeleton, None, space)
+    sol = prog.solve()
+    assert sol.violation < 1e-2, sol.violations
+    tip = prog.kin["right"].tip(sol.q_joints["right"][-1])
+    gap = float(scene.bodies["box"].sdf(torch.tensor(tip[None, :2]),
+                                        torch.tensor(sol.q_obj[-1]))[0])
+    assert abs(gap - 0.03) < 0.005  # the tip's rim on the box (tip radius 3 cm)
+    guess = prog.as_guess(sol)
+    assert np.allclose(guess["p_touch"], sol.touch_point)

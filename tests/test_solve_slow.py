@@ -47,3 +47,17 @@ def test_solve_two_arm_scenes(tmp_path, task, actors):
         assert len(doc["trajectory"]["joints"][name]) == steps
         assert len(doc["executed"]["joints"][name][0]) == 7
     assert (out / "playback.html").stat().st_size > 1_000_000  # both arms' meshes
+
+
+@pytest.mark.slow
+def test_solve_two_arm_touch(tmp_path):
+    """Left pushes the box into the right arm's reach, the right tip ends on it (#6: within
+    1 cm in pybullet)."""
+    out = tmp_path / "out"
+    res = subprocess.run([sys.executable, "-m", "robotplan.cli", "solve",
+                          str(TASKS / "two_arm_touch.yaml"), "--out", str(out)], cwd=ROOT,
+                         capture_output=True, text=True, timeout=1800)
+    assert res.returncode == 0, res.stderr
+    doc = json.loads((out / "result.json").read_text())
+    assert doc["skeleton"][-1]["actor"] == "right" and doc["skeleton"][-1]["mode"] == "reach"
+    assert doc["execution"]["touch_distance"] <= 0.01
