@@ -36,7 +36,7 @@ from robotplan.program import ProgramSettings, PushProgram, Solution
 from robotplan.scene import Scene
 from robotplan.skeleton import Skeleton, SkeletonSpace
 
-__all__ = ["ArmPushProgram", "ArmSettings"]
+__all__ = ["ARM_PROGRAM_SETTINGS", "ArmPushProgram", "ArmSettings"]
 
 
 @dataclass(frozen=True)
@@ -51,17 +51,21 @@ class ArmSettings:
     # only, and a 20 cm step between them cut through the box's corner in pybullet
     tip_reach_step: float = 0.04
     joint_step_weight: float = 0.01  # cost per rad² of joint motion per step
-    # the kinematic stage pushes quasi-statically inside this friction cone (ProgramSettings.
-    # push_friction), well inside pybullet's 0.15 (8.5°): the box arrives a few degrees off
-    # the plan, and a push at the plan's cone edge then slides. two_arm_handover, executed
-    # coverage: 0.67 with 0.12, 1.0 with 0.08; 0.05 left the program infeasible
-    push_friction: float = 0.08
-    turn_length: float = 0.3  # kinematic stage: turning 1 rad costs like 0.3 m of travel
-    cone_in_learned: bool = True
 
 
 ARM_SETTINGS = ArmSettings()
-PROGRAM_SETTINGS = ProgramSettings()
+ARM_PROGRAM_SETTINGS = replace(
+    ProgramSettings(),
+    # the kinematic stage pushes quasi-statically inside this friction cone, well inside
+    # pybullet's 0.15 (8.5°): the box arrives a few degrees off the plan, and a push at the
+    # plan's cone edge then slides. two_arm_handover, executed coverage: 0.67 with 0.12, 1.0
+    # with 0.08; 0.05 left the program infeasible
+    push_friction=0.08,
+    turn_length=0.3,  # kinematic stage: turning 1 rad costs like 0.3 m of travel
+    cone_in_learned=True,
+    sparse_jacobians=True,  # dense rows over every joint: kinematic stage 30 s, sparse 11 s
+)
+"""The program settings of scenes with arms (the free pushers' are ``ProgramSettings()``)."""
 # m beyond the goal region's inradius that straight face pushes may end from its centre and
 # still be tried: turning the object on the way covers that much (two_arm_handover: 0.22 m
 # for the left-then-right push from the same face, inradius 0.175 m)
@@ -76,16 +80,12 @@ class ArmPushProgram(PushProgram):
     """:class:`PushProgram` whose pushers are the tips of the scene's arms."""
 
     def __init__(self, scene: Scene, skeleton: Skeleton, model, space: SkeletonSpace,
-                 settings: ProgramSettings = PROGRAM_SETTINGS,
+                 settings: ProgramSettings = ARM_PROGRAM_SETTINGS,
                  guess: dict[str, np.ndarray] | None = None,
                  arm_settings: ArmSettings = ARM_SETTINGS) -> None:
         self.kin = {r.name: _kinematics(r) for r in scene.robots}
         self.arm_settings = arm_settings
         self.QJ: dict[str, np.ndarray] = {}
-        if settings.push_friction <= 0:  # the free pushers' defaults: the arms' own
-            settings = replace(settings, push_friction=arm_settings.push_friction,
-                               turn_length=arm_settings.turn_length, sparse_jacobians=True,
-                               cone_in_learned=arm_settings.cone_in_learned)
         super().__init__(scene, skeleton, model, space, settings, guess)
         N = self.N
         radii = {scene.bodies[name].shape.radius for name in self.kin}
@@ -233,7 +233,7 @@ def _kinematics(spec) -> ArmKinematics:
 
 
 def reach_check(scene: Scene, skeleton: Skeleton, space: SkeletonSpace,
-                settings: ProgramSettings = PROGRAM_SETTINGS, slack: float = 0.03
+                settings: ProgramSettings = ARM_PROGRAM_SETTINGS, slack: float = 0.03
                 ) -> str | None:
     """Cheap pruning before any program is solved: the circle-and-push guess of the
     skeleton, and every state where an arm's tip must be at push height (its pushes, a

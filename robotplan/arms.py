@@ -98,16 +98,20 @@ def _out(r: np.ndarray, jacs: list[np.ndarray]) -> tuple[Tensor, list[Tensor]]:
     return torch.from_numpy(r), [torch.from_numpy(J) for J in jacs]
 
 
-class TipCoupling:
-    """The planar pusher variables are the arm's tip: ``FK_xy(q_t) − x_t = 0``.
-
-    ``(q (n, dof), x (n, 2)) → (n, 2)`` in m."""
+class _OnArm:
+    """An arm functional: ``__call__`` is the value part of ``jacobians``."""
 
     def __init__(self, kin: ArmKinematics) -> None:
         self.kin = kin
 
-    def __call__(self, q: Tensor, x: Tensor) -> Tensor:
-        return self.jacobians(q, x)[0]
+    def __call__(self, *inputs: Tensor) -> Tensor:
+        return self.jacobians(*inputs)[0]
+
+
+class TipCoupling(_OnArm):
+    """The planar pusher variables are the arm's tip: ``FK_xy(q_t) − x_t = 0``.
+
+    ``(q (n, dof), x (n, 2)) → (n, 2)`` in m."""
 
     def jacobians(self, q: Tensor, x: Tensor) -> tuple[Tensor, list[Tensor]]:
         P, J = self.kin.batch(q)
@@ -116,44 +120,37 @@ class TipCoupling:
         return _out(r, [J[:, 0, :2, :], eye])
 
 
-class TipHeight:
+class _PointHeights(_OnArm):
+    """Heights of the FK points ``points`` (a slice of tip, then CHECK_LINKS),
+    ``q (n, dof) → (n, k)`` in m."""
+
+    points: slice
+
+    def jacobians(self, q: Tensor) -> tuple[Tensor, list[Tensor]]:
+        P, J = self.kin.batch(q)
+        return _out(P[:, self.points, 2], [J[:, self.points, 2, :]])
+
+
+class TipHeight(_PointHeights):
     """Height of the tip centre above the table, ``q (n, dof) → (n, 1)`` in m."""
 
-    def __init__(self, kin: ArmKinematics) -> None:
-        self.kin = kin
-
-    def __call__(self, q: Tensor) -> Tensor:
-        return self.jacobians(q)[0]
-
-    def jacobians(self, q: Tensor) -> tuple[Tensor, list[Tensor]]:
-        P, J = self.kin.batch(q)
-        return _out(P[:, 0, 2:3], [J[:, 0, 2:3, :]])
+    points = slice(0, 1)
 
 
-class CheckPointHeights:
+class CheckPointHeights(_PointHeights):
     """Heights of the check links' origins (flange first), ``q (n, dof) → (n, K−1)``."""
 
-    def __init__(self, kin: ArmKinematics) -> None:
-        self.kin = kin
-
-    def __call__(self, q: Tensor) -> Tensor:
-        return self.jacobians(q)[0]
-
-    def jacobians(self, q: Tensor) -> tuple[Tensor, list[Tensor]]:
-        P, J = self.kin.batch(q)
-        return _out(P[:, 1:, 2], [J[:, 1:, 2, :]])
+    points = slice(1, None)
 
 
-class ArmSeparation:
+class ArmSeparation(_OnArm):
     """Smooth minimum distance between the check points (tip included) of two arms,
     ``−(1/β) log Σ_ij exp(−β d_ij)`` (≤ the true minimum, so a bound on it is safe):
     ``(qA (n, dof), qB (n, dof)) → (n, 1)`` in m."""
 
     def __init__(self, a: ArmKinematics, b: ArmKinematics, beta: float = 60.0) -> None:
+        super().__init__(a)
         self.a, self.b, self.beta = a, b, beta
-
-    def __call__(self, qa: Tensor, qb: Tensor) -> Tensor:
-        return self.jacobians(qa, qb)[0]
 
     def jacobians(self, qa: Tensor, qb: Tensor) -> tuple[Tensor, list[Tensor]]:
         Pa, Ja = self.a.batch(qa)

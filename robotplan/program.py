@@ -85,8 +85,8 @@ class ProgramSettings:
     solver: str = "snopt"
     # hand SNOPT the per-step sparsity of the stepwise constraints. Off for free pushers: on
     # bench_box_003 (seed 0) push@0,push@1 the kinematic stage went from feasible (coverage
-    # 0.998) to infeasible; on for arms (ArmSettings), where the dense rows over every joint
-    # made one kinematic stage 30 s instead of 11 s
+    # 0.998) to infeasible; on for arms (ARM_PROGRAM_SETTINGS), where the dense rows over
+    # every joint made one kinematic stage 30 s instead of 11 s
     sparse_jacobians: bool = False
     optimality_tol: float = 2e-3
     feasibility_tol: float = 1e-4
@@ -345,8 +345,9 @@ class PushProgram:
         radius = limit_surface_radius(support_corners(self.obj.shape), c_B)
         H = QuasiStaticPush(c_B, radius, self.settings.push_friction, turn=turn)
         k = self.push_steps
-        m = 3 if turn else 2
-        lb, ub = np.zeros((1, m)), np.array([[0.0, np.inf, np.inf][3 - m:]])
+        m = 3 if turn else 2  # [turn (= 0)], cone edge, cone edge (≥ 0)
+        lb, ub = np.zeros((1, m)), np.full((1, m), np.inf)
+        ub[0, 0] = 0.0 if turn else np.inf
         self._add_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P], m, 100, lb, ub,
                        "quasi_static" if turn else "friction_cone")
 

@@ -56,8 +56,7 @@ def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
     from robotplan.arm_program import reach_check
 
     touch = scene.goal.actor if scene.goal.type == "touch" else None
-    frames = [space.init_frame] + [f for f in ("goal",) if f != space.init_frame]
-    for frame in frames:
+    for frame in dict.fromkeys((space.init_frame, "goal")):
         space = replace(space, init_frame=frame)
         every = actor_candidates(space, actors, obj, max_pushes, touch)
         kept = [sk for sk in every if reach_check(scene, sk, space) is None]
@@ -87,11 +86,15 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
     obj, actors = _check_supported(scene)
     skeletons, space = _skeletons(scene, obj, actors, skeleton, max_pushes, quiet)
     settings = ProgramSettings(solver=solver)
+    if scene.robots:
+        from robotplan.arm_program import ARM_PROGRAM_SETTINGS
+
+        settings = replace(ARM_PROGRAM_SETTINGS, solver=solver)
     result = search_push(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
                          time_budget, space)
     if not result.solved and scene.obstacles and skeleton is None and not scene.robots:
         # around obstacles: three pushes when fewer fail (the object's route is longer)
-        more = [sk for sk in space_for(scene).candidates(actors[0], obj, 3) if sk.pushes == 3]
+        more = [sk for sk in space.candidates(actors[0], obj, 3) if sk.pushes == 3]
         if not quiet:
             print(f"no plan with up to {max_pushes} pushes; trying {len(more)} with three")
         left = None if time_budget is None else max(0.0, time_budget - result.seconds)
