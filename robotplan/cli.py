@@ -247,12 +247,16 @@ def _cmd_eval_push(args: argparse.Namespace) -> int:
     from robotplan.learned.evaluation import evaluate_push
 
     torch.set_num_threads(args.threads)
+    device = args.device
+    if device == "auto":
+        device = "cuda" if torch.cuda.is_available() else "cpu"
     for path, what in ((args.model, "--model"), (args.data, "--data")):
         if not Path(path).is_dir():
             print(f"error: {path}: {what}: no such folder", file=sys.stderr)
             return EXIT_BAD_INPUT
     result = evaluate_push(args.model, args.data, scenes=args.scenes,
-                           per_scene=args.per_scene or None, seed=args.seed)
+                           per_scene=args.per_scene or None, seed=args.seed, device=device,
+                           chunk=8 if device == "cpu" else 128)
     if args.record:
         from robotplan.learned.model_card import record_heldout
 
@@ -382,6 +386,7 @@ def _parser() -> argparse.ArgumentParser:
                     help="at most this many random samples of each scene (0: all)")
     ep.add_argument("--seed", type=int, default=0)
     ep.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    ep.add_argument("--device", default="auto", help="cpu, cuda or auto")
     ep.add_argument("--json", action="store_true")
     ep.add_argument("--record", action="store_true",
                     help="store the result in the model's metrics.json and model card")

@@ -30,24 +30,24 @@ def pick_samples(samples: PushSamples, per_scene: int | None, seed: int) -> np.n
 @torch.no_grad()
 def evaluate_push(model_dir: str | Path, data_dir: str | Path, scenes: int | None = None,
                   per_scene: int | None = None, seed: int = 0, chunk: int = 8,
-                  progress: bool = True) -> dict:
+                  progress: bool = True, device: str | torch.device = "cpu") -> dict:
     """RMSE over every point of X_h between predicted and true φ1_t, per sample, averaged
     over samples with and without pusher contact; also for the "no motion" baseline
-    φ1_t = φ1_{t−1}. Distances in millimetres."""
+    φ1_t = φ1_{t−1}. Distances in millimetres. On a GPU ``device``, use a larger ``chunk``."""
     from tqdm import tqdm
 
     t0 = time.time()
-    model = load_model(model_dir)
+    model = load_model(model_dir, device)
     spec = model.spec
     ws = Workspace(spec.workspace_center, spec.workspace_size,
                    spec.workspace_size[0] / spec.grid[1])
-    grid = ws.points().reshape(-1, 2)
+    grid = ws.points().reshape(-1, 2).to(device)
     point_term = model.point_term(grid[None])  # the same for every sample: computed once
     samples = PushSamples(data_dir, scenes)
     idx = pick_samples(samples, per_scene, seed)
     errs, bases = [], []
     for i in tqdm(range(0, len(idx), chunk), desc="eval", unit="batch", disable=not progress):
-        b: SampleBatch = samples.batch(idx[i:i + chunk])
+        b: SampleBatch = samples.batch(idx[i:i + chunk], device=device)
         inputs = b.inputs(grid, ws.shape)
         out = model.from_terms(model.sdf_term(model.features(inputs)), point_term)
         prev = inputs[:, 0].reshape(len(b.radius), -1)
@@ -55,8 +55,8 @@ def evaluate_push(model_dir: str | Path, data_dir: str | Path, scenes: int | Non
         pred = prev + out if spec.kind == "flow" else out
         errs.append((pred - now).pow(2).mean(1).sqrt())
         bases.append((prev - now).pow(2).mean(1).sqrt())
-    err = torch.cat(errs).numpy() * 1e3
-    base = torch.cat(bases).numpy() * 1e3
+    err = torch.cat(errs).cpu().numpy() * 1e3
+    base = torch.cat(bases).cpu().numpy() * 1e3
     contact = samples.contact[idx]
 
     def stats(v: np.ndarray) -> dict:
@@ -73,5 +73,5 @@ def evaluate_push(model_dir: str | Path, data_dir: str | Path, scenes: int | Non
         "samples": {"contact": int(contact.sum()), "free": int((~contact).sum())},
         "rmse_mm": stats(err), "rmse_std_mm": spread(err),
         "baseline_rmse_mm": stats(base), "baseline_std_mm": spread(base),
-        "seconds": round(time.time() - t0, 1),
+        "seconds": round(time.time() - t0, 1), "device": str(device),
     }

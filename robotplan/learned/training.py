@@ -182,13 +182,16 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
     bar = tqdm(total=cfg.steps, initial=step, unit="step", disable=not progress,
                desc=f"train {cfg.kind}")
     loss_ema = None
+    perm, perm_epoch = train_idx, -1
     if step == 0:
         bar.write(json.dumps(validate()))  # the untrained model, for the record
     try:
         while step < cfg.steps:
             epoch, b = divmod(step, per_epoch)
             if cfg.contact_share is None:
-                perm = np.random.default_rng([cfg.seed, epoch]).permutation(train_idx)
+                if perm_epoch != epoch:  # one permutation per epoch (not per step)
+                    perm = np.random.default_rng([cfg.seed, epoch]).permutation(train_idx)
+                    perm_epoch = epoch
                 chosen = perm[b * cfg.batch:(b + 1) * cfg.batch]
             else:  # balanced batches: the metric averages contact and free separately
                 rng = np.random.default_rng([cfg.seed, 7, step])

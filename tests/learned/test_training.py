@@ -48,6 +48,13 @@ def test_evaluation_and_model_card(tiny_push_data, tmp_path):
     assert set(result["samples"]) == {"contact", "free"}
     assert result["baseline_rmse_mm"]["contact"] > 1.0
     assert result["baseline_rmse_mm"]["free"] < 2.0
+    # batching (a GPU evaluates 128 samples at a time) does not change the numbers
+    again = evaluate_push(out, tiny_push_data, per_scene=3, progress=False, chunk=64,
+                          device="cpu")
+    assert again["device"] == "cpu" and again["samples"] == result["samples"]
+    for key in ("rmse_mm", "baseline_rmse_mm"):
+        for split in ("contact", "free"):
+            assert abs(again[key][split] - result[key][split]) <= 0.002
     write_model_card(out)
     record_heldout(out, result)
     card = (out / "MODEL_CARD.md").read_text()
