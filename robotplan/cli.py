@@ -199,6 +199,15 @@ def _cmd_data_push(args: argparse.Namespace) -> int:
     return 0
 
 
+def _device(name: str) -> str:
+    """``--device``: ``auto`` is the GPU when torch sees one, else the CPU."""
+    import torch
+
+    if name == "auto":
+        return "cuda" if torch.cuda.is_available() else "cpu"
+    return name
+
+
 def _cmd_train_push(args: argparse.Namespace) -> int:
     import torch
 
@@ -217,9 +226,7 @@ def _cmd_train_push(args: argparse.Namespace) -> int:
         print(f"error: {out}: --out: the folder is not empty; --resume it or pass --overwrite",
               file=sys.stderr)
         return EXIT_BAD_INPUT
-    device = args.device
-    if device == "auto":
-        device = "cuda" if torch.cuda.is_available() else "cpu"
+    device = _device(args.device)
     torch.set_num_threads(args.threads)
     cfg = TrainConfig(data=args.data, out=args.out, kind=args.model, steps=args.steps,
                       batch=args.batch, lr=args.lr, points=args.points, seed=args.seed,
@@ -247,16 +254,13 @@ def _cmd_eval_push(args: argparse.Namespace) -> int:
     from robotplan.learned.evaluation import evaluate_push
 
     torch.set_num_threads(args.threads)
-    device = args.device
-    if device == "auto":
-        device = "cuda" if torch.cuda.is_available() else "cpu"
+    device = _device(args.device)
     for path, what in ((args.model, "--model"), (args.data, "--data")):
         if not Path(path).is_dir():
             print(f"error: {path}: {what}: no such folder", file=sys.stderr)
             return EXIT_BAD_INPUT
     result = evaluate_push(args.model, args.data, scenes=args.scenes,
-                           per_scene=args.per_scene or None, seed=args.seed, device=device,
-                           chunk=8 if device == "cpu" else 128)
+                           per_scene=args.per_scene or None, seed=args.seed, device=device)
     if args.record:
         from robotplan.learned.model_card import record_heldout
 

@@ -147,6 +147,7 @@ def initial_guess(prog: PushProgram) -> dict[str, np.ndarray]:
     q2[0] = prog.pusher.pose[:2]
     speed = prog.settings.guess_speed  # per step and axis
     done = 0
+    p_touch = None
     for k, ph in enumerate(prog.skeleton.phases):
         a, b = k * T, (k + 1) * T
         center = q1[a, :2]
@@ -188,6 +189,6 @@ def initial_guess(prog: PushProgram) -> dict[str, np.ndarray]:
                 q2[a + s] = q1[a + s, :2] + offset
     p = np.array([0.5 * (q1[t, :2] + q2[t]) for t in prog.push_steps]).reshape(-1, 2)
     guess = {"q_obj": q1, "q_pusher": q2, "p": p}
-    if prog.scene.goal.type == "touch" and prog.skeleton.phases[-1].mode == "reach":
+    if p_touch is not None:
         guess["p_touch"] = p_touch[None]
     return guess

@@ -347,7 +347,8 @@ class PushProgram:
         k = self.push_steps
         m = 3 if turn else 2  # [turn (= 0)], cone edge, cone edge (≥ 0)
         lb, ub = np.zeros((1, m)), np.full((1, m), np.inf)
-        ub[0, 0] = 0.0 if turn else np.inf
+        if turn:
+            ub[0, 0] = 0.0
         self._add_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P], m, 100, lb, ub,
                        "quasi_static" if turn else "friction_cone")
 
