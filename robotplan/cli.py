@@ -110,6 +110,30 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     return 0 if doc["status"] == "solved" else 1
 
 
+def _cmd_diagnose(args: argparse.Namespace) -> int:
+    from robotplan.diagnose import check_steps, summarize, table, to_json
+
+    path = Path(args.dir) / "result.json"
+    if not path.is_file():
+        print(f"error: {path}: no result.json (run robotplan solve first)", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if _not_a_model(args.model):
+        return EXIT_BAD_INPUT
+    scene = load_scene(args.scene)
+    try:
+        checks = check_steps(scene, json.loads(path.read_text()), args.model)
+    except (ValueError, KeyError, StopIteration) as err:
+        print(f"error: {path}: {err!s} (is {args.scene} the scene it was solved for?)",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.json:
+        print(to_json(checks))
+        return 0
+    print(table(checks))
+    _print_result(summarize(checks), False)
+    return 0
+
+
 def _cmd_view(args: argparse.Namespace) -> int:
     import functools
     import http.server
@@ -232,7 +256,8 @@ def _cmd_train_push(args: argparse.Namespace) -> int:
                       batch=args.batch, lr=args.lr, points=args.points, seed=args.seed,
                       scenes=args.scenes, device=device, minutes=args.minutes,
                       val_every=args.val_every, contact_share=args.contact_share,
-                      spec={"encoder": args.encoder}, init_weights=args.init_weights,
+                      near_share=args.near_share, spec={"encoder": args.encoder},
+                      init_weights=args.init_weights,
                       command=" ".join(["robotplan", *sys.argv[1:]]))
     if args.resume:  # the run's settings come from its checkpoint; only the budget may change
         saved = json.loads(torch.load(ckpt, weights_only=True)["config"])
@@ -261,6 +286,11 @@ def _cmd_eval_push(args: argparse.Namespace) -> int:
             return EXIT_BAD_INPUT
     result = evaluate_push(args.model, args.data, scenes=args.scenes,
                            per_scene=args.per_scene or None, seed=args.seed, device=device)
+    if args.pose_fit > 0:
+        from robotplan.learned.pose_fit import evaluate_pose_fit
+
+        result["pose_fit"] = evaluate_pose_fit(args.model, args.data, samples=args.pose_fit,
+                                               seed=args.seed, scenes=args.scenes)
     if args.record:
         from robotplan.learned.model_card import record_heldout
 
@@ -338,6 +368,14 @@ def _parser() -> argparse.ArgumentParser:
                     help="start no program after S seconds; the best so far wins")
     so.set_defaults(run=_cmd_solve)
 
+    dg = sub.add_parser("diagnose", help="a plan's push steps against one-step pybullet and "
+                        "the learned model (where plan and physics part)")
+    dg.add_argument("dir", metavar="DIR", help="a folder written by robotplan solve")
+    dg.add_argument("scene", metavar="SCENE", help="the scene it was solved for")
+    dg.add_argument("--model", default=default_model, metavar="DIR")
+    dg.add_argument("--json", action="store_true")
+    dg.set_defaults(run=_cmd_diagnose)
+
     vw = sub.add_parser("view", help="serve DIR/playback.html locally")
     vw.add_argument("dir", metavar="DIR")
     vw.add_argument("--port", type=int, default=0, help="0: any free port")
@@ -376,6 +414,9 @@ def _parser() -> argparse.ArgumentParser:
                     help="start from these weights (e.g. a previous run's weights.pt)")
     tp.add_argument("--contact-share", type=float, default=None,
                     help="balanced batches with this share of contact samples")
+    tp.add_argument("--near-share", type=float, default=0.25,
+                    help="share of the query points drawn within 10 cm of the object (the "
+                         "rest uniform on the table); more resolves the object's turning")
     tp.add_argument("--resume", action="store_true", help="continue from checkpoint.pt")
     tp.add_argument("--overwrite", action="store_true", help="start over in a used folder")
     tp.set_defaults(run=_cmd_train_push)
@@ -391,6 +432,9 @@ def _parser() -> argparse.ArgumentParser:
     ep.add_argument("--seed", type=int, default=0)
     ep.add_argument("--threads", type=int, default=os.cpu_count() or 1)
     ep.add_argument("--device", default="auto", help="cpu, cuda or auto")
+    ep.add_argument("--pose-fit", type=int, default=0, metavar="N",
+                    help="also fit the pose that minimises H_t on N contact samples and "
+                         "report translation and turn errors (~1 s a sample)")
     ep.add_argument("--json", action="store_true")
     ep.add_argument("--record", action="store_true",
                     help="store the result in the model's metrics.json and model card")

@@ -112,6 +112,9 @@ class ProgramSettings:
     # ≤ 0 leaves the object's motion free apart from sticking
     push_friction: float = 0.0
     cone_in_learned: bool = False  # keep the friction cone in the learned stage too
+    # and the limit surface's turning law: the learned models predict ~10–16 % of the turn
+    # pybullet produces (README, known limits), the law (given the true translation) ~50–60 %
+    turn_in_learned: bool = False
 
 
 @dataclass
@@ -190,7 +193,7 @@ class PushProgram:
             self._add_dynamics(model)
             self._add_step_limits(settings.max_step, settings.max_turn)
             if settings.cone_in_learned and settings.push_friction > 0 and len(self.push_steps):
-                self._add_quasi_static(turn=False)
+                self._add_quasi_static(turn=settings.turn_in_learned)
         else:
             self._add_kinematic_pushing()
             self._add_step_limits(settings.warm_max_step, settings.warm_max_turn)
@@ -339,8 +342,9 @@ class PushProgram:
 
     def _add_quasi_static(self, turn: bool) -> None:
         """QuasiStaticPush rows in every push step: the friction cone, and with ``turn`` the
-        limit surface's turning rate (the kinematic stage; the learned stage keeps the cone
-        only, H_F decides the motion)."""
+        limit surface's turning rate (the kinematic stage, and the learned stage with
+        ``turn_in_learned``; otherwise the learned stage keeps the cone only and H_F alone
+        decides how the object turns)."""
         c_B = centroid(self.obj.shape.outline())
         radius = limit_surface_radius(support_corners(self.obj.shape), c_B)
         H = QuasiStaticPush(c_B, radius, self.settings.push_friction, turn=turn)

@@ -6,7 +6,7 @@ import pytest
 from robotplan import load_scene
 from robotplan.execute import execute_push
 from robotplan.scene.bodies import Body
-from robotplan.sdf import Circle, Polygon
+from robotplan.sdf import Box, Circle, LShape, Polygon
 from robotplan.viewer import write_playback
 from tests.conftest import TASKS
 
@@ -109,9 +109,12 @@ def test_guess_routes_the_object_around_the_obstacle():
              (0.03, 0.04), (0.12, 0.04), (0.12, 0.1))),  # a T: concave
     Polygon(((-0.1, -0.08), (0.1, -0.08), (0.0, 0.11))),  # a triangle
     Circle(0.07),
+    Box((0.2, 0.1)),
+    LShape((0.24, 0.16), 0.06),
 ])
-def test_unseen_footprints_are_simulated_as_their_outlines(shape, rng):
-    """pybullet's body of a polygon (convex pieces) or a disc (cylinder): the distance from
+def test_footprints_are_simulated_as_their_outlines(shape, rng):
+    """pybullet's body of a polygon (convex pieces), a disc (cylinder), a box or an L-shape
+    (boxes about the centroid, the data's bodies): the distance from
     probe spheres around and inside its concavities matches the SDF to 2 mm."""
     import torch
 

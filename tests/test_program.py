@@ -48,6 +48,17 @@ def test_program_shape_and_initial_guess():
     assert "H_F" in names
 
 
+def test_learned_program_keeps_the_quasi_static_rows_asked_for():
+    def constraints(**settings):
+        return {b.evaluator().get_description() for b in build(**settings).prog.GetAllConstraints()}
+
+    assert not {"friction_cone", "quasi_static"} & constraints()
+    cone = constraints(push_friction=0.08, cone_in_learned=True)
+    assert "friction_cone" in cone and "quasi_static" not in cone
+    turn = constraints(push_friction=0.08, cone_in_learned=True, turn_in_learned=True)
+    assert "quasi_static" in turn and "friction_cone" not in turn
+
+
 def test_kinematic_program_replaces_h_f_by_sticking_contact():
     prog = build(kinematic=True, scene_file=DATA / "box_push_near.yaml")
     names = {b.evaluator().get_description() for b in prog.prog.GetAllConstraints()}

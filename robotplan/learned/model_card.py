@@ -86,6 +86,20 @@ def write_model_card(model_dir: Path) -> None:
                      f"{n['contact']} / {n['free']} | {r['contact']} ± "
                      f"{held['rmse_std_mm']['contact']} | {r['free']} ± "
                      f"{held['rmse_std_mm']['free']} | {b['contact']} |")
+    fit = (held or {}).get("pose_fit")
+    if fit:
+        lines += [
+            "",
+            "## Rigid motion as the planner reads it (`eval push --pose-fit`)",
+            "The pose minimising H_t fitted per contact sample against the simulator's step:"
+            " median errors, and the turn gain (1: the model turns the object as much as"
+            " pybullet does, 0: not at all).",
+            "| shape | samples | translation error mm | yaw error ° | true turn ° | turn gain |",
+            "| --- | --- | --- | --- | --- | --- |",
+            *(f"| {k} | {v['samples']} | {v['translation_error_mm']} | {v['yaw_error_deg']} | "
+              f"{v['true_turn_deg']} | {v['turn_gain']} |"
+              for k, v in fit.items() if isinstance(v, dict)),
+        ]
     lines += [
         "",
         "## Known failure modes",
