@@ -36,7 +36,7 @@ def test_program_shape_and_initial_guess():
     # the reach phase ends at init point 2 (180° in the table frame): west of the object
     assert g["q_pusher"][10, 0] < prog.obj.pose[0] - prog.obj.shape.bound_radius
     names = {b.evaluator().get_description() for b in prog.prog.GetAllConstraints()}
-    assert {"H_coll", "H_PoC", "H_g"} <= names and "H_F" not in names
+    assert {"H_coll", "H_PoC", "H_g", "swept"} <= names and "H_F" not in names
     assert "H_F" in {b.evaluator().get_description() for b in prog.prog.GetAllCosts()}
     # the pusher pushes in contact with the box (φ_box = radius − 1 mm)
     X = torch.tensor(g["q_obj"][20])
@@ -52,11 +52,12 @@ def test_learned_program_keeps_the_quasi_static_rows_asked_for():
     def constraints(**settings):
         return {b.evaluator().get_description() for b in build(**settings).prog.GetAllConstraints()}
 
-    assert not {"friction_cone", "quasi_static"} & constraints()
-    cone = constraints(push_friction=0.08, cone_in_learned=True)
+    # the default: the cone and the limit surface's turning law in the learned stage too
+    assert "quasi_static" in constraints() and "friction_cone" not in constraints()
+    cone = constraints(turn_in_learned=False)
     assert "friction_cone" in cone and "quasi_static" not in cone
-    turn = constraints(push_friction=0.08, cone_in_learned=True, turn_in_learned=True)
-    assert "quasi_static" in turn and "friction_cone" not in turn
+    assert not {"friction_cone", "quasi_static"} & constraints(cone_in_learned=False)
+    assert not {"friction_cone", "quasi_static"} & constraints(push_friction=0.0)
 
 
 def test_kinematic_program_replaces_h_f_by_sticking_contact():

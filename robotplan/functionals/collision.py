@@ -10,7 +10,7 @@ from robotplan.functionals.windows import body_aabb, margin, window_points
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle
 
-__all__ = ["Collision", "FixedCollision", "face_contact_overlap"]
+__all__ = ["Collision", "FixedCollision", "SweptClearance", "face_contact_overlap"]
 
 
 class Collision(Functional):
@@ -65,6 +65,29 @@ class FixedCollision(Functional):
 
     def residual(self, X_W1: Tensor) -> Tensor:
         return self.pair(X_W1, self.pose.to(X_W1).expand(X_W1.shape[0], -1))
+
+
+class SweptClearance(Functional):
+    """The gap (m) between a body and a disc at ``samples`` points inside the disc's straight
+    move: ``residual(X_WB (T, 3), x_prev (T, 2), x (T, 2)) → (T, samples)`` =
+    φ_B(x_prev + s_j (x − x_prev)) − radius, s_j = j / (samples + 1).
+
+    H_coll sees the planned states only; a pusher that follows a reach step in a straight line
+    can pass through the object between two clear states (in pybullet it then drags the
+    object along). The SDF's gradient is a unit vector everywhere, so a bound on this gap
+    points out of the object even deep inside it, where H_coll's sigmoids are flat.
+    """
+
+    def __init__(self, body: Body, disc: Body, samples: int = 7) -> None:
+        if not isinstance(disc.shape, Circle):
+            raise ValueError("SweptClearance: the second body must be a disc (a pusher)")
+        self.body, self.radius = body, disc.shape.radius
+        self.s = torch.arange(1, samples + 1, dtype=torch.float64) / (samples + 1)
+
+    def residual(self, X_WB: Tensor, x_prev: Tensor, x: Tensor) -> Tensor:
+        s = self.s.to(x)[None, :, None]  # (1, S, 1)
+        points = x_prev[:, None, :2] + s * (x[:, None, :2] - x_prev[:, None, :2])  # (T, S, 2)
+        return self.body.sdf(points, X_WB) - self.radius
 
 
 def face_contact_overlap(body: Body, a: float = 500.0, depth: float = 0.0) -> float:

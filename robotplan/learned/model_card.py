@@ -94,6 +94,7 @@ def write_model_card(model_dir: Path) -> None:
             "The pose minimising H_t fitted per contact sample against the simulator's step:"
             " median errors, and the turn gain (1: the model turns the object as much as"
             " pybullet does, 0: not at all).",
+            "",
             "| shape | samples | translation error mm | yaw error ° | true turn ° | turn gain |",
             "| --- | --- | --- | --- | --- | --- |",
             *(f"| {k} | {v['samples']} | {v['translation_error_mm']} | {v['yaw_error_deg']} | "
