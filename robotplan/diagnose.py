@@ -28,6 +28,7 @@ from robotplan.learned.dynamics import load_model
 from robotplan.learned.pose_fit import fit_step
 from robotplan.scene import Scene
 from robotplan.sim import PHYSICS, PushWorld
+from robotplan.transforms import wrap_angle
 
 __all__ = ["StepCheck", "check_steps", "summarize", "table", "to_json"]
 
@@ -43,13 +44,9 @@ class StepCheck:
     pusher: list[float]
 
 
-def _wrap(a: float) -> float:
-    return float((a + np.pi) % (2 * np.pi) - np.pi)
-
-
 def _delta(a: np.ndarray, b: np.ndarray) -> list[float]:
     d = np.asarray(b, dtype=float) - np.asarray(a, dtype=float)
-    return [float(d[0]), float(d[1]), _wrap(d[2])]
+    return [float(d[0]), float(d[1]), float(wrap_angle(d[2]))]
 
 
 def check_steps(scene: Scene, result: dict, model_dir: str | Path) -> list[StepCheck]:

@@ -13,6 +13,8 @@ Points carry their own leading batch dimensions and broadcast against the pose's
 
 from __future__ import annotations
 
+import math
+
 import torch
 from torch import Tensor
 
@@ -22,6 +24,7 @@ __all__ = [
     "quaternion_to_matrix",
     "spatial_to_body",
     "spatial_to_world",
+    "wrap_angle",
 ]
 
 
@@ -88,3 +91,9 @@ def spatial_to_world(points_B: Tensor, X_WB: Tensor) -> Tensor:
     """``p_W = R p_B + t`` for points ``(..., N, 3)`` and poses ``(..., 7)``."""
     R = quaternion_to_matrix(X_WB[..., 3:])
     return torch.einsum("...ij,...nj->...ni", R, points_B) + X_WB[..., None, :3]
+
+
+def wrap_angle(a: float) -> float:
+    """An angle (rad) wrapped to [−π, π), e.g. the difference of two yaws; elementwise on
+    numpy arrays and tensors."""
+    return (a + math.pi) % (2 * math.pi) - math.pi

@@ -48,3 +48,17 @@ def test_spatial_round_trip(rng):
     pts = torch.from_numpy(rng.normal(size=(4, 30, 3)))
     back = spatial_to_world(spatial_to_body(pts, pose), pose)
     assert torch.allclose(back, pts, atol=1e-12)
+
+
+def test_wrap_angle():
+    import math
+
+    import numpy as np
+
+    from robotplan.transforms import wrap_angle
+
+    a = np.array([0.0, 3.0, -3.0, 3.5, -3.5, 7.0, 2 * math.pi])
+    w = wrap_angle(a)
+    assert np.all((w >= -math.pi) & (w < math.pi))
+    assert np.allclose(np.cos(w), np.cos(a)) and np.allclose(np.sin(w), np.sin(a))
+    assert abs(wrap_angle(3.5) - (3.5 - 2 * math.pi)) < 1e-12

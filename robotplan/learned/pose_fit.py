@@ -28,6 +28,7 @@ from robotplan.learned.dynamics import PushDynamics, load_model
 from robotplan.learned.samples import PushSamples
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape
+from robotplan.transforms import wrap_angle
 
 __all__ = ["evaluate_pose_fit", "fit_step"]
 
@@ -62,10 +63,6 @@ def fit_step(model: PushDynamics, obj: Body, pusher: Body, q1_prev: np.ndarray,
     return q1_prev + minimize(fun, np.zeros(3), jac=True, method="L-BFGS-B").x * scale
 
 
-def _wrap(a: np.ndarray) -> np.ndarray:
-    return (a + np.pi) % (2 * np.pi) - np.pi
-
-
 def evaluate_pose_fit(model_dir: str | Path, data_dir: str | Path, samples: int = 100,
                       seed: int = 0, scenes: int | None = None, progress: bool = True
                       ) -> dict:
@@ -97,7 +94,7 @@ def evaluate_pose_fit(model_dir: str | Path, data_dir: str | Path, samples: int 
                     (q2p[0], q2p[1], 0.0), 0.0, 0.06)
         fit = fit_step(model, obj, tool, q1p, q2p, q2n)
         true, pred = q1n - q1p, fit - q1p
-        true[2], pred[2] = _wrap(true[2]), _wrap(pred[2])
+        true[2], pred[2] = wrap_angle(true[2]), wrap_angle(pred[2])
         rows.append((lshape, *true, *pred))
     R = np.array(rows, dtype=float).reshape(-1, 7)
     out: dict = {"model": str(model_dir), "data": str(data_dir), "samples": len(R)}
