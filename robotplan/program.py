@@ -79,7 +79,7 @@ class ProgramSettings:
     reach_clearance: float = 0.01  # m between pusher and object outside push steps
     # and at least −swept_tolerance (m) along each free move (SweptClearance, samples per
     # move): on 5 + 5 benchmark scenes 7 plans moved the pusher through the object between
-    # two clear states, and pybullet dragged the object along (0 to 6 cm deep)
+    # two clear states (6 mm to 15 cm deep), and pybullet dragged the object along
     swept_samples: int = 7
     swept_tolerance: float = 0.002
     goal_tol: float = 0.003  # share of the object's area allowed outside the goal
