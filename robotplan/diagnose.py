@@ -59,9 +59,7 @@ def check_steps(scene: Scene, result: dict, model_dir: str | Path) -> list[StepC
     Q1, Q2 = np.asarray(poses, dtype=float), np.asarray(traj["pusher"], dtype=float)
     body, spec = scene.bodies[obj_name], next(o for o in scene.objects if o.name == obj_name)
     tool = scene.bodies[scene.pushers[0].name]
-    model = load_model(model_dir)
-    for p in model.parameters():
-        p.requires_grad_(False)
+    model = load_model(model_dir)  # LearnedDynamics freezes its parameters
     checks = []
     with PushWorld(PHYSICS) as world:
         for t in range(1, len(Q1)):

@@ -25,6 +25,7 @@ from scipy.optimize import minimize
 from robotplan.functionals.base import Quadrature
 from robotplan.functionals.dynamics import LearnedDynamics
 from robotplan.learned.dynamics import PushDynamics, load_model
+from robotplan.learned.push_data import LSHAPE
 from robotplan.learned.samples import PushSamples
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape
@@ -72,9 +73,7 @@ def evaluate_pose_fit(model_dir: str | Path, data_dir: str | Path, samples: int 
     from tqdm import tqdm
 
     t0 = time.time()
-    model = load_model(model_dir)
-    for p in model.parameters():
-        p.requires_grad_(False)
+    model = load_model(model_dir)  # LearnedDynamics freezes its parameters
     data = PushSamples(data_dir, scenes)
     d = data.data
     contact = np.flatnonzero(data.contact)
@@ -84,7 +83,7 @@ def evaluate_pose_fit(model_dir: str | Path, data_dir: str | Path, samples: int 
     for i in tqdm(picked, desc="pose fit", unit="sample", disable=not progress):
         s, now = data.scene[i], data.now[i]
         half_w, half_h, thick = data.params[s]
-        lshape = thick < 2 * half_h - 1e-9
+        lshape = bool(d["shape_type"][s] == LSHAPE)
         shape = (LShape((2 * half_w, 2 * half_h), float(thick)) if lshape
                  else Box((2 * half_w, 2 * half_h)))
         q1p, q1n = d["object_pose"][now - 1].astype(float), d["object_pose"][now].astype(float)
