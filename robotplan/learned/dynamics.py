@@ -15,7 +15,6 @@ the point part once per quadrature point.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import warnings
 from dataclasses import asdict, dataclass, field
@@ -151,33 +150,38 @@ class PushDynamics(nn.Module):
         return self.encoder(grids[:, None])
 
     @torch.no_grad()
-    def encode_with_masks(self, grids: Tensor) -> tuple[Tensor, list[Tensor]]:
+    def encode_with_masks(self, grids: Tensor, linear: bool = True
+                          ) -> tuple[Tensor, list[Tensor]]:
         """Features ``(M, F)`` of grids ``(M, C, H, W)`` and the encoder's ReLU masks, which
-        :meth:`encoder_input_grad` needs to pull feature gradients back to the grids."""
+        :meth:`encoder_input_grad` needs to pull feature gradients back to the grids.
+        ``linear=False`` stops before the encoder's linear layer: ``(M, C'·h·w)``."""
         enc = self.encoder
         convs = [m for m in enc.conv if isinstance(m, nn.Conv2d)]
         masks: list[Tensor] = []
         y = grids
         for j, conv in enumerate(convs):
-            if j == 0:
-                # oneDNN is slower for one input channel (the shared encoder), faster for 3
-                single = conv.in_channels == 1
-                with _no_onednn() if single else contextlib.nullcontext():
-                    y = nn.functional.conv2d(y, conv.weight * enc.scale, conv.bias, conv.stride)
-            else:
-                y = nn.functional.conv2d(y, conv.weight, conv.bias, conv.stride)
+            weight = conv.weight * enc.scale if j == 0 else conv.weight
+            if j == 0 and conv.in_channels == 1:  # oneDNN is slower for one input channel
+                with _no_onednn():
+                    y = nn.functional.conv2d(y, weight, conv.bias, conv.stride)
+            else:  # oneDNN in channels-last layout: ~2x faster for these few channels
+                y = nn.functional.conv2d(y.contiguous(memory_format=torch.channels_last),
+                                         weight.contiguous(memory_format=torch.channels_last),
+                                         conv.bias, conv.stride)
             masks.append(y > 0)
             y = y.clamp_min_(0)
-        return enc.linear(y.flatten(1)), masks
+        y = y.flatten(1)  # in the (C', h, w) order of the linear layer's inputs
+        return (enc.linear(y) if linear else y), masks
 
     @torch.no_grad()
     def encoder_input_grad(self, masks: list[Tensor], grad_features: Tensor,
-                           index: Tensor | None = None) -> Tensor:
+                           index: Tensor | None = None, linear: bool = True) -> Tensor:
         """Reverse mode through the encoder: ``∂(Σ grad_features · features) / ∂grids``.
 
         Args:
             masks: from :meth:`encode_with_masks`.
-            grad_features: ``(M', F)`` gradients with respect to the features.
+            grad_features: ``(M', F)`` gradients with respect to the features (with
+                ``linear=False``: to the flattened output of the last convolution).
             index: ``(M',)`` which encoded grid each row belongs to (default: row i ↔ grid i);
                 a grid may appear several times (e.g. a pusher grid used by two steps).
         Returns:
@@ -189,16 +193,20 @@ class PushDynamics(nn.Module):
         convs = [m for m in enc.conv if isinstance(m, nn.Conv2d)]
         if index is not None:
             masks = [mk[index] for mk in masks]
-        g = (grad_features @ enc.linear.weight).reshape(masks[-1].shape)
+        g = (grad_features @ enc.linear.weight if linear else grad_features)
+        g = g.reshape(masks[-1].shape)
         for j in range(len(convs) - 1, -1, -1):
-            g = g * masks[j]
+            g = g * masks[j].view(torch.uint8)
             conv = convs[j]
             if j > 0:
-                g = nn.grad.conv2d_input(masks[j - 1].shape, conv.weight, g, conv.stride)
+                g = nn.grad.conv2d_input(masks[j - 1].shape,
+                                         conv.weight.contiguous(memory_format=torch.channels_last),
+                                         g.contiguous(memory_format=torch.channels_last),
+                                         conv.stride)
             else:
                 with _no_onednn():
                     g = nn.grad.conv2d_input((g.shape[0], conv.in_channels, *self.spec.grid),
-                                             conv.weight * enc.scale, g, conv.stride)
+                                             conv.weight * enc.scale, g.contiguous(), conv.stride)
         return g
 
     @torch.no_grad()
@@ -233,10 +241,10 @@ class PushDynamics(nn.Module):
         dtype = matmul_dtype or grad_out.dtype
         layers = [mod for mod in self.head if isinstance(mod, nn.Linear)]
         g = (grad_out * self.spec.out_scale)[..., None] * layers[-1].weight[0]  # (B, P, H)
-        for j in range(len(layers) - 2, -1, -1):
-            g = torch.where(masks[j + 1], g, 0.0)
+        for j in range(len(layers) - 2, -1, -1):  # a bool mask times g via its uint8 view:
+            g = g * masks[j + 1].view(torch.uint8)  # exact, ~4x faster than torch.where
             g = torch.matmul(g.to(dtype), layers[j].weight.to(dtype)).to(grad_out.dtype)
-        return torch.where(masks[0], g, 0.0).sum(1)
+        return (g * masks[0].view(torch.uint8)).sum(1)
 
     def sdf_term(self, features: Tensor) -> Tensor:
         """``(B, 3 · sdf_features)`` (φ1_{t−1}, φ2_{t−1}, φ2_t) → first-layer term ``(B, H1)``."""
