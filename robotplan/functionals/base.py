@@ -13,9 +13,11 @@ from dataclasses import dataclass
 import torch
 from torch import Tensor
 
-from robotplan.sdf import Workspace
+from robotplan.scene.bodies import Body
+from robotplan.sdf import Circle, Workspace
+from robotplan.transforms import planar_to_body
 
-__all__ = ["Functional", "Quadrature"]
+__all__ = ["Functional", "Quadrature", "sdf_pose_gradients"]
 
 
 @dataclass(frozen=True)
@@ -63,3 +65,33 @@ class Functional:
         jac = [torch.stack([torch.zeros_like(x) if g[i] is None else g[i] for g in rows], dim=1)
                for i, x in enumerate(xs)]
         return r.detach(), jac
+
+
+def sdf_pose_gradients(body: Body, points_W: Tensor, X_WB: Tensor, position_only: bool = False
+                       ) -> tuple[Tensor, Tensor, Tensor]:
+    """φ of ``body`` at table-frame points and its exact first derivatives, without autograd.
+
+    Args:
+        points_W: ``(..., N, 2)`` points; X_WB: ``(..., 3)`` poses or ``(..., 2)`` positions
+            (leading dimensions broadcast as in :meth:`Body.sdf`).
+        position_only: treat a ``(..., 3)`` pose as a position (no yaw derivative).
+    Returns:
+        φ ``(..., N)``; ∂φ/∂X_WB ``(..., N, k)`` with k = X_WB's width (the yaw column is 0
+        for discs and position-only bodies); ∂φ/∂p_W ``(..., N, 2)``.
+    From ∇φ in the body frame: ∂φ/∂p_W = R ∇φ_B, ∂φ/∂t = −R ∇φ_B and
+    ∂φ/∂θ = ∇φ_B · (p_B,y, −p_B,x).
+    """
+    X = X_WB.detach()
+    p_B = planar_to_body(points_W.detach(), X)
+    phi, g = body.shape.sdf_and_grad(p_B)
+    gx, gy = g[..., 0], g[..., 1]
+    if X.shape[-1] == 2:
+        grad_W = g
+        return phi, -grad_W, grad_W
+    c, s = torch.cos(X[..., 2:3]), torch.sin(X[..., 2:3])
+    grad_W = torch.stack((c * gx - s * gy, s * gx + c * gy), dim=-1)
+    if position_only or isinstance(body.shape, Circle):
+        d_theta = torch.zeros_like(phi)
+    else:
+        d_theta = gx * p_B[..., 1] - gy * p_B[..., 0]
+    return phi, torch.cat((-grad_W, d_theta[..., None]), dim=-1), grad_W

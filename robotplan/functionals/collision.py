@@ -5,8 +5,14 @@ from __future__ import annotations
 import torch
 from torch import Tensor
 
-from robotplan.functionals.base import Functional, Quadrature
-from robotplan.functionals.windows import body_aabb, margin, window_points
+from robotplan.functionals.base import Functional, Quadrature, sdf_pose_gradients
+from robotplan.functionals.windows import (
+    aabb_jacobians,
+    body_aabb,
+    margin,
+    window_bound_gradients,
+    window_points,
+)
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle
 
@@ -53,6 +59,45 @@ class Collision(Functional):
         inside2 = torch.sigmoid(-self.a * self.body2.sdf(x, X_W2[active]))
         return out.index_put((active,), (inside1 * inside2 * w).sum(1, keepdim=True))
 
+    def jacobians(self, X_W1: Tensor, X_W2: Tensor) -> tuple[Tensor, list[Tensor]]:
+        """The fast path's value and exact Jacobians ``(T, 1, k_i)`` without autograd: the
+        sigmoids' slopes along ∂φ/∂X, plus the taper's slope where the window's bounds
+        follow the bodies' extreme vertices."""
+        if self.quadrature is not None:
+            return super().jacobians(X_W1, X_W2)
+        X1, X2 = X_W1.detach(), X_W2.detach()
+        r = torch.zeros(X1.shape[0], 1, dtype=X1.dtype)
+        J1 = torch.zeros(X1.shape[0], 1, X1.shape[1], dtype=X1.dtype)
+        J2 = torch.zeros(X2.shape[0], 1, X2.shape[1], dtype=X1.dtype)
+        lo1, hi1 = body_aabb(self.body1, X1)
+        lo2, hi2 = body_aabb(self.body2, X2)
+        lo = torch.maximum(lo1, lo2) - self.margin
+        hi = torch.minimum(hi1, hi2) + self.margin
+        active = (hi > lo).all(dim=1).nonzero()[:, 0]
+        if len(active) == 0:
+            return r, [J1, J2]
+        A1, A2 = X1[active], X2[active]
+        x, w, factors = window_points(lo[active], hi[active], self.resolution,
+                                      self.margin / 3, factors=True)
+        phi1, d1, _ = sdf_pose_gradients(self.body1, x, A1)
+        phi2, d2, _ = sdf_pose_gradients(self.body2, x, A2)
+        s1, s2 = torch.sigmoid(-self.a * phi1), torch.sigmoid(-self.a * phi2)
+        f = s1 * s2
+        r[active, 0] = (f * w).sum(1)
+        slope1 = -self.a * s1 * (1.0 - s1) * s2 * w  # ∂(f w)/∂φ1
+        slope2 = -self.a * s2 * (1.0 - s2) * s1 * w
+        g_lo, g_hi = window_bound_gradients(f, factors)  # (A, 2) each
+        from1_lo = (lo1[active] >= lo2[active]).to(X1.dtype)  # which body sets each bound
+        from1_hi = (hi1[active] <= hi2[active]).to(X1.dtype)
+        for J, d, slope, X, body, lo_mine, hi_mine in (
+                (J1, d1, slope1, A1, self.body1, from1_lo, from1_hi),
+                (J2, d2, slope2, A2, self.body2, 1.0 - from1_lo, 1.0 - from1_hi)):
+            J_lo, J_hi = aabb_jacobians(body, X)
+            J[active, 0] = (torch.bmm(slope[:, None, :], d)[:, 0]
+                            + ((g_lo * lo_mine)[..., None] * J_lo
+                               + (g_hi * hi_mine)[..., None] * J_hi).sum(1))
+        return r, [J1, J2]
+
 
 class FixedCollision(Functional):
     """H_coll between a moving body and a fixed one (an obstacle at its scene pose):
@@ -88,6 +133,18 @@ class SweptClearance(Functional):
         s = self.s.to(x)[None, :, None]  # (1, S, 1)
         points = x_prev[:, None, :2] + s * (x[:, None, :2] - x_prev[:, None, :2])  # (T, S, 2)
         return self.body.sdf(points, X_WB) - self.radius
+
+    def jacobians(self, X_WB: Tensor, x_prev: Tensor, x: Tensor
+                  ) -> tuple[Tensor, list[Tensor]]:
+        """Gaps ``(T, S)`` and exact Jacobians from ∇φ (no autograd)."""
+        s = self.s.to(x)[None, :, None]
+        points = x_prev[:, None, :2] + s * (x[:, None, :2] - x_prev[:, None, :2])
+        phi, d_pose, d_point = sdf_pose_gradients(self.body, points, X_WB.detach())
+        J_prev = torch.zeros(*phi.shape, x_prev.shape[1], dtype=phi.dtype)
+        J_now = torch.zeros(*phi.shape, x.shape[1], dtype=phi.dtype)
+        J_prev[..., :2] = (1.0 - s) * d_point
+        J_now[..., :2] = s * d_point
+        return phi - self.radius, [d_pose, J_prev, J_now]
 
 
 def face_contact_overlap(body: Body, a: float = 500.0, depth: float = 0.0) -> float:

@@ -5,8 +5,14 @@ from __future__ import annotations
 import torch
 from torch import Tensor
 
-from robotplan.functionals.base import Functional, Quadrature
-from robotplan.functionals.windows import body_aabb, margin, window_points
+from robotplan.functionals.base import Functional, Quadrature, sdf_pose_gradients
+from robotplan.functionals.windows import (
+    aabb_jacobians,
+    body_aabb,
+    margin,
+    window_bound_gradients,
+    window_points,
+)
 from robotplan.scene.bodies import Body
 
 __all__ = ["GoalRegion"]
@@ -46,3 +52,23 @@ class GoalRegion(Functional):
         inside = torch.sigmoid(-self.a * self.body.sdf(x, X_WB))  # (T, P)
         outside_region = torch.sigmoid(self.a * (self.region.sdf(x) + self.inset))
         return (inside * outside_region * w).sum(1, keepdim=True)
+
+    def jacobians(self, X_WB: Tensor) -> tuple[Tensor, list[Tensor]]:
+        """The fast path's value and exact Jacobian ``(T, 1, k)`` without autograd (the
+        sigmoid's slope along ∂φ/∂X plus the taper's, as in :class:`Collision`)."""
+        if self.quadrature is not None:
+            return super().jacobians(X_WB)
+        X = X_WB.detach()
+        lo, hi = body_aabb(self.body, X)
+        x, w, factors = window_points(lo - self.margin, hi + self.margin, self.resolution,
+                                      self.margin / 3, factors=True)
+        phi, d_pose, _ = sdf_pose_gradients(self.body, x, X)
+        inside = torch.sigmoid(-self.a * phi)
+        outside_region = torch.sigmoid(self.a * (self.region.sdf(x) + self.inset))
+        f = inside * outside_region
+        slope = -self.a * inside * (1.0 - inside) * outside_region * w
+        g_lo, g_hi = window_bound_gradients(f, factors)
+        J_lo, J_hi = aabb_jacobians(self.body, X)
+        J = (torch.bmm(slope[:, None, :], d_pose)[:, 0]
+             + (g_lo[..., None] * J_lo + g_hi[..., None] * J_hi).sum(1))
+        return (f * w).sum(1, keepdim=True), [J[:, None, :]]

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import NamedTuple
 
 import torch
 from torch import Tensor
@@ -20,7 +21,8 @@ from torch import Tensor
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Circle, Shape2D
 
-__all__ = ["body_aabb", "margin", "window_points"]
+__all__ = ["WindowFactors", "aabb_jacobians", "body_aabb", "margin", "window_bound_gradients",
+           "window_points"]
 
 
 def margin(a: float, eps: float = 1e-4) -> float:
@@ -48,13 +50,72 @@ def body_aabb(body: Body, X_WB: Tensor) -> tuple[Tensor, Tensor]:
     return (torch.stack((wx.amin(1), wy.amin(1)), 1), torch.stack((wx.amax(1), wy.amax(1)), 1))
 
 
+def aabb_jacobians(body: Body, X_WB: Tensor) -> tuple[Tensor, Tensor]:
+    """∂lo/∂X_WB and ∂hi/∂X_WB ``(T, 2, k)`` of :func:`body_aabb` (k = X_WB's width): each
+    bound follows its extreme vertex (a disc's follows its centre)."""
+    X = X_WB.detach()
+    T, k = X.shape
+    eye = torch.zeros(T, 2, k, dtype=X.dtype)
+    eye[:, 0, 0] = eye[:, 1, 1] = 1.0
+    if isinstance(body.shape, Circle) or k == 2:  # a disc, or a shape held at yaw 0
+        return eye, eye.clone()
+    verts = _outline(body.shape, X.dtype)  # (V, 2)
+    c, s = torch.cos(X[:, 2:3]), torch.sin(X[:, 2:3])
+    wx = c * verts[:, 0] - s * verts[:, 1]  # (T, V) without the translation
+    wy = s * verts[:, 0] + c * verts[:, 1]
+    dx_dyaw, dy_dyaw = -wy, wx  # ∂/∂θ of the rotated vertices
+
+    def slope(coord: Tensor, d_yaw: Tensor, extreme: Tensor) -> Tensor:
+        # vertices tied for the extreme share it, as autograd's amin/amax do (e.g. a
+        # face parallel to the axis: the mean of the one-sided derivatives)
+        tied = (coord == extreme).to(coord.dtype)
+        return (tied * d_yaw).sum(1) / tied.sum(1)
+
+    out = []
+    for pick in (torch.amin, torch.amax):
+        J = eye.clone()
+        J[:, 0, 2] = slope(wx, dx_dyaw, pick(wx, dim=1, keepdim=True))
+        J[:, 1, 2] = slope(wy, dy_dyaw, pick(wy, dim=1, keepdim=True))
+        out.append(J)
+    return out[0], out[1]
+
+
 def _smoothstep(u: Tensor) -> Tensor:
     u = u.clamp(0.0, 1.0)
     return u * u * (3.0 - 2.0 * u)
 
 
-def window_points(lo: Tensor, hi: Tensor, resolution: float, taper: float = 0.0
-                  ) -> tuple[Tensor, Tensor]:
+def _smoothstep_slope(u: Tensor) -> Tensor:
+    inside = (u > 0.0) & (u < 1.0)
+    return torch.where(inside, 6.0 * u * (1.0 - u), torch.zeros_like(u))
+
+
+class WindowFactors(NamedTuple):
+    """The separable weights of :func:`window_points` (rows y, columns x) and their slopes
+    with respect to the window's bounds: ``w (T, n)``, ``d_lo``, ``d_hi`` per axis."""
+
+    wx: Tensor
+    wy: Tensor
+    wx_lo: Tensor
+    wx_hi: Tensor
+    wy_lo: Tensor
+    wy_hi: Tensor
+
+
+def window_bound_gradients(f: Tensor, factors: WindowFactors) -> tuple[Tensor, Tensor]:
+    """∂(Σ_p f_p w_p)/∂lo and /∂hi ``(T, 2)`` for an integrand ``f (T, P)`` held fixed on
+    the lattice of :func:`window_points` (the taper's part of the integral's gradient)."""
+    F = f.reshape(f.shape[0], factors.wy.shape[1], factors.wx.shape[1])  # (T, ny, nx)
+    Fx = torch.einsum("tyx,ty->tx", F, factors.wy)  # integrated over rows
+    Fy = torch.einsum("tyx,tx->ty", F, factors.wx)
+    d_lo = torch.stack(((Fx * factors.wx_lo).sum(1), (Fy * factors.wy_lo).sum(1)), dim=1)
+    d_hi = torch.stack(((Fx * factors.wx_hi).sum(1), (Fy * factors.wy_hi).sum(1)), dim=1)
+    return d_lo, d_hi
+
+
+def window_points(lo: Tensor, hi: Tensor, resolution: float, taper: float = 0.0,
+                  factors: bool = False
+                  ) -> tuple[Tensor, Tensor] | tuple[Tensor, Tensor, WindowFactors]:
     """Lattice cell centres ``(i + ½) h`` inside each window ``[lo_t, hi_t]``.
 
     Returns points ``(T, P, 2)`` and weights ``(T, P)``: h² times, with ``taper`` > 0, a
@@ -62,7 +123,8 @@ def window_points(lo: Tensor, hi: Tensor, resolution: float, taper: float = 0.0
     one ramp per lattice row and column); 0 for padding and for empty windows. The lattice
     is chosen from the detached bounds; the ramp follows ``lo``/``hi`` with their gradients,
     so that the windowed integral is continuous as points enter and leave. P is the
-    largest window's point count.
+    largest window's point count. ``factors=True`` also returns the
+    :class:`WindowFactors` (for gradients without autograd).
     """
     h = resolution
     lo_d, hi_d = lo.detach(), hi.detach()
@@ -77,8 +139,22 @@ def window_points(lo: Tensor, hi: Tensor, resolution: float, taper: float = 0.0
     gy = (i0[:, 1:2] + iy + 0.5) * h  # (T, ny)
     wx = (ix < n[:, 0:1]).to(lo.dtype) * h
     wy = (iy < n[:, 1:2]).to(lo.dtype) * h
+    slopes = []
     if taper > 0:
-        wx = wx * _smoothstep((gx - lo[:, 0:1]) / taper) * _smoothstep((hi[:, 0:1] - gx) / taper)
-        wy = wy * _smoothstep((gy - lo[:, 1:2]) / taper) * _smoothstep((hi[:, 1:2] - gy) / taper)
+        ramps = []
+        for g, w, axis in ((gx, wx, 0), (gy, wy, 1)):
+            u_lo, u_hi = (g - lo[:, axis:axis + 1]) / taper, (hi[:, axis:axis + 1] - g) / taper
+            r_lo, r_hi = _smoothstep(u_lo), _smoothstep(u_hi)
+            ramps.append(w * r_lo * r_hi)
+            if factors:
+                slopes += [-w * _smoothstep_slope(u_lo.detach()) * r_hi.detach() / taper,
+                           w * r_lo.detach() * _smoothstep_slope(u_hi.detach()) / taper]
+        wx, wy = ramps
+    elif factors:
+        slopes = [torch.zeros_like(wx), torch.zeros_like(wx), torch.zeros_like(wy),
+                  torch.zeros_like(wy)]
     pts = torch.stack(torch.broadcast_tensors(gx[:, None, :], gy[:, :, None]), dim=-1)
-    return pts.reshape(T, -1, 2), (wy[:, :, None] * wx[:, None, :]).reshape(T, -1)
+    weights = (wy[:, :, None] * wx[:, None, :]).reshape(T, -1)
+    if factors:
+        return pts.reshape(T, -1, 2), weights, WindowFactors(wx, wy, *slopes)
+    return pts.reshape(T, -1, 2), weights

@@ -161,7 +161,8 @@ def _box_sdf_and_grad(px: Tensor, py: Tensor, cx: float, cy: float, hx: float, h
 
 def _select(first: Tensor, a: tuple[Tensor, ...], b: tuple[Tensor, ...]) -> tuple[Tensor, ...]:
     """Per element, the tuple ``a`` where ``first`` is 1 and ``b`` where it is 0."""
-    return tuple(y + first * (x - y) for x, y in zip(a, b, strict=True))
+    mask = first.bool()
+    return tuple(torch.where(mask, x, y) for x, y in zip(a, b, strict=True))
 
 
 def lshape_sdf(px: Tensor, py: Tensor, w: Tensor | float, h: Tensor | float,

@@ -114,7 +114,7 @@ def test_swept_clearance_sees_a_move_through_the_object_and_has_exact_gradients(
     assert r[1].min() > 0.0  # 20 cm to the side passes clear
     # gradients against central differences in float64
     r_jac, jac = H.jacobians(X, a, b)
-    assert torch.equal(r_jac, r)
+    assert (r_jac - r).abs().max() < 1e-14  # the written-out path computes the same gaps
     for which, J in enumerate(jac):
         fd = central_difference_jacobian(H, (X, a, b), which)
         assert torch.allclose(J, fd, atol=1e-6), which
