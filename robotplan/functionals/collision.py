@@ -6,13 +6,7 @@ import torch
 from torch import Tensor
 
 from robotplan.functionals.base import Functional, Quadrature, sdf_pose_gradients
-from robotplan.functionals.windows import (
-    aabb_jacobians,
-    body_aabb,
-    margin,
-    window_bound_gradients,
-    window_points,
-)
+from robotplan.functionals.windows import body_aabb, margin, window_bound_gradients, window_points
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle
 
@@ -46,18 +40,24 @@ class Collision(Functional):
             inside1 = torch.sigmoid(-self.a * self.body1.sdf(x, X_W1))  # (T, N)
             inside2 = torch.sigmoid(-self.a * self.body2.sdf(x, X_W2))
             return self.quadrature.integrate(inside1 * inside2)[:, None]
-        lo1, hi1 = body_aabb(self.body1, X_W1)
-        lo2, hi2 = body_aabb(self.body2, X_W2)
-        lo = torch.maximum(lo1, lo2) - self.margin
-        hi = torch.minimum(hi1, hi2) + self.margin
+        lo, hi, active, _, _ = self._windows(X_W1, X_W2)
         out = torch.zeros(X_W1.shape[0], 1, dtype=X_W1.dtype)
-        active = (hi > lo).all(dim=1).nonzero()[:, 0]
         if len(active) == 0:
             return out + 0.0 * (X_W1.sum() + X_W2.sum())  # keeps the graph for autograd
         x, w = window_points(lo[active], hi[active], self.resolution, self.margin / 3)
         inside1 = torch.sigmoid(-self.a * self.body1.sdf(x, X_W1[active]))  # (A, P)
         inside2 = torch.sigmoid(-self.a * self.body2.sdf(x, X_W2[active]))
         return out.index_put((active,), (inside1 * inside2 * w).sum(1, keepdim=True))
+
+    def _windows(self, X_W1: Tensor, X_W2: Tensor, jacobians: bool = False) -> tuple:
+        """Each step's window ``lo, hi (T, 2)`` (the overlap of the bounding boxes grown by
+        the margin), the steps where it is not empty, and the two bodies' own
+        :func:`body_aabb` results."""
+        box1 = body_aabb(self.body1, X_W1, jacobians)
+        box2 = body_aabb(self.body2, X_W2, jacobians)
+        lo = torch.maximum(box1[0], box2[0]) - self.margin
+        hi = torch.minimum(box1[1], box2[1]) + self.margin
+        return lo, hi, (hi > lo).all(dim=1).nonzero()[:, 0], box1, box2
 
     def jacobians(self, X_W1: Tensor, X_W2: Tensor) -> tuple[Tensor, list[Tensor]]:
         """The fast path's value and exact Jacobians ``(T, 1, k_i)`` without autograd: the
@@ -69,11 +69,7 @@ class Collision(Functional):
         r = torch.zeros(X1.shape[0], 1, dtype=X1.dtype)
         J1 = torch.zeros(X1.shape[0], 1, X1.shape[1], dtype=X1.dtype)
         J2 = torch.zeros(X2.shape[0], 1, X2.shape[1], dtype=X1.dtype)
-        lo1, hi1 = body_aabb(self.body1, X1)
-        lo2, hi2 = body_aabb(self.body2, X2)
-        lo = torch.maximum(lo1, lo2) - self.margin
-        hi = torch.minimum(hi1, hi2) + self.margin
-        active = (hi > lo).all(dim=1).nonzero()[:, 0]
+        lo, hi, active, box1, box2 = self._windows(X1, X2, jacobians=True)
         if len(active) == 0:
             return r, [J1, J2]
         A1, A2 = X1[active], X2[active]
@@ -87,12 +83,13 @@ class Collision(Functional):
         slope1 = -self.a * s1 * (1.0 - s1) * s2 * w  # ∂(f w)/∂φ1
         slope2 = -self.a * s2 * (1.0 - s2) * s1 * w
         g_lo, g_hi = window_bound_gradients(f, factors)  # (A, 2) each
-        from1_lo = (lo1[active] >= lo2[active]).to(X1.dtype)  # which body sets each bound
-        from1_hi = (hi1[active] <= hi2[active]).to(X1.dtype)
-        for J, d, slope, X, body, lo_mine, hi_mine in (
-                (J1, d1, slope1, A1, self.body1, from1_lo, from1_hi),
-                (J2, d2, slope2, A2, self.body2, 1.0 - from1_lo, 1.0 - from1_hi)):
-            J_lo, J_hi = aabb_jacobians(body, X)
+        # which body sets each bound
+        from1_lo = (box1[0][active] >= box2[0][active]).to(X1.dtype)
+        from1_hi = (box1[1][active] <= box2[1][active]).to(X1.dtype)
+        for J, d, slope, box, lo_mine, hi_mine in (
+                (J1, d1, slope1, box1, from1_lo, from1_hi),
+                (J2, d2, slope2, box2, 1.0 - from1_lo, 1.0 - from1_hi)):
+            J_lo, J_hi = box[2][active], box[3][active]
             J[active, 0] = (torch.bmm(slope[:, None, :], d)[:, 0]
                             + ((g_lo * lo_mine)[..., None] * J_lo
                                + (g_hi * hi_mine)[..., None] * J_hi).sum(1))
@@ -129,16 +126,18 @@ class SweptClearance(Functional):
         self.body, self.radius = body, disc.shape.radius
         self.s = torch.arange(1, samples + 1, dtype=torch.float64) / (samples + 1)
 
+    def _points(self, x_prev: Tensor, x: Tensor) -> tuple[Tensor, Tensor]:
+        """The sample points ``(T, S, 2)`` and their fractions s ``(1, S, 1)`` of the move."""
+        s = self.s.to(x)[None, :, None]
+        return x_prev[:, None, :2] + s * (x[:, None, :2] - x_prev[:, None, :2]), s
+
     def residual(self, X_WB: Tensor, x_prev: Tensor, x: Tensor) -> Tensor:
-        s = self.s.to(x)[None, :, None]  # (1, S, 1)
-        points = x_prev[:, None, :2] + s * (x[:, None, :2] - x_prev[:, None, :2])  # (T, S, 2)
-        return self.body.sdf(points, X_WB) - self.radius
+        return self.body.sdf(self._points(x_prev, x)[0], X_WB) - self.radius
 
     def jacobians(self, X_WB: Tensor, x_prev: Tensor, x: Tensor
                   ) -> tuple[Tensor, list[Tensor]]:
         """Gaps ``(T, S)`` and exact Jacobians from ∇φ (no autograd)."""
-        s = self.s.to(x)[None, :, None]
-        points = x_prev[:, None, :2] + s * (x[:, None, :2] - x_prev[:, None, :2])
+        points, s = self._points(x_prev.detach(), x.detach())
         phi, d_pose, d_point = sdf_pose_gradients(self.body, points, X_WB.detach())
         J_prev = torch.zeros(*phi.shape, x_prev.shape[1], dtype=phi.dtype)
         J_now = torch.zeros(*phi.shape, x.shape[1], dtype=phi.dtype)

@@ -44,31 +44,24 @@ from __future__ import annotations
 import torch
 from torch import Tensor
 
-from robotplan.functionals.base import Quadrature
+from robotplan.functionals.base import Quadrature, sdf_pose_gradients
 from robotplan.learned.dynamics import PushDynamics
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Circle, Workspace
-from robotplan.transforms import planar_to_body
 
 __all__ = ["LearnedDynamics", "grid_with_tangents", "phase_quadrature", "render_on_grid"]
 
 
 def grid_with_tangents(body: Body, X_WB: Tensor, points: Tensor, position_only: bool
                        ) -> tuple[Tensor, Tensor]:
-    """φ of ``body`` at ``points (N, 2)`` for poses ``X_WB (S, 3|2)`` and dφ/dq.
+    """φ of ``body`` at ``points (N, 2)`` for poses ``X_WB (S, 3|2)`` and dφ/dq
+    (:func:`~robotplan.functionals.base.sdf_pose_gradients`, tangents first).
 
     Returns ``(S, N)`` values and ``(S, k, N)`` derivatives, k = 2 (x, y) for a
-    position-only body, else 3 (x, y, yaw). Exact: from ∇φ in the body frame,
-    dφ/dt = −R ∇φ_B and dφ/dθ = ∇φ_B · (p_B,y, −p_B,x).
+    position-only body, else 3 (x, y, yaw).
     """
-    p_B = planar_to_body(points, X_WB.detach())  # (S, N, 2)
-    phi, g = body.shape.sdf_and_grad(p_B)
-    gx, gy = g[..., 0], g[..., 1]
-    if position_only or X_WB.shape[-1] == 2:
-        return phi, torch.stack((-gx, -gy), dim=1)
-    c, s = torch.cos(X_WB[:, 2:3]), torch.sin(X_WB[:, 2:3])
-    d_theta = gx * p_B[..., 1] - gy * p_B[..., 0]
-    return phi, torch.stack((-(c * gx - s * gy), -(s * gx + c * gy), d_theta), dim=1)
+    phi, d_pose, _ = sdf_pose_gradients(body, points, X_WB, position_only)
+    return phi, (d_pose[..., :2] if position_only else d_pose).movedim(-1, 1)
 
 
 def render_on_grid(body: Body, X_WB: Tensor, workspace: Workspace, tangents: bool = True

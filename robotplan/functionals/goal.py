@@ -6,13 +6,7 @@ import torch
 from torch import Tensor
 
 from robotplan.functionals.base import Functional, Quadrature, sdf_pose_gradients
-from robotplan.functionals.windows import (
-    aabb_jacobians,
-    body_aabb,
-    margin,
-    window_bound_gradients,
-    window_points,
-)
+from robotplan.functionals.windows import body_aabb, margin, window_bound_gradients, window_points
 from robotplan.scene.bodies import Body
 
 __all__ = ["GoalRegion"]
@@ -59,7 +53,7 @@ class GoalRegion(Functional):
         if self.quadrature is not None:
             return super().jacobians(X_WB)
         X = X_WB.detach()
-        lo, hi = body_aabb(self.body, X)
+        lo, hi, J_lo, J_hi = body_aabb(self.body, X, jacobians=True)
         x, w, factors = window_points(lo - self.margin, hi + self.margin, self.resolution,
                                       self.margin / 3, factors=True)
         phi, d_pose, _ = sdf_pose_gradients(self.body, x, X)
@@ -68,7 +62,6 @@ class GoalRegion(Functional):
         f = inside * outside_region
         slope = -self.a * inside * (1.0 - inside) * outside_region * w
         g_lo, g_hi = window_bound_gradients(f, factors)
-        J_lo, J_hi = aabb_jacobians(self.body, X)
         J = (torch.bmm(slope[:, None, :], d_pose)[:, 0]
              + (g_lo[..., None] * J_lo + g_hi[..., None] * J_hi).sum(1))
         return (f * w).sum(1, keepdim=True), [J[:, None, :]]

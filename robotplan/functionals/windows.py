@@ -21,8 +21,7 @@ from torch import Tensor
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Circle, Shape2D
 
-__all__ = ["WindowFactors", "aabb_jacobians", "body_aabb", "margin", "window_bound_gradients",
-           "window_points"]
+__all__ = ["WindowFactors", "body_aabb", "margin", "window_bound_gradients", "window_points"]
 
 
 def margin(a: float, eps: float = 1e-4) -> float:
@@ -35,49 +34,47 @@ def _outline(shape: Shape2D, dtype: torch.dtype) -> Tensor:
     return torch.as_tensor(shape.outline(), dtype=dtype)
 
 
-def body_aabb(body: Body, X_WB: Tensor) -> tuple[Tensor, Tensor]:
+def body_aabb(body: Body, X_WB: Tensor, jacobians: bool = False
+              ) -> tuple[Tensor, Tensor] | tuple[Tensor, Tensor, Tensor, Tensor]:
     """Axis-aligned bounding boxes ``lo, hi (T, 2)`` of a body at poses ``X_WB (T, 3|2)``
-    (differentiable almost everywhere in the poses)."""
+    (differentiable almost everywhere in the poses). ``jacobians=True`` also returns
+    ∂lo/∂X_WB and ∂hi/∂X_WB ``(T, 2, k)`` (k = X_WB's width), for gradients without
+    autograd: each bound follows its extreme vertex, a disc's its centre."""
     X = X_WB
+    T, k = X.shape
+    if jacobians:
+        eye = torch.zeros(T, 2, k, dtype=X.dtype)
+        eye[:, 0, 0] = eye[:, 1, 1] = 1.0
     if isinstance(body.shape, Circle):
         r = body.shape.radius
-        return X[:, :2] - r, X[:, :2] + r
+        lo, hi = X[:, :2] - r, X[:, :2] + r
+        return (lo, hi, eye, eye.clone()) if jacobians else (lo, hi)
     verts = _outline(body.shape, X.dtype)  # (V, 2) body frame
-    yaw = X[:, 2:3] if X.shape[-1] == 3 else torch.zeros_like(X[:, :1])
+    yaw = X[:, 2:3] if k == 3 else torch.zeros_like(X[:, :1])
     c, s = torch.cos(yaw), torch.sin(yaw)
-    wx = c * verts[:, 0] - s * verts[:, 1] + X[:, 0:1]  # (T, V)
-    wy = s * verts[:, 0] + c * verts[:, 1] + X[:, 1:2]
-    return (torch.stack((wx.amin(1), wy.amin(1)), 1), torch.stack((wx.amax(1), wy.amax(1)), 1))
+    rx = c * verts[:, 0] - s * verts[:, 1]  # (T, V) rotated, not yet translated
+    ry = s * verts[:, 0] + c * verts[:, 1]
+    wx, wy = rx + X[:, 0:1], ry + X[:, 1:2]
+    lo = torch.stack((wx.amin(1), wy.amin(1)), 1)
+    hi = torch.stack((wx.amax(1), wy.amax(1)), 1)
+    if not jacobians:
+        return lo, hi
+    if k == 2:  # a shape held at yaw 0
+        return lo, hi, eye, eye.clone()
 
-
-def aabb_jacobians(body: Body, X_WB: Tensor) -> tuple[Tensor, Tensor]:
-    """∂lo/∂X_WB and ∂hi/∂X_WB ``(T, 2, k)`` of :func:`body_aabb` (k = X_WB's width): each
-    bound follows its extreme vertex (a disc's follows its centre)."""
-    X = X_WB.detach()
-    T, k = X.shape
-    eye = torch.zeros(T, 2, k, dtype=X.dtype)
-    eye[:, 0, 0] = eye[:, 1, 1] = 1.0
-    if isinstance(body.shape, Circle) or k == 2:  # a disc, or a shape held at yaw 0
-        return eye, eye.clone()
-    verts = _outline(body.shape, X.dtype)  # (V, 2)
-    c, s = torch.cos(X[:, 2:3]), torch.sin(X[:, 2:3])
-    wx = c * verts[:, 0] - s * verts[:, 1]  # (T, V) without the translation
-    wy = s * verts[:, 0] + c * verts[:, 1]
-    dx_dyaw, dy_dyaw = -wy, wx  # ∂/∂θ of the rotated vertices
-
-    def slope(coord: Tensor, d_yaw: Tensor, extreme: Tensor) -> Tensor:
+    def yaw_slope(coord: Tensor, d_yaw: Tensor, extreme: Tensor) -> Tensor:
         # vertices tied for the extreme share it, as autograd's amin/amax do (e.g. a
         # face parallel to the axis: the mean of the one-sided derivatives)
-        tied = (coord == extreme).to(coord.dtype)
+        tied = (coord == extreme[:, None]).to(coord.dtype)
         return (tied * d_yaw).sum(1) / tied.sum(1)
 
-    out = []
-    for pick in (torch.amin, torch.amax):
-        J = eye.clone()
-        J[:, 0, 2] = slope(wx, dx_dyaw, pick(wx, dim=1, keepdim=True))
-        J[:, 1, 2] = slope(wy, dy_dyaw, pick(wy, dim=1, keepdim=True))
-        out.append(J)
-    return out[0], out[1]
+    J = []
+    for bound in (lo, hi):
+        Jb = eye.clone()
+        Jb[:, 0, 2] = yaw_slope(wx.detach(), -ry.detach(), bound[:, 0].detach())
+        Jb[:, 1, 2] = yaw_slope(wy.detach(), rx.detach(), bound[:, 1].detach())
+        J.append(Jb)
+    return lo, hi, J[0], J[1]
 
 
 def _smoothstep(u: Tensor) -> Tensor:

@@ -160,9 +160,8 @@ def _box_sdf_and_grad(px: Tensor, py: Tensor, cx: float, cy: float, hx: float, h
 
 
 def _select(first: Tensor, a: tuple[Tensor, ...], b: tuple[Tensor, ...]) -> tuple[Tensor, ...]:
-    """Per element, the tuple ``a`` where ``first`` is 1 and ``b`` where it is 0."""
-    mask = first.bool()
-    return tuple(torch.where(mask, x, y) for x, y in zip(a, b, strict=True))
+    """Per element, the tuple ``a`` where the bool ``first`` is true and ``b`` elsewhere."""
+    return tuple(torch.where(first, x, y) for x, y in zip(a, b, strict=True))
 
 
 def lshape_sdf(px: Tensor, py: Tensor, w: Tensor | float, h: Tensor | float,
@@ -290,12 +289,12 @@ class LShape(_PolygonalShape):
         w, h, t = self.size[0] / 2, self.size[1] / 2, self.thickness
         bottom = _box_sdf_and_grad(px, py, 0.0, t / 2 - h, w, t / 2)
         left = _box_sdf_and_grad(px, py, t / 2 - w, 0.0, t / 2, h)
-        outside = _select((bottom[0] < left[0]).to(px.dtype), bottom, left)
+        outside = _select(bottom[0] < left[0], bottom, left)
         box = _box_sdf_and_grad(px, py, 0.0, 0.0, w, h)
         notch = _box_sdf_and_grad(px, py, t / 2, t / 2, w - t / 2, h - t / 2)
         notch = (-notch[0], -notch[1], -notch[2])
-        inside = _select((box[0] > notch[0]).to(px.dtype), box, notch)
-        return _select((outside[0] < 0).to(px.dtype), inside, outside)
+        inside = _select(box[0] > notch[0], box, notch)
+        return _select(outside[0] < 0, inside, outside)
 
     def outline(self, n_arc: int = 720) -> np.ndarray:
         w, h, t = self.size[0] / 2, self.size[1] / 2, self.thickness
