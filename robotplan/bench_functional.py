@@ -14,7 +14,12 @@ import numpy as np
 import torch
 
 from robotplan.functionals import Collision, GoalRegion, Quadrature
-from robotplan.functionals.dynamics import QUADRATURE_LEVELS, LearnedDynamics, phase_quadrature
+from robotplan.functionals.dynamics import (
+    QUADRATURE_COARSE,
+    QUADRATURE_LEVELS,
+    LearnedDynamics,
+    phase_quadrature,
+)
 from robotplan.learned.dynamics import load_model
 from robotplan.learned.push_data import simulate_scene
 from robotplan.scene.bodies import Body
@@ -61,7 +66,7 @@ def phase_quadrature_for(obj: Body, X1: torch.Tensor, workspace: Workspace) -> Q
     return phase_quadrature(X1[:, :2].float(), obj.shape.bound_radius, workspace)
 
 
-def _describe_quadrature(coarse: float = 0.14) -> str:
+def _describe_quadrature(coarse: float = QUADRATURE_COARSE) -> str:
     """The default of :func:`phase_quadrature` in words (from its constants)."""
     finer = ", ".join(f"{spacing * 100:g} cm within r_object + {margin * 100:g} cm"
                       for margin, spacing in QUADRATURE_LEVELS)

@@ -13,6 +13,7 @@ import sys
 import time
 from pathlib import Path
 
+from robotplan.memory import keep_freed_memory
 from robotplan.scene import SceneError, load_scene
 
 EXIT_BAD_INPUT = 2
@@ -444,6 +445,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    keep_freed_memory()
     try:
         return args.run(args)
     except SceneError as err:

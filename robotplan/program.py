@@ -35,7 +35,7 @@ from pydrake.solvers import IpoptSolver, MathematicalProgram, SnoptSolver, Solve
 from robotplan.bridge import bridge, stepwise, stepwise_sparsity
 from robotplan.functionals import Collision, ContactPoint, GoalRegion
 from robotplan.functionals.collision import FixedCollision, SweptClearance, face_contact_overlap
-from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
+from robotplan.functionals.dynamics import QUADRATURE_COARSE, LearnedDynamics, phase_quadrature
 from robotplan.functionals.sticking import (
     PushingDirection,
     PushLever,
@@ -99,7 +99,7 @@ class ProgramSettings:
     # SNOPT major iterations of the learned stage (it starts from the kinematic plan and keeps
     # it when it ends worse; 100 took 40–260 s a program and rarely beat 50)
     iterations: int = 50
-    quad_coarse: float = 0.14  # H_F quadrature (see phase_quadrature)
+    quad_coarse: float = QUADRATURE_COARSE  # H_F quadrature (see phase_quadrature)
     # warm start: first solve the kinematic program (sticking contact, pushing direction,
     # no H_F: milliseconds per iteration) and start the learned program from its solution
     warm_start: bool = True

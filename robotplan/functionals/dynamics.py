@@ -7,25 +7,29 @@ The fast path (:meth:`LearnedDynamics.evaluate`) computes what the naive path co
 (:meth:`LearnedDynamics.evaluate_naive`: every step on its own, all 19,600 grid points
 through the whole network, autograd) in far less time:
 
-* **one rendering per state**: φ1_s(X_h), φ2_s(X_h) and their tangent grids dφ/dq (exact,
-  from ∇φ; 3 per object grid, 2 per pusher grid) are rendered once per state s; the
-  paper's shared encoder also encodes each grid once (2T + 1 encodings for T steps, not 3T);
+* **one rendering per state**: φ1_s(X_h), φ2_s(X_h) and their tangents dφ/dq (exact, from
+  ∇φ, kept factored as :class:`GridTangents`) are rendered once per state s; the paper's
+  shared encoder also encodes each grid once (2T + 1 encodings for T steps, not 3T);
 * **reverse mode through the encoder**: H_t is a scalar, so one backward pass per step
-  (transposed convolutions with the primal's ReLU masks, no autograd graph) gives
-  ∂H_t/∂φ(X_h), which is contracted with the tangent grids; forward mode would need one
-  pass per tangent (7 per step), and was 1.5× slower overall;
+  (transposed convolutions masked by the primal's ReLU outputs, no autograd graph) gives
+  ∂H_t/∂φ(X_h), which is contracted with the tangents; forward mode would need one pass
+  per tangent (7 per step), and was 1.5× slower overall. The transposed convolutions run
+  as ordinary ones in polyphase form (``conv_input_grad``; 2–3x faster at stride 2);
 * **split first layer**: the SDF part is one (600 → 300) product per step, the point part
   (100 → 300) is computed once for the fixed quadrature points; for the joint encoder its
-  linear layer and this SDF part are folded into one (300 × 5120) map (half the products
+  linear layer and this SDF part are folded into one (5120 × 300) map (half the products
   and half the weights to read; bfloat16 would make its backward product 5x faster, 2.2 →
   0.4 ms, but costs gradient precision the solver needs);
+* **only live hidden units**: a first-layer unit that is 0 at every step and point (~25 %
+  of them on real pushes; known from max S + max P before any product) is dropped from
+  the second layer's products, forward and backward (exact);
 * **channels-last convolutions**: oneDNN is about 2x faster on these 3- and 5-channel
-  layers in NHWC layout (forward, and the transposed convolutions of the backward pass);
-  ReLU masks are applied by multiplying with their ``uint8`` view (exact, 4x faster than
-  ``torch.where``);
+  layers in NHWC layout;
 * **fewer quadrature points**: a :class:`~robotplan.functionals.Quadrature` of the
-  caller's choice (see :func:`phase_quadrature`), instead of the 140 × 140 grid;
-* **no autograd**: the head's reverse mode is written out (its ReLU masks, like the
+  caller's choice, by default :func:`phase_quadrature` (10 cm cells, 5 cm within r + 5 cm
+  and 2.5 cm within r + 1 cm of the object's path; ~350–650 points, worst per-step error
+  of H_t 3.8 % against the 19,600-point grid over 3 × 24 real pushes), instead of X_h;
+* **no autograd**: the head's reverse mode is written out (through its ReLU outputs, like the
   encoder's), and its hidden-to-hidden products run in bfloat16 for a float32 model
   (float32 accumulation; AVX512-BF16 halves their cost): per step 0.5 % on H_t and 2.4 %
   on its gradient at worst over 24 realistic pushes, well below the quadrature's error;
@@ -33,7 +37,10 @@ through the whole network, autograd) in far less time:
 * **separable rendering**: on the grid a body-frame coordinate is a row term plus a
   column term, and the shapes give φ and ∇φ in closed form (:func:`render_on_grid`);
 * **exact sparse Jacobians**: per step, ∂H_t/∂q1_{t−1}, ∂q1_t, ∂q2_{t−1}, ∂q2_t from one
-  backward pass through the head (each step's inputs are separate leaves).
+  backward pass through the head (each step's inputs are separate leaves);
+* **no page faults**: the ~20 MB of short-lived tensors per call stay in the heap
+  (:func:`~robotplan.memory.keep_freed_memory`); with glibc's defaults they were fresh
+  ``mmap`` pages every call (~5,700 faults, 56 → 39 ms at 532 points).
 
 The quadrature error against the full-grid integral and the timings are measured by
 ``robotplan bench functional`` (numbers in its docstring and the project notes).
@@ -41,15 +48,19 @@ The quadrature error against the full-grid integral and the timings are measured
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import torch
 from torch import Tensor
 
 from robotplan.functionals.base import Quadrature, sdf_pose_gradients
 from robotplan.learned.dynamics import PushDynamics
+from robotplan.memory import keep_freed_memory
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Circle, Workspace
 
-__all__ = ["LearnedDynamics", "grid_with_tangents", "phase_quadrature", "render_on_grid"]
+__all__ = ["GridTangents", "LearnedDynamics", "grid_with_tangents", "phase_quadrature",
+           "render_on_grid"]
 
 
 def grid_with_tangents(body: Body, X_WB: Tensor, points: Tensor, position_only: bool
@@ -64,12 +75,56 @@ def grid_with_tangents(body: Body, X_WB: Tensor, points: Tensor, position_only: 
     return phi, (d_pose[..., :2] if position_only else d_pose).movedim(-1, 1)
 
 
+@dataclass(frozen=True)
+class GridTangents:
+    """dφ/dq of a body rendered on the grid, kept factored (nothing per tangent is stored).
+
+    With body-frame coordinates p = R(θ)ᵀ(x − c) and the body-frame gradient g = ∇φ(p):
+    dφ/dc = −R g and dφ/dθ = g_x p_y − g_y p_x. :meth:`contract` needs only G·g_x and
+    G·g_y and four sums, where the dense form is 3 planes and ~11 operations on them.
+    """
+
+    gx: Tensor  # (S, N) body-frame ∂φ/∂x
+    gy: Tensor  # (S, N)
+    dofs: int  # 2: position (x, y); 3: pose (x, y, yaw)
+    px: Tensor | None = None  # (S, N) body-frame coordinates, for a turning body only
+    py: Tensor | None = None
+    cos: Tensor | None = None  # (S, 1)
+    sin: Tensor | None = None
+
+    def __getitem__(self, rows: slice) -> GridTangents:
+        turning = [None if v is None else v[rows] for v in (self.px, self.py, self.cos, self.sin)]
+        return GridTangents(self.gx[rows], self.gy[rows], self.dofs, *turning)
+
+    def contract(self, G: Tensor) -> Tensor:
+        """``Σ_n G[s, n] · dφ_s(x_n)/dq`` for ``G (S, N)`` → ``(S, dofs)``."""
+        a, b = G * self.gx, G * self.gy
+        A, B = a.sum(1), b.sum(1)
+        if self.px is None:
+            cols = [-A, -B] + ([torch.zeros_like(A)] if self.dofs == 3 else [])
+            return torch.stack(cols, dim=1)
+        c, s = self.cos[:, 0], self.sin[:, 0]
+        turn = torch.linalg.vecdot(a, self.py) - torch.linalg.vecdot(b, self.px)
+        return torch.stack((-(c * A - s * B), -(s * A + c * B), turn), dim=1)
+
+    def dense(self) -> Tensor:
+        """The tangent planes ``(S, dofs, N)`` (for checks; :meth:`contract` is cheaper)."""
+        gx, gy = self.gx, self.gy
+        if self.px is None:
+            rows = [-gx, -gy] + ([torch.zeros_like(gx)] if self.dofs == 3 else [])
+            return torch.stack(rows, dim=1)
+        c, s = self.cos, self.sin
+        return torch.stack((-(c * gx - s * gy), -(s * gx + c * gy),
+                            gx * self.py - gy * self.px), dim=1)
+
+
 def render_on_grid(body: Body, X_WB: Tensor, workspace: Workspace, tangents: bool = True
-                   ) -> tuple[Tensor, Tensor | None]:
+                   ) -> tuple[Tensor, GridTangents | None]:
     """:func:`grid_with_tangents` on the workspace grid X_h, using its separable structure:
     a body-frame coordinate is the sum of a term per column and a term per row, so the
-    transform costs one broadcast add per coordinate. ``(S, H·W)``, ``(S, k, H·W)``; k = 2
-    for positions ``(S, 2)``, else 3 (0 along yaw for a disc); no tangents if not asked.
+    transform costs one broadcast add per coordinate. Returns φ ``(S, H·W)`` and its
+    :class:`GridTangents` (k = 2 for positions ``(S, 2)``, else 3, 0 along yaw for a disc);
+    no tangents if not asked.
     """
     X = X_WB.detach()
     x0, _, y0, _ = workspace.bounds
@@ -89,29 +144,37 @@ def render_on_grid(body: Body, X_WB: Tensor, workspace: Workspace, tangents: boo
     phi, gx, gy = body.shape.sdf_and_grad_planes(px.contiguous(), py.contiguous())
     gx, gy = gx.flatten(1), gy.flatten(1)
     if not turns:
-        rows_k = [-gx, -gy] + ([torch.zeros_like(gx)] if X.shape[-1] == 3 else [])
-        return phi.flatten(1), torch.stack(rows_k, dim=1)
-    d_theta = gx * py.flatten(1) - gy * px.flatten(1)
-    return phi.flatten(1), torch.stack((-(c * gx - s * gy), -(s * gx + c * gy), d_theta), dim=1)
+        return phi.flatten(1), GridTangents(gx, gy, X.shape[-1])
+    return phi.flatten(1), GridTangents(gx, gy, 3, px.flatten(1), py.flatten(1), c, s)
 
 
-QUADRATURE_LEVELS = ((0.10, 0.07), (0.02, 0.035))
+QUADRATURE_COARSE = 0.10
+QUADRATURE_LEVELS = ((0.05, 0.05), (0.01, 0.025))
 """The default refinement of :func:`phase_quadrature`: ``(margin, spacing)`` pairs, coarse to
 fine; a cell is refined to ``spacing`` when it comes within the object's bounding radius
-plus ``margin`` of the object's path."""
+plus ``margin`` of the object's path.
+
+Chosen on 3 × 24 real pushes (``bench_functional.realistic_pushes``, seeds 321 / 777 /
+555), worst per-step relative error of H_t against the 1 cm grid X_h: 0.038 / 0.031 /
+0.034 with ~460 points (10 cm; 5 cm within r + 5 cm; 2.5 cm within r + 1 cm), where the
+earlier 14 / 7 / 3.5 cm rule (~280 points) reached 0.10. The worst steps are well-predicted
+ones (small H_t) whose residual is spread over the whole table: thin ridges of the learned
+flow's error run from the object's corners to the table border, and 14 cm cells miss them.
+"""
 
 
 def phase_quadrature(centers: Tensor, bound_radius: float, workspace: Workspace,
                      levels: tuple[tuple[float, float], ...] = QUADRATURE_LEVELS,
-                     coarse: float = 0.14, dtype: torch.dtype = torch.float32) -> Quadrature:
+                     coarse: float = QUADRATURE_COARSE, dtype: torch.dtype = torch.float32
+                     ) -> Quadrature:
     """A fixed multi-level midpoint rule for one phase.
 
     The workspace is tiled with ``coarse`` cells; level by level, a cell that comes within
     ``bound_radius + margin`` of any of the ``centers (C, 2)`` (e.g. the object's positions
     in the phase's initial guess) is split into square sub-cells of that level's spacing.
     Every point is a cell centre weighted by the cell's area, so the weights sum to the
-    workspace area. The default, 14 / 7 / 3.5 cm, uses ~200–330 points for the objects
-    of the data ranges (19,600 for the 1 cm grid X_h).
+    workspace area. The default, 10 / 5 / 2.5 cm, uses ~350–650 points for the objects of
+    the data ranges and a 10-step push (19,600 for the 1 cm grid X_h).
     """
     cells = Workspace(workspace.center, workspace.size, coarse).points(torch.float64)
     cells, size = cells.reshape(-1, 2), coarse
@@ -143,6 +206,7 @@ class LearnedDynamics:
     def __init__(self, model: PushDynamics, obj: Body, pusher: Body,
                  quadrature: Quadrature, matmul_dtype: torch.dtype | None = None) -> None:
         self.model, self.obj, self.pusher = model.eval(), obj, pusher
+        keep_freed_memory()  # its short-lived ~MB tensors would page-fault on every call
         for p in model.parameters():
             p.requires_grad_(False)
         spec = model.spec
@@ -157,10 +221,12 @@ class LearnedDynamics:
                                      quadrature.weights.to(self.dtype))
         with torch.no_grad():
             self.point_term = model.point_term(self.quadrature.points[None])  # (1, N, H1)
-            # joint encoder: its linear layer and the head's SDF part folded into one
-            # (H1, C'·h·w) map; half the products and half the weights to read per call
+            # joint encoder: its linear layer and the head's SDF part folded into one map,
+            # stored as (C'·h·w, H1) (both products read it row by row); half the products
+            # and half the weights to read per call
             first, linear = model.first_sdf, model.encoder.linear
-            self.conv_to_hidden = ((first.weight @ linear.weight, first(linear.bias))
+            self.conv_to_hidden = (((first.weight @ linear.weight).T.contiguous(),
+                                    first(linear.bias))
                                    if model.spec.encoder == "joint" else None)
 
     # ---------------------------------------------------------------- fast path
@@ -177,13 +243,13 @@ class LearnedDynamics:
             images = torch.stack((phi1, phi2[:-1], phi2[1:]), dim=1).reshape(T, 3, *shape)
         else:  # one encoding per grid; each pusher grid feeds two steps
             images = torch.cat((phi1, phi2)).reshape(2 * T + 1, 1, *shape)
-        f, masks = m.encode_with_masks(images, linear=not joint)
+        f, acts = m.encode_with_activations(images, linear=not joint)
         if joint:
-            S = torch.addmm(self.conv_to_hidden[1], f, self.conv_to_hidden[0].T)  # (T, H1)
+            S = torch.addmm(self.conv_to_hidden[1], f, self.conv_to_hidden[0])  # (T, H1)
         else:
             f = torch.cat((f[:T], f[T:2 * T], f[T + 1:]), dim=1)  # (T, 3F) per step
             S = m.sdf_term(f)
-        out, head_masks = m.head_with_masks(S, self.point_term, self.matmul_dtype)  # (T, N)
+        out, head_acts = m.head_with_activations(S, self.point_term, self.matmul_dtype)  # (T, N)
         # φ1 at the quadrature points for states 0…T: state t is "now" of step t and
         # "prev" of step t + 1
         x, w = self.quadrature.points, self.quadrature.weights
@@ -197,12 +263,12 @@ class LearnedDynamics:
         if not jacobian:
             return H, None, None
         c = 2.0 * residual * w  # ∂H_t/∂φ1_t(x_n); −c is ∂H_t/∂output(x_n)
-        g_hidden = m.head_input_grad(head_masks, -c, self.matmul_dtype)  # ∂H_t/∂S_t (T, H1)
+        g_hidden = m.head_input_grad(head_acts, -c, self.matmul_dtype)  # ∂H_t/∂S_t (T, H1)
         g_now = torch.einsum("tn,tkn->tk", c, dphi_q[1:])
         g_prev = -torch.einsum("tn,tkn->tk", c, dphi_q[:-1]) if flow else torch.zeros_like(g_now)
         # reverse mode through the encoder to the input grids, then along the tangent grids
         if joint:
-            G = m.encoder_input_grad(masks, g_hidden @ self.conv_to_hidden[0],
+            G = m.encoder_input_grad(acts, g_hidden @ self.conv_to_hidden[0].T,
                                      linear=False).flatten(2)
             G1, G2p, G2n = G[:, 0], G[:, 1], G[:, 2]  # each (T, N)
         else:
@@ -211,11 +277,10 @@ class LearnedDynamics:
             F = m.spec.sdf_features
             g_features = g_hidden @ m.first_sdf.weight
             g_split = torch.cat((g_features[:, :F], g_features[:, F:2 * F], g_features[:, 2 * F:]))
-            G = m.encoder_input_grad(masks, g_split, index).flatten(1)
+            G = m.encoder_input_grad(acts, g_split, index).flatten(1)
             G1, G2p, G2n = G[:T], G[T:2 * T], G[2 * T:]
-        J1 = torch.stack((g_prev + torch.einsum("tn,tkn->tk", G1, dphi1), g_now), dim=1)
-        J2 = torch.stack((torch.einsum("tn,tkn->tk", G2p, dphi2[:-1]),
-                          torch.einsum("tn,tkn->tk", G2n, dphi2[1:])), dim=1)
+        J1 = torch.stack((g_prev + dphi1.contract(G1), g_now), dim=1)
+        J2 = torch.stack((dphi2[:-1].contract(G2p), dphi2[1:].contract(G2n)), dim=1)
         return H, J1, J2
 
     # ---------------------------------------------------------------- naive path

@@ -101,7 +101,8 @@ def test_grid_tangents_are_exact(obj):
 
 def test_phase_quadrature_weights_sum_to_the_workspace_area():
     centers = torch.tensor([[0.0, 0.0], [0.3, 0.1]])
-    q = phase_quadrature(centers, 0.1, Workspace(), levels=((0.1, 0.07), (0.02, 0.035)))
+    q = phase_quadrature(centers, 0.1, Workspace(), levels=((0.1, 0.07), (0.02, 0.035)),
+                         coarse=0.14)
     assert abs(q.weights.sum().item() - 1.96) < 1e-4
     assert sorted(q.weights.unique().tolist()) == pytest.approx([0.035**2, 0.07**2, 0.14**2])
     for spacing, reach in ((0.07, 0.2), (0.035, 0.12)):
@@ -120,11 +121,17 @@ def test_render_on_grid_matches_the_pointwise_rendering(shape):
     body = Body("b", "object", shape, (0, 0, 0), 0.0, 0.06)
     ws = Workspace()
     X = torch.tensor([[0.02, -0.01, 0.3], [0.1, 0.05, -1.0]], dtype=F64)
-    phi, dphi = render_on_grid(body, X, ws)
+    phi, tangents = render_on_grid(body, X, ws)
+    dphi = tangents.dense()
     phi_p, dphi_p = grid_with_tangents(body, X, ws.points(F64).reshape(-1, 2), False)
     assert phi.shape == (2, 19600) and dphi.shape == (2, 3, 19600)
     assert (phi - phi_p).abs().max() < 1e-12
     assert (dphi - dphi_p).abs().max() < 1e-9
+    # the factored contraction equals the dense one, for poses and for positions
+    G = torch.randn(2, 19600, dtype=F64, generator=torch.Generator().manual_seed(5))
+    for t in (tangents, render_on_grid(body, X[:, :2], ws)[1], tangents[1:]):
+        dense = torch.einsum("sn,skn->sk", G[:len(t.gx)], t.dense())
+        assert (t.contract(G[:len(t.gx)]) - dense).abs().max() < 1e-9 * dense.abs().max()
     values, none = render_on_grid(body, X[:, :2], ws, tangents=False)
     expected = body.sdf(ws.points(F64).reshape(-1, 2), X[:, :2])
     assert none is None and (values - expected).abs().max() < 1e-12

@@ -61,9 +61,9 @@ def test_joint_encoder_variant():
     x, p = torch.rand(2, 3, 140, 140, dtype=torch.float64), torch.rand(2, 5, 2, dtype=torch.float64)
     assert m(x, p).shape == (2, 5)
     # reverse mode through the encoder equals autograd's input gradient
-    f, masks = m.encode_with_masks(x)
+    f, acts = m.encode_with_activations(x)
     g = torch.rand_like(f)
-    grad = m.encoder_input_grad(masks, g)
+    grad = m.encoder_input_grad(acts, g)
     xr = x.clone().requires_grad_(True)
     (m.encoder(xr) * g).sum().backward()
     with torch.no_grad():
@@ -75,10 +75,10 @@ def test_joint_encoder_variant():
 def test_shared_encoder_input_grad_with_repeated_rows():
     m = PushDynamics(DynamicsSpec(**TINY_SPEC)).double()
     x = torch.rand(3, 1, 140, 140, dtype=torch.float64)
-    f, masks = m.encode_with_masks(x)
+    f, acts = m.encode_with_activations(x)
     index = torch.tensor([2, 0, 2])
     g = torch.rand(3, f.shape[1], dtype=torch.float64)
-    grad = m.encoder_input_grad(masks, g, index)
+    grad = m.encoder_input_grad(acts, g, index)
     for row, i in enumerate(index.tolist()):
         xr = x[i:i + 1].clone().requires_grad_(True)
         (m.encoder(xr) * g[row]).sum().backward()
