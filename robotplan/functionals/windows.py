@@ -42,39 +42,33 @@ def body_aabb(body: Body, X_WB: Tensor, jacobians: bool = False
     autograd: each bound follows its extreme vertex, a disc's its centre."""
     X = X_WB
     T, k = X.shape
-    if jacobians:
-        eye = torch.zeros(T, 2, k, dtype=X.dtype)
-        eye[:, 0, 0] = eye[:, 1, 1] = 1.0
     if isinstance(body.shape, Circle):
         r = body.shape.radius
         lo, hi = X[:, :2] - r, X[:, :2] + r
-        return (lo, hi, eye, eye.clone()) if jacobians else (lo, hi)
+        if not jacobians:
+            return lo, hi
+        eye = torch.eye(2, k, dtype=X.dtype).expand(T, 2, k)
+        return lo, hi, eye, eye
     verts = _outline(body.shape, X.dtype)  # (V, 2) body frame
     yaw = X[:, 2:3] if k == 3 else torch.zeros_like(X[:, :1])
     c, s = torch.cos(yaw), torch.sin(yaw)
     rx = c * verts[:, 0] - s * verts[:, 1]  # (T, V) rotated, not yet translated
     ry = s * verts[:, 0] + c * verts[:, 1]
-    wx, wy = rx + X[:, 0:1], ry + X[:, 1:2]
-    lo = torch.stack((wx.amin(1), wy.amin(1)), 1)
-    hi = torch.stack((wx.amax(1), wy.amax(1)), 1)
+    W = torch.stack((rx, ry), dim=1) + X[:, :2, None]  # (T, 2, V) world vertices
+    lo, hi = W.amin(2), W.amax(2)
     if not jacobians:
         return lo, hi
+    eye = torch.eye(2, k, dtype=X.dtype).expand(T, 2, k)
     if k == 2:  # a shape held at yaw 0
-        return lo, hi, eye, eye.clone()
-
-    def yaw_slope(coord: Tensor, d_yaw: Tensor, extreme: Tensor) -> Tensor:
-        # vertices tied for the extreme share it, as autograd's amin/amax do (e.g. a
-        # face parallel to the axis: the mean of the one-sided derivatives)
-        tied = (coord == extreme[:, None]).to(coord.dtype)
-        return (tied * d_yaw).sum(1) / tied.sum(1)
-
-    J = []
-    for bound in (lo, hi):
-        Jb = eye.clone()
-        Jb[:, 0, 2] = yaw_slope(wx.detach(), -ry.detach(), bound[:, 0].detach())
-        Jb[:, 1, 2] = yaw_slope(wy.detach(), rx.detach(), bound[:, 1].detach())
-        J.append(Jb)
-    return lo, hi, J[0], J[1]
+        return lo, hi, eye, eye
+    # ∂(vertex)/∂yaw = (−ry, rx); vertices tied for an extreme share it, as autograd's
+    # amin/amax do (e.g. a face parallel to the axis: the mean of the one-sided slopes)
+    W, d_yaw = W.detach(), torch.stack((-ry, rx), dim=1).detach()  # (T, 2, V)
+    bounds = torch.stack((lo, hi), dim=1).detach()  # (T, 2 bounds, 2 axes)
+    tied = (W[:, None] == bounds[..., None]).to(X.dtype)  # (T, 2, 2, V)
+    slope = (tied * d_yaw[:, None]).sum(-1) / tied.sum(-1)  # (T, 2, 2)
+    J = torch.cat((eye[:, None, :, :2].expand(T, 2, 2, 2), slope[..., None]), dim=-1)
+    return lo, hi, J[:, 0], J[:, 1]
 
 
 def _smoothstep(u: Tensor) -> Tensor:
