@@ -83,3 +83,22 @@ def test_shared_encoder_input_grad_with_repeated_rows():
         xr = x[i:i + 1].clone().requires_grad_(True)
         (m.encoder(xr) * g[row]).sum().backward()
         assert torch.allclose(grad[row:row + 1], xr.grad, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("hidden", [(16, 12), (16,)], ids=["two-layer", "one-layer"])
+def test_head_reverse_mode_skips_dead_units_exactly(hidden):
+    spec = dict(TINY_SPEC, hidden=hidden)
+    m = PushDynamics(DynamicsSpec(**spec)).double()
+    g = torch.Generator().manual_seed(3)
+    S = torch.randn(4, hidden[0], dtype=torch.float64, generator=g)
+    P = torch.randn(1, 9, hidden[0], dtype=torch.float64, generator=g)
+    S[:, :5] -= 10.0  # units 0-4 dead at every (b, p); the head must drop them exactly
+    out, (units, acts) = m.head_with_activations(S, P)
+    assert len(units) <= hidden[0] - 5 and not (units < 5).any()
+    assert (out - m.from_terms(S, P)).abs().max() < 1e-12
+    c = torch.randn(4, 9, dtype=torch.float64, generator=g)
+    S_ = S.clone().requires_grad_(True)
+    (expected,) = torch.autograd.grad((m.from_terms(S_, P) * c).sum(), S_)
+    grad = m.head_input_grad((units, acts), c)
+    assert (grad - expected).abs().max() < 1e-12 * max(1.0, expected.abs().max().item())
+    assert (grad[:, :5] == 0).all() and grad.abs().sum() > 0
