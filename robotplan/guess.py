@@ -12,7 +12,8 @@ import torch
 if TYPE_CHECKING:
     from robotplan.program import PushProgram
 
-__all__ = ["contact_offset", "guess_goal", "init_point", "initial_guess", "object_route"]
+__all__ = ["contact_offset", "contact_point_guess", "guess_goal", "init_point", "initial_guess",
+           "object_route"]
 
 
 def init_point(prog: PushProgram, index: int, center: np.ndarray) -> np.ndarray:
@@ -27,21 +28,60 @@ def init_point(prog: PushProgram, index: int, center: np.ndarray) -> np.ndarray:
 
 
 def contact_offset(prog: PushProgram, X_obj: np.ndarray, direction: np.ndarray,
-                   depth: float = 0.001) -> np.ndarray:
-    """Where along ``direction`` from the object's origin the pusher touches it (its
-    centre at φ_obj = radius − depth), by bisection on the ray."""
+                   depth: float = 0.001, samples: int = 64) -> np.ndarray:
+    """Where along ``direction`` from the object's origin the pusher touches it from
+    outside (its centre at φ_obj = radius − depth): the outermost crossing on the ray.
+
+    The origin need not lie inside the object (an L-shape's frame is its bounding box's
+    centre, usually in the notch), so the ray is sampled first and the last sample still
+    within reach brackets the bisection. A ray that never comes within reach (into a
+    notch's opening) gets its closest approach moved along −∇φ until it touches.
+    """
     u = direction / max(float(np.linalg.norm(direction)), 1e-9)
     target = prog.pusher.shape.radius - depth
-    lo, hi = 0.0, prog.obj.shape.bound_radius + prog.pusher.shape.radius
+    reach = prog.obj.shape.bound_radius + prog.pusher.shape.radius
     X = torch.as_tensor(X_obj, dtype=torch.float64)[None]
+
+    def phi(d: np.ndarray) -> np.ndarray:
+        points = torch.as_tensor(X_obj[:2] + d[:, None] * u, dtype=torch.float64)[None]
+        return prog.obj.sdf(points, X)[0].numpy()
+
+    d = np.linspace(0.0, reach, samples)
+    values = phi(d)
+    inside = np.nonzero(values < target)[0]
+    if len(inside) == 0:  # closest approach, moved along -∇φ onto the touching level
+        from robotplan.functionals.base import sdf_pose_gradients
+
+        best = X_obj[:2] + d[int(np.argmin(values))] * u
+        phi_b, _, grad = sdf_pose_gradients(
+            prog.obj, torch.as_tensor(best, dtype=torch.float64)[None, None], X)
+        step = (float(phi_b[0, 0]) - target) * grad[0, 0].numpy()
+        return best - step - X_obj[:2]
+    lo, hi = d[inside[-1]], d[min(inside[-1] + 1, samples - 1)]
     for _ in range(30):
         mid = 0.5 * (lo + hi)
-        point = torch.as_tensor(X_obj[:2] + mid * u, dtype=torch.float64)[None]
-        if prog.obj.sdf(point, X).item() < target:
+        if phi(np.array([mid]))[0] < target:
             lo = mid
         else:
             hi = mid
     return hi * u
+
+
+def contact_point_guess(prog: PushProgram, q_obj: np.ndarray, q_pusher: np.ndarray
+                        ) -> np.ndarray:
+    """H_PoC's contact point for pusher centres ``q_pusher (n, 2)`` beside objects at
+    ``q_obj (n, 3)``: the point of the pusher's surface that faces the object (its centre
+    moved by the radius against ∇φ_obj). It lies on both surfaces when they touch, and
+    never at the pusher's centre, where φ_pusher's gradient vanishes (a solver started
+    there could not move it: violation = radius)."""
+    from robotplan.functionals.base import sdf_pose_gradients
+
+    X = torch.as_tensor(q_obj, dtype=torch.float64)
+    points = torch.as_tensor(q_pusher, dtype=torch.float64)[:, None, :]
+    _, _, grad = sdf_pose_gradients(prog.obj, points, X)
+    n = grad[:, 0].numpy()
+    n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-9)
+    return q_pusher - prog.pusher.shape.radius * n
 
 
 TOUCH_DISTANCE = 0.6  # m from the touching arm's base where the guess brings the object
@@ -187,7 +227,8 @@ def initial_guess(prog: PushProgram) -> dict[str, np.ndarray]:
                 q1[a + s] = q1[a]
                 q1[a + s, :2] = q1[a, :2] + travel * (s - k) / (T - k)
                 q2[a + s] = q1[a + s, :2] + offset
-    p = np.array([0.5 * (q1[t, :2] + q2[t]) for t in prog.push_steps]).reshape(-1, 2)
+    steps = np.asarray(prog.push_steps, dtype=int)
+    p = contact_point_guess(prog, q1[steps], q2[steps]) if len(steps) else np.zeros((0, 2))
     guess = {"q_obj": q1, "q_pusher": q2, "p": p}
     if p_touch is not None:
         guess["p_touch"] = p_touch[None]
