@@ -32,10 +32,11 @@ def contact_offset(prog: PushProgram, X_obj: np.ndarray, direction: np.ndarray,
     """Where along ``direction`` from the object's origin the pusher touches it from
     outside (its centre at φ_obj = radius − depth): the outermost crossing on the ray.
 
-    The origin need not lie inside the object (an L-shape's frame is its bounding box's
-    centre, usually in the notch), so the ray is sampled first and the last sample still
-    within reach brackets the bisection. A ray that never comes within reach (into a
-    notch's opening) gets its closest approach moved along −∇φ until it touches.
+    From an origin inside the object, bisection on the ray. The origin need not be inside
+    (an L-shape's frame is its bounding box's centre, usually in the notch): then the ray
+    is sampled and the last sample within reach brackets the bisection, and a ray that
+    never comes within reach (into the notch's opening) gets its closest approach moved
+    along −∇φ onto the touching level.
     """
     u = direction / max(float(np.linalg.norm(direction)), 1e-9)
     target = prog.pusher.shape.radius - depth
@@ -46,18 +47,20 @@ def contact_offset(prog: PushProgram, X_obj: np.ndarray, direction: np.ndarray,
         points = torch.as_tensor(X_obj[:2] + d[:, None] * u, dtype=torch.float64)[None]
         return prog.obj.sdf(points, X)[0].numpy()
 
-    d = np.linspace(0.0, reach, samples)
-    values = phi(d)
-    inside = np.nonzero(values < target)[0]
-    if len(inside) == 0:  # closest approach, moved along -∇φ onto the touching level
-        from robotplan.functionals.base import sdf_pose_gradients
+    lo, hi = 0.0, reach
+    if phi(np.zeros(1))[0] >= target:  # the origin is outside: find the outermost bracket
+        d = np.linspace(0.0, reach, samples)
+        values = phi(d)
+        inside = np.nonzero(values < target)[0]
+        if len(inside) == 0:
+            from robotplan.functionals.base import sdf_pose_gradients
 
-        best = X_obj[:2] + d[int(np.argmin(values))] * u
-        phi_b, _, grad = sdf_pose_gradients(
-            prog.obj, torch.as_tensor(best, dtype=torch.float64)[None, None], X)
-        step = (float(phi_b[0, 0]) - target) * grad[0, 0].numpy()
-        return best - step - X_obj[:2]
-    lo, hi = d[inside[-1]], d[min(inside[-1] + 1, samples - 1)]
+            best = X_obj[:2] + d[int(np.argmin(values))] * u
+            phi_b, _, grad = sdf_pose_gradients(
+                prog.obj, torch.as_tensor(best, dtype=torch.float64)[None, None], X)
+            step = (float(phi_b[0, 0]) - target) * grad[0, 0].numpy()
+            return best - step - X_obj[:2]
+        lo, hi = d[inside[-1]], d[min(inside[-1] + 1, samples - 1)]
     for _ in range(30):
         mid = 0.5 * (lo + hi)
         if phi(np.array([mid]))[0] < target:
@@ -228,7 +231,10 @@ def initial_guess(prog: PushProgram) -> dict[str, np.ndarray]:
                 q1[a + s, :2] = q1[a, :2] + travel * (s - k) / (T - k)
                 q2[a + s] = q1[a + s, :2] + offset
     steps = np.asarray(prog.push_steps, dtype=int)
-    p = contact_point_guess(prog, q1[steps], q2[steps]) if len(steps) else np.zeros((0, 2))
+    p = 0.5 * (q1[steps, :2] + q2[steps]) if len(steps) else np.zeros((0, 2))
+    if len(steps):  # never at the pusher's centre (φ_pusher's gradient vanishes there)
+        near = np.linalg.norm(p - q2[steps], axis=1) < 0.5 * prog.pusher.shape.radius
+        p[near] = contact_point_guess(prog, q1[steps][near], q2[steps][near])
     guess = {"q_obj": q1, "q_pusher": q2, "p": p}
     if p_touch is not None:
         guess["p_touch"] = p_touch[None]

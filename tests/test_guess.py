@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from robotplan import load_scene
-from robotplan.guess import contact_offset
+from robotplan.guess import contact_offset, contact_point_guess
 from robotplan.program import ProgramSettings, PushProgram
 from robotplan.skeleton import load_skeleton_space, parse_skeleton
 from tests.conftest import DATA, TASKS
@@ -46,16 +46,26 @@ def test_contact_offset_is_the_outermost_touch_on_the_ray(scene_file, obj):
     assert touched >= 12  # the others look into the notch's opening
 
 
-def test_guess_contact_points_lie_on_the_pusher_facing_the_object():
+def test_guess_contact_points_stay_off_the_pusher_centre():
     prog = kinematic_program(DATA / "lshape_push.yaml", "object")
     g = prog.guess
     steps = np.asarray(prog.push_steps)
     p, q2, q1 = g["p"], g["q_pusher"][steps], g["q_obj"][steps]
     r = prog.pusher.shape.radius
-    assert np.allclose(np.linalg.norm(p - q2, axis=1), r, atol=1e-9)  # never the centre
-    # in the steps where the pusher is in contact, p is on the L's surface too
+    # φ_pusher's gradient vanishes at its centre: a contact point started there never moves
+    assert (np.linalg.norm(p - q2, axis=1) >= 0.5 * r - 1e-9).all()
+    # the pusher is guessed outside the L, touching it after the approach steps
     gap = np.array([phi_obj(prog, q2[i:i + 1], q1[i])[0] for i in range(len(steps))]) - r
-    on = np.abs(gap) < 2e-3
-    assert on[-1] and on.sum() >= 3  # after the approach steps
-    surface = np.array([phi_obj(prog, p[i:i + 1], q1[i])[0] for i in np.nonzero(on)[0]])
-    assert np.abs(surface).max() < 3e-3
+    assert (gap > -2e-3).all() and abs(gap[-1]) < 2e-3
+
+
+def test_contact_point_guess_is_on_the_pusher_facing_the_object():
+    prog = kinematic_program(DATA / "lshape_push.yaml", "object")
+    X = np.tile(np.array(prog.obj.pose, dtype=float), (3, 1))
+    q2 = X[:, :2] + contact_offset(prog, X[0], np.array([0.3, -1.0])) + [[0, 0], [0.01, 0],
+                                                                         [0, 0.02]]
+    p = contact_point_guess(prog, X, q2)
+    r = prog.pusher.shape.radius
+    assert np.allclose(np.linalg.norm(p - q2, axis=1), r, atol=1e-9)
+    # facing the object: p is nearer to it than the centre by the radius
+    assert np.allclose(phi_obj(prog, p[:1], X[0]), phi_obj(prog, q2[:1], X[0]) - r, atol=1e-6)
