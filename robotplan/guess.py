@@ -9,6 +9,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import torch
 
+from robotplan.functionals.base import sdf_pose_gradients
+
 if TYPE_CHECKING:
     from robotplan.program import PushProgram
 
@@ -53,8 +55,6 @@ def contact_offset(prog: PushProgram, X_obj: np.ndarray, direction: np.ndarray,
         values = phi(d)
         inside = np.nonzero(values < target)[0]
         if len(inside) == 0:
-            from robotplan.functionals.base import sdf_pose_gradients
-
             best = X_obj[:2] + d[int(np.argmin(values))] * u
             phi_b, _, grad = sdf_pose_gradients(
                 prog.obj, torch.as_tensor(best, dtype=torch.float64)[None, None], X)
@@ -77,8 +77,6 @@ def contact_point_guess(prog: PushProgram, q_obj: np.ndarray, q_pusher: np.ndarr
     moved by the radius against ∇φ_obj). It lies on both surfaces when they touch, and
     never at the pusher's centre, where φ_pusher's gradient vanishes (a solver started
     there could not move it: violation = radius)."""
-    from robotplan.functionals.base import sdf_pose_gradients
-
     X = torch.as_tensor(q_obj, dtype=torch.float64)
     points = torch.as_tensor(q_pusher, dtype=torch.float64)[:, None, :]
     _, _, grad = sdf_pose_gradients(prog.obj, points, X)

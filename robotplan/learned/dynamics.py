@@ -92,6 +92,12 @@ def relu_backward(grad: Tensor, relu_output: Tensor) -> Tensor:
     return torch.ops.aten.threshold_backward(grad, relu_output, 0)
 
 
+def _live_columns(layers: list[nn.Linear], j: int, units: Tensor) -> Tensor:
+    """Layer j's weight, restricted to the live first-layer ``units`` if it reads them
+    (the layer after the first hidden one: j = 0)."""
+    return layers[j].weight[:, units] if j == 0 else layers[j].weight
+
+
 def conv_input_grad(grad: Tensor, weight: Tensor, stride: int, size: tuple[int, int]
                     ) -> Tensor:
     """∂(Σ grad · conv2d(x, weight, stride)) / ∂x for x of spatial ``size``: the transposed
@@ -182,7 +188,7 @@ class PushDynamics(nn.Module):
 
     @torch.no_grad()
     def encode_with_activations(self, grids: Tensor, linear: bool = True
-                          ) -> tuple[Tensor, list[Tensor]]:
+                                ) -> tuple[Tensor, list[Tensor]]:
         """Features ``(M, F)`` of grids ``(M, C, H, W)`` and the encoder's ReLU outputs, which
         :meth:`encoder_input_grad` needs to pull feature gradients back to the grids.
         ``linear=False`` stops before the encoder's linear layer: ``(M, C'·h·w)``."""
@@ -259,16 +265,12 @@ class PushDynamics(nn.Module):
         x = (sdf_term[:, None, units] + point_term[..., units]).clamp_min_(0.0)  # (B, P, k)
         activations = [x]
         for j, lin in enumerate(layers[:-1]):
-            weight = (lin.weight[:, units] if j == 0 else lin.weight).to(dtype)
+            weight = _live_columns(layers, j, units).to(dtype)
             x = torch.matmul(x.to(dtype), weight.T).to(sdf_term.dtype)
             x = x.add_(lin.bias).clamp_min_(0.0)
             activations.append(x)
-        last = layers[-1]
-        if len(layers) == 1:
-            out = torch.matmul(x, last.weight[0, units])
-        else:
-            out = torch.matmul(x, last.weight[0])
-        return (out + last.bias[0]) * self.spec.out_scale, (units, activations)
+        out = torch.matmul(x, _live_columns(layers, len(layers) - 1, units)[0])
+        return (out + layers[-1].bias[0]) * self.spec.out_scale, (units, activations)
 
     @torch.no_grad()
     def head_input_grad(self, cache: tuple[Tensor, list[Tensor]], grad_out: Tensor,
@@ -282,11 +284,11 @@ class PushDynamics(nn.Module):
         dtype = matmul_dtype or grad_out.dtype
         layers = [mod for mod in self.head if isinstance(mod, nn.Linear)]
         units, activations = cache
-        last = layers[-1].weight[0] if len(layers) > 1 else layers[-1].weight[0, units]
+        last = _live_columns(layers, len(layers) - 1, units)[0]
         g = (grad_out * self.spec.out_scale)[..., None] * last  # (B, P, H_last)
         for j in range(len(layers) - 2, -1, -1):
             g = relu_backward(g, activations[j + 1])
-            weight = (layers[j].weight[:, units] if j == 0 else layers[j].weight).to(dtype)
+            weight = _live_columns(layers, j, units).to(dtype)
             g = torch.matmul(g.to(dtype), weight).to(grad_out.dtype)
         grad = grad_out.new_zeros(grad_out.shape[0], layers[0].in_features)
         grad[:, units] = relu_backward(g, activations[0]).sum(1)
