@@ -48,13 +48,9 @@ def planar_to_body(points_W: Tensor, X_WB: Tensor) -> Tensor:
         ``(..., N, 2)`` the same points in the body frame.
     """
     t, c, s = _planar_parts(X_WB)
-    t, c, s = t[..., 0, :], c[..., 0], s[..., 0]
-    tx, ty = t[..., 0], t[..., 1]
-    # One batched matmul of homogeneous points [x, y, 1] with the (3, 2) map A per pose.
-    A = torch.stack((c, -s, s, c, -(c * tx + s * ty), s * tx - c * ty), dim=-1)
-    A = A.reshape(*A.shape[:-1], 3, 2)
-    homogeneous = torch.cat((points_W, torch.ones_like(points_W[..., :1])), dim=-1)
-    return homogeneous @ A
+    d = points_W - t
+    dx, dy = d[..., 0], d[..., 1]
+    return torch.stack((c * dx + s * dy, c * dy - s * dx), dim=-1)
 
 
 def planar_to_world(points_B: Tensor, X_WB: Tensor) -> Tensor:

@@ -144,8 +144,9 @@ def test_learned_program_never_ends_worse_than_its_warm_start():
     learned = PushProgram(kin.scene, kin.skeleton, PushDynamics(DynamicsSpec(**TINY)),
                           kin.space, ProgramSettings(iterations=3), guess=kin.as_guess(warm))
     assert learned.keep_start and not kin.keep_start
-    start = learned.prog.GetInitialGuess(learned.prog.decision_variables())
     sol = learned.solve()
+    start = learned.prog.GetInitialGuess(learned.prog.decision_variables())  # set by solve
+    assert np.isfinite(start).all()
     assert _rank(sol.violations, sol.cost) <= _rank(*learned.evaluate(start))
     assert sol.q_obj.shape == (learned.N + 1, 3) and sol.contact.shape == (10, 2)
 

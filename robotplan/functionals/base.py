@@ -15,7 +15,6 @@ from torch import Tensor
 
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Circle, Workspace
-from robotplan.transforms import planar_to_body
 
 __all__ = ["Functional", "Quadrature", "sdf_pose_gradients"]
 
@@ -82,16 +81,18 @@ def sdf_pose_gradients(body: Body, points_W: Tensor, X_WB: Tensor, position_only
     ∂φ/∂θ = ∇φ_B · (p_B,y, −p_B,x).
     """
     X = X_WB.detach()
-    p_B = planar_to_body(points_W.detach(), X)
-    phi, g = body.shape.sdf_and_grad(p_B)
-    gx, gy = g[..., 0], g[..., 1]
+    dx = points_W[..., 0].detach() - X[..., 0:1]  # (..., N) coordinate planes
+    dy = points_W[..., 1].detach() - X[..., 1:2]
     if X.shape[-1] == 2:
-        grad_W = g
+        phi, gx, gy = body.shape.sdf_and_grad_planes(dx, dy)
+        grad_W = torch.stack((gx, gy), dim=-1)
         return phi, -grad_W, grad_W
     c, s = torch.cos(X[..., 2:3]), torch.sin(X[..., 2:3])
-    grad_W = torch.stack((c * gx - s * gy, s * gx + c * gy), dim=-1)
+    bx, by = c * dx + s * dy, c * dy - s * dx  # p_B = R(yaw)ᵀ (p_W − t)
+    phi, gx, gy = body.shape.sdf_and_grad_planes(bx, by)
+    wx, wy = c * gx - s * gy, s * gx + c * gy  # R ∇φ_B
     if position_only or isinstance(body.shape, Circle):
         d_theta = torch.zeros_like(phi)
     else:
-        d_theta = gx * p_B[..., 1] - gy * p_B[..., 0]
-    return phi, torch.cat((-grad_W, d_theta[..., None]), dim=-1), grad_W
+        d_theta = gx * by - gy * bx
+    return (phi, torch.stack((-wx, -wy, d_theta), dim=-1), torch.stack((wx, wy), dim=-1))

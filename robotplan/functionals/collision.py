@@ -79,20 +79,17 @@ class Collision(Functional):
         phi2, d2, _ = sdf_pose_gradients(self.body2, x, A2)
         s1, s2 = torch.sigmoid(-self.a * phi1), torch.sigmoid(-self.a * phi2)
         f = s1 * s2
-        r[active, 0] = (f * w).sum(1)
-        slope1 = -self.a * s1 * (1.0 - s1) * s2 * w  # ∂(f w)/∂φ1
-        slope2 = -self.a * s2 * (1.0 - s2) * s1 * w
-        g_lo, g_hi = window_bound_gradients(f, factors)  # (A, 2) each
+        fw = f * w
+        r[active, 0] = fw.sum(1)
+        slope1 = (-self.a) * (1.0 - s1) * fw  # ∂(f w)/∂φ1 = −a σ1 (1 − σ1) σ2 w
+        slope2 = (-self.a) * (1.0 - s2) * fw
+        g = torch.stack(window_bound_gradients(f, factors), dim=1)  # (A, lo/hi, axis)
         # which body sets each bound
-        from1_lo = (box1[0][active] >= box2[0][active]).to(X1.dtype)
-        from1_hi = (box1[1][active] <= box2[1][active]).to(X1.dtype)
-        for J, d, slope, box, lo_mine, hi_mine in (
-                (J1, d1, slope1, box1, from1_lo, from1_hi),
-                (J2, d2, slope2, box2, 1.0 - from1_lo, 1.0 - from1_hi)):
-            J_lo, J_hi = box[2][active], box[3][active]
+        own1 = torch.stack((box1[0] >= box2[0], box1[1] <= box2[1]), dim=1)[active]
+        for J, d, slope, box, own in ((J1, d1, slope1, box1, own1), (J2, d2, slope2, box2, ~own1)):
+            J_bounds = torch.stack((box[2], box[3]), dim=1)[active]  # (A, lo/hi, axis, k)
             J[active, 0] = (torch.bmm(slope[:, None, :], d)[:, 0]
-                            + ((g_lo * lo_mine)[..., None] * J_lo
-                               + (g_hi * hi_mine)[..., None] * J_hi).sum(1))
+                            + ((g * own)[..., None] * J_bounds).sum((1, 2)))
         return r, [J1, J2]
 
 

@@ -60,8 +60,9 @@ class GoalRegion(Functional):
         inside = torch.sigmoid(-self.a * phi)
         outside_region = torch.sigmoid(self.a * (self.region.sdf(x) + self.inset))
         f = inside * outside_region
-        slope = -self.a * inside * (1.0 - inside) * outside_region * w
+        fw = f * w
+        slope = (-self.a) * (1.0 - inside) * fw  # ∂(f w)/∂φ
         g_lo, g_hi = window_bound_gradients(f, factors)
         J = (torch.bmm(slope[:, None, :], d_pose)[:, 0]
              + (g_lo[..., None] * J_lo + g_hi[..., None] * J_hi).sum(1))
-        return (f * w).sum(1, keepdim=True), [J[:, None, :]]
+        return fw.sum(1, keepdim=True), [J[:, None, :]]

@@ -29,9 +29,15 @@ def margin(a: float, eps: float = 1e-4) -> float:
     return math.log(1.0 / eps) / a
 
 
+@lru_cache(maxsize=8)
+def _eye(dtype: torch.dtype) -> Tensor:
+    return torch.eye(2, dtype=dtype)
+
+
 @lru_cache(maxsize=256)
 def _outline(shape: Shape2D, dtype: torch.dtype) -> Tensor:
-    return torch.as_tensor(shape.outline(), dtype=dtype)
+    """The shape's outline vertices ``(2, V)`` (columns) in its frame."""
+    return torch.as_tensor(shape.outline().T.copy(), dtype=dtype)
 
 
 def body_aabb(body: Body, X_WB: Tensor, jacobians: bool = False
@@ -49,59 +55,55 @@ def body_aabb(body: Body, X_WB: Tensor, jacobians: bool = False
             return lo, hi
         eye = torch.eye(2, k, dtype=X.dtype).expand(T, 2, k)
         return lo, hi, eye, eye
-    verts = _outline(body.shape, X.dtype)  # (V, 2) body frame
-    yaw = X[:, 2:3] if k == 3 else torch.zeros_like(X[:, :1])
+    verts = _outline(body.shape, X.dtype)  # (2, V) body frame
+    if k == 2:  # a shape held at yaw 0
+        W = verts + X[:, :, None]
+        lo, hi = W.amin(2), W.amax(2)
+        if not jacobians:
+            return lo, hi
+        eye = torch.eye(2, dtype=X.dtype).expand(T, 2, 2)
+        return lo, hi, eye, eye
+    yaw = X[:, 2]
     c, s = torch.cos(yaw), torch.sin(yaw)
-    rx = c * verts[:, 0] - s * verts[:, 1]  # (T, V) rotated, not yet translated
-    ry = s * verts[:, 0] + c * verts[:, 1]
-    W = torch.stack((rx, ry), dim=1) + X[:, :2, None]  # (T, 2, V) world vertices
+    ns = -s
+    # rows: R (rotated vertices) and ∂R/∂yaw (their yaw slopes (−ry, rx)), one product
+    R = torch.stack((c, ns, s, c, ns, -c, c, ns), dim=1).view(T, 4, 2)
+    rotated = R @ verts  # (T, 4, V)
+    W = rotated[:, :2] + X[:, :2, None]  # (T, 2, V) world vertices
     lo, hi = W.amin(2), W.amax(2)
     if not jacobians:
         return lo, hi
-    eye = torch.eye(2, k, dtype=X.dtype).expand(T, 2, k)
-    if k == 2:  # a shape held at yaw 0
-        return lo, hi, eye, eye
-    # ∂(vertex)/∂yaw = (−ry, rx); vertices tied for an extreme share it, as autograd's
-    # amin/amax do (e.g. a face parallel to the axis: the mean of the one-sided slopes)
-    W, d_yaw = W.detach(), torch.stack((-ry, rx), dim=1).detach()  # (T, 2, V)
+    # vertices tied for an extreme share it, as autograd's amin/amax do (e.g. a face
+    # parallel to the axis: the mean of the one-sided slopes)
     bounds = torch.stack((lo, hi), dim=1).detach()  # (T, 2 bounds, 2 axes)
-    tied = (W[:, None] == bounds[..., None]).to(X.dtype)  # (T, 2, 2, V)
-    slope = (tied * d_yaw[:, None]).sum(-1) / tied.sum(-1)  # (T, 2, 2)
-    J = torch.cat((eye[:, None, :, :2].expand(T, 2, 2, 2), slope[..., None]), dim=-1)
+    tied = W.detach()[:, None] == bounds[..., None]  # (T, 2, 2, V)
+    slope = (tied * rotated[:, None, 2:].detach()).sum(-1) / tied.sum(-1)  # (T, 2, 2)
+    J = torch.cat((_eye(X.dtype).expand(T, 2, 2, 2), slope[..., None]), dim=-1)
     return lo, hi, J[:, 0], J[:, 1]
 
 
-def _smoothstep(u: Tensor) -> Tensor:
-    u = u.clamp(0.0, 1.0)
-    return u * u * (3.0 - 2.0 * u)
-
-
-def _smoothstep_slope(u: Tensor) -> Tensor:
-    inside = (u > 0.0) & (u < 1.0)
-    return torch.where(inside, 6.0 * u * (1.0 - u), torch.zeros_like(u))
-
-
 class WindowFactors(NamedTuple):
-    """The separable weights of :func:`window_points` (rows y, columns x) and their slopes
-    with respect to the window's bounds: ``w (T, n)``, ``d_lo``, ``d_hi`` per axis."""
+    """The separable weights of :func:`window_points` and their slopes: per axis (x, y) the
+    weights ``w (T, 2, m)`` of the lattice columns and rows and their derivatives
+    ``slopes (T, 2, m, 2)`` with respect to the window's (lo, hi) bound on that axis; the
+    first ``nx`` columns and ``ny`` rows are the lattice's."""
 
-    wx: Tensor
-    wy: Tensor
-    wx_lo: Tensor
-    wx_hi: Tensor
-    wy_lo: Tensor
-    wy_hi: Tensor
+    w: Tensor
+    slopes: Tensor
+    nx: int
+    ny: int
 
 
 def window_bound_gradients(f: Tensor, factors: WindowFactors) -> tuple[Tensor, Tensor]:
     """∂(Σ_p f_p w_p)/∂lo and /∂hi ``(T, 2)`` for an integrand ``f (T, P)`` held fixed on
     the lattice of :func:`window_points` (the taper's part of the integral's gradient)."""
-    F = f.reshape(f.shape[0], factors.wy.shape[1], factors.wx.shape[1])  # (T, ny, nx)
-    Fx = torch.einsum("tyx,ty->tx", F, factors.wy)  # integrated over rows
-    Fy = torch.einsum("tyx,tx->ty", F, factors.wx)
-    d_lo = torch.stack(((Fx * factors.wx_lo).sum(1), (Fy * factors.wy_lo).sum(1)), dim=1)
-    d_hi = torch.stack(((Fx * factors.wx_hi).sum(1), (Fy * factors.wy_hi).sum(1)), dim=1)
-    return d_lo, d_hi
+    nx, ny = factors.nx, factors.ny
+    F = f.reshape(f.shape[0], ny, nx)  # (T, rows y, columns x)
+    wx, wy = factors.w[:, 0, :nx, None], factors.w[:, 1, None, :ny]  # column, row
+    d_x = torch.bmm(torch.bmm(wy, F), factors.slopes[:, 0, :nx])  # (T, 1, lo/hi)
+    d_y = torch.bmm(torch.bmm(F, wx).mT, factors.slopes[:, 1, :ny])
+    d = torch.cat((d_x, d_y), dim=1)  # (T, axis, lo/hi)
+    return d[..., 0], d[..., 1]
 
 
 def window_points(lo: Tensor, hi: Tensor, resolution: float, taper: float = 0.0,
@@ -117,35 +119,27 @@ def window_points(lo: Tensor, hi: Tensor, resolution: float, taper: float = 0.0,
     largest window's point count. ``factors=True`` also returns the
     :class:`WindowFactors` (for gradients without autograd).
     """
-    h = resolution
+    h, T = resolution, lo.shape[0]
     lo_d, hi_d = lo.detach(), hi.detach()
-    i0 = torch.floor(lo_d / h)  # first cell index per axis
-    n = (torch.ceil(hi_d / h) - i0).clamp_min(0).long()  # (T, 2) cells per axis
-    n[(hi_d <= lo_d).any(dim=1)] = 0
-    T = lo.shape[0]
-    nx, ny = (int(n[:, 0].max()), int(n[:, 1].max())) if T else (0, 0)
-    ix = torch.arange(max(nx, 1), dtype=lo.dtype)
-    iy = torch.arange(max(ny, 1), dtype=lo.dtype)
-    gx = (i0[:, 0:1] + ix + 0.5) * h  # (T, nx)
-    gy = (i0[:, 1:2] + iy + 0.5) * h  # (T, ny)
-    wx = (ix < n[:, 0:1]).to(lo.dtype) * h
-    wy = (iy < n[:, 1:2]).to(lo.dtype) * h
-    slopes = []
+    i0 = torch.floor(lo_d / h)  # (T, 2) first cell index per axis
+    # cells per axis; none on an empty axis (or a NaN bound: the NaN then reaches the sum)
+    n = torch.where(hi_d > lo_d, torch.ceil(hi_d / h) - i0, 0.0)
+    nx, ny = (max(int(v), 1) for v in n.amax(0).tolist()) if T else (1, 1)
+    index = torch.arange(max(nx, ny), dtype=lo.dtype)
+    g = (i0[..., None] + index + 0.5) * h  # (T, 2, m) cell centres per axis
+    w = (index < n[..., None]).to(lo.dtype) * h
+    slopes = torch.zeros(*w.shape, 2, dtype=lo.dtype) if factors else None
     if taper > 0:
-        ramps = []
-        for g, w, axis in ((gx, wx, 0), (gy, wy, 1)):
-            u_lo, u_hi = (g - lo[:, axis:axis + 1]) / taper, (hi[:, axis:axis + 1] - g) / taper
-            r_lo, r_hi = _smoothstep(u_lo), _smoothstep(u_hi)
-            ramps.append(w * r_lo * r_hi)
-            if factors:
-                slopes += [-w * _smoothstep_slope(u_lo.detach()) * r_hi.detach() / taper,
-                           w * r_lo.detach() * _smoothstep_slope(u_hi.detach()) / taper]
-        wx, wy = ramps
-    elif factors:
-        slopes = [torch.zeros_like(wx), torch.zeros_like(wx), torch.zeros_like(wy),
-                  torch.zeros_like(wy)]
+        u = (torch.stack((g - lo[..., None], hi[..., None] - g)) / taper).clamp(0.0, 1.0)
+        ramp = u * u * (3.0 - 2.0 * u)  # (lo/hi side, T, 2, m) smoothstep
+        if factors:
+            slope = (6.0 / taper) * u.detach() * (1.0 - u.detach())  # 0 where clamped
+            ramp_d = ramp.detach()
+            slopes = torch.stack((-w * slope[0] * ramp_d[1], w * ramp_d[0] * slope[1]), dim=-1)
+        w = w * ramp[0] * ramp[1]
+    gx, gy = g[:, 0, :nx], g[:, 1, :ny]
     pts = torch.stack(torch.broadcast_tensors(gx[:, None, :], gy[:, :, None]), dim=-1)
-    weights = (wy[:, :, None] * wx[:, None, :]).reshape(T, -1)
+    weights = (w[:, 1, :ny, None] * w[:, 0, None, :nx]).reshape(T, -1)
     if factors:
-        return pts.reshape(T, -1, 2), weights, WindowFactors(wx, wy, *slopes)
+        return pts.reshape(T, -1, 2), weights, WindowFactors(w, slopes, nx, ny)
     return pts.reshape(T, -1, 2), weights

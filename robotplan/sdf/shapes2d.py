@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import ClassVar, Literal
 
 import numpy as np
@@ -141,27 +141,35 @@ def _box_sdf(px: Tensor, py: Tensor, cx: float, cy: float, hx: float, hy: float)
     return safe_hypot(qx.clamp_min(0.0), qy.clamp_min(0.0)) + torch.maximum(qx, qy).clamp_max(0.0)
 
 
-def _box_sdf_and_grad(px: Tensor, py: Tensor, cx: float, cy: float, hx: float, hy: float
-                      ) -> tuple[Tensor, Tensor, Tensor]:
+def _box_sdf_and_grad(px: Tensor, py: Tensor, cx: Tensor | float, cy: Tensor | float,
+                      hx: Tensor | float, hy: Tensor | float) -> tuple[Tensor, Tensor, Tensor]:
     """:func:`_box_sdf` and its gradient ``(φ, ∂φ/∂x, ∂φ/∂y)``, branch-free: outside, the
-    unit vector from the nearest boundary point; inside, the normal of the nearest face."""
+    unit vector from the nearest boundary point; inside, the normal of the nearest face.
+
+    The box parameters may be tensors ``(K, 1, …)`` that broadcast with the points: K boxes
+    in one pass, results ``(K, …)`` (the same few kernels for any K)."""
     dx, dy = px - cx, py - cy
-    sx, sy = torch.sign(dx), torch.sign(dy)
     qx, qy = dx.abs() - hx, dy.abs() - hy
     ox, oy = qx.clamp_min(0.0), qy.clamp_min(0.0)
-    out = safe_hypot(ox, oy)
+    out = torch.hypot(ox, oy)  # not differentiated: no need for safe_hypot here
     inv = out.clamp_min(1e-30).reciprocal()  # ox, oy are 0 wherever out is
     deepest = torch.maximum(qx, qy)
-    inner = (deepest <= 0).to(px.dtype)
-    x_face = inner * (qx > qy).to(px.dtype)
-    gx = sx * (ox * inv + x_face)
-    gy = sy * (oy * inv + (inner - x_face))
+    inner = deepest <= 0
+    x_face = (qx > qy) & inner
+    gx = (ox * inv + x_face) * dx.sign()  # sign(0) = 0 on a symmetry line, as autograd's
+    gy = (oy * inv + (inner ^ x_face)) * dy.sign()
     return out + deepest.clamp_max(0.0), gx, gy
 
 
-def _select(first: Tensor, a: tuple[Tensor, ...], b: tuple[Tensor, ...]) -> tuple[Tensor, ...]:
-    """Per element, the tuple ``a`` where the bool ``first`` is true and ``b`` elsewhere."""
-    return tuple(torch.where(first, x, y) for x, y in zip(a, b, strict=True))
+@lru_cache(maxsize=256)
+def _lshape_boxes(size: tuple[float, float], thickness: float, dtype: torch.dtype
+                  ) -> tuple[Tensor, Tensor]:
+    """The four boxes of an L-shape's closed form: parameters ``(cx, cy, hx, hy) × (bottom
+    strip, left strip, bounding box, notch)`` and the sign of each box's SDF in it."""
+    w, h, t = size[0] / 2, size[1] / 2, thickness
+    params = torch.tensor([[0.0, t / 2 - w, 0.0, t / 2], [t / 2 - h, 0.0, 0.0, t / 2],
+                           [w, t / 2, w, w - t / 2], [t / 2, h, h, h - t / 2]], dtype=dtype)
+    return params, torch.tensor([1.0, 1.0, 1.0, -1.0], dtype=dtype)
 
 
 def lshape_sdf(px: Tensor, py: Tensor, w: Tensor | float, h: Tensor | float,
@@ -284,17 +292,17 @@ class LShape(_PolygonalShape):
         return phi, torch.stack((gx, gy), dim=-1)
 
     def sdf_and_grad_planes(self, px: Tensor, py: Tensor) -> tuple[Tensor, Tensor, Tensor]:
-        """Closed form from the boxes of :func:`lshape_sdf`: outside, the nearer strip;
-        inside, the bounding box or the notch (its negated SDF), whichever is larger."""
-        w, h, t = self.size[0] / 2, self.size[1] / 2, self.thickness
-        bottom = _box_sdf_and_grad(px, py, 0.0, t / 2 - h, w, t / 2)
-        left = _box_sdf_and_grad(px, py, t / 2 - w, 0.0, t / 2, h)
-        outside = _select(bottom[0] < left[0], bottom, left)
-        box = _box_sdf_and_grad(px, py, 0.0, 0.0, w, h)
-        notch = _box_sdf_and_grad(px, py, t / 2, t / 2, w - t / 2, h - t / 2)
-        notch = (-notch[0], -notch[1], -notch[2])
-        inside = _select(box[0] > notch[0], box, notch)
-        return _select(outside[0] < 0, inside, outside)
+        """Closed form from the boxes of :func:`lshape_sdf`, all four in one pass: outside,
+        the nearer strip; inside, the bounding box or the notch (its negated SDF),
+        whichever is larger."""
+        params, sign = _lshape_boxes(self.size, self.thickness, px.dtype)
+        ones = [1] * px.dim()
+        phi, gx, gy = _box_sdf_and_grad(px, py, *params.view(4, 4, *ones))  # (4 boxes, ...)
+        values = torch.stack((phi, gx, gy)) * sign.view(1, 4, *ones)  # the notch negated
+        bottom, left, box, notch = values[0]
+        pick = torch.where(torch.minimum(bottom, left) < 0, (box <= notch) + 2, bottom >= left)
+        chosen = values.gather(1, pick[None, None].expand(3, 1, *pick.shape))[:, 0]
+        return chosen[0], chosen[1], chosen[2]
 
     def outline(self, n_arc: int = 720) -> np.ndarray:
         w, h, t = self.size[0] / 2, self.size[1] / 2, self.thickness
