@@ -16,8 +16,8 @@ from torch import Tensor
 
 from robotplan.functionals.base import Functional
 
-__all__ = ["PushLever", "PushingDirection", "QuasiStaticPush", "StickingContact", "centroid",
-           "limit_surface_radius"]
+__all__ = ["CornerClearance", "PushLever", "PushingDirection", "QuasiStaticPush",
+           "StickingContact", "centroid", "convex_corners", "limit_surface_radius"]
 
 
 def centroid(outline: np.ndarray) -> np.ndarray:
@@ -124,3 +124,32 @@ class QuasiStaticPush(Functional):
         across = d[:, 0] * n[:, 1] - d[:, 1] * n[:, 0]
         rows = (turn, self.mu * along - across, self.mu * along + across)
         return torch.stack(rows if self.turn else rows[1:], -1)
+
+
+def convex_corners(outline: np.ndarray, min_turn_deg: float = 20.0) -> np.ndarray:
+    """Indices ``(K,)`` of the convex corners of a counter-clockwise outline ``(V, 2)``:
+    vertices where the boundary turns left by more than ``min_turn_deg`` (a circle's fine
+    polygon has none; an L-shape's notch corner is concave and not one)."""
+    prev, nxt = np.roll(outline, 1, axis=0), np.roll(outline, -1, axis=0)
+    a, b = outline - prev, nxt - outline
+    cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return np.nonzero(np.arctan2(cross, (a * b).sum(1)) > np.radians(min_turn_deg))[0]
+
+
+class CornerClearance(Functional):
+    """Distance (m) of the contact point from each convex corner of the object.
+
+    ``residual(X_WB (T, 3), p_W (T, 2)) → (T, K)`` = |p_B − v_k| for the corners
+    ``v_k (K, 2)`` in the body frame. A push at a corner has no face normal: any direction
+    in the corner's normal cone passes the friction cone and, through the centroid, the
+    lever arm is 0; but the contact rolls off to either side and the object turns away in
+    pybullet (obstacle_push: a diagonal corner push turned the box by 0.5 rad in 30 cm and
+    the plan failed). A lower bound on these distances keeps pushes on faces.
+    """
+
+    def __init__(self, corners_B: np.ndarray) -> None:
+        self.corners = torch.as_tensor(np.asarray(corners_B, dtype=float))
+
+    def residual(self, X_WB: Tensor, p: Tensor) -> Tensor:
+        d = _in_body_frame(X_WB, p)[:, None, :] - self.corners.to(p)  # (T, K, 2)
+        return (d * d).sum(-1).clamp_min(1e-18).sqrt()
