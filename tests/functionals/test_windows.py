@@ -20,6 +20,15 @@ def test_window_points_cover_the_window_on_a_fixed_lattice():
     assert torch.allclose((inside / 0.005 - 0.5).round(), inside / 0.005 - 0.5)
 
 
+def test_a_nan_pose_gives_a_nan_value_not_an_error(ell, region):
+    X = torch.tensor([[0.0, 0.0, 0.1], [float("nan"), 0.0, 0.1]], dtype=F64)
+    value = GoalRegion(ell, region)(X)
+    assert torch.isfinite(value[0]).all() and torch.isnan(value[1]).all()
+    r, (J,) = GoalRegion(ell, region).jacobians(X)
+    assert torch.isfinite(r[0]).all() and torch.isnan(r[1]).all()
+    assert torch.isfinite(J[0]).all()  # the valid step's Jacobian is untouched
+
+
 def test_aabb_of_rotated_box():
     box = Body("b", "object", Box((0.2, 0.1)), (0, 0, 0), 0.0, 0.06)
     lo, hi = body_aabb(box, torch.tensor([[1.0, 2.0, torch.pi / 2]], dtype=F64))
