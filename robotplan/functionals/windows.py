@@ -128,7 +128,7 @@ def window_points(lo: Tensor, hi: Tensor, resolution: float, taper: float = 0.0,
     index = torch.arange(max(nx, ny), dtype=lo.dtype)
     g = (i0[..., None] + index + 0.5) * h  # (T, 2, m) cell centres per axis
     w = (index < n[..., None]).to(lo.dtype) * h
-    slopes = torch.zeros(*w.shape, 2, dtype=lo.dtype) if factors else None
+    slopes = None
     if taper > 0:
         u = (torch.stack((g - lo[..., None], hi[..., None] - g)) / taper).clamp(0.0, 1.0)
         ramp = u * u * (3.0 - 2.0 * u)  # (lo/hi side, T, 2, m) smoothstep
@@ -137,6 +137,8 @@ def window_points(lo: Tensor, hi: Tensor, resolution: float, taper: float = 0.0,
             ramp_d = ramp.detach()
             slopes = torch.stack((-w * slope[0] * ramp_d[1], w * ramp_d[0] * slope[1]), dim=-1)
         w = w * ramp[0] * ramp[1]
+    elif factors:
+        slopes = torch.zeros(*w.shape, 2, dtype=lo.dtype)
     gx, gy = g[:, 0, :nx], g[:, 1, :ny]
     pts = torch.stack(torch.broadcast_tensors(gx[:, None, :], gy[:, :, None]), dim=-1)
     weights = (w[:, 1, :ny, None] * w[:, 0, None, :nx]).reshape(T, -1)
