@@ -28,6 +28,9 @@ class Execution:
     tips: dict = field(default_factory=dict)  # robot → (N+1, 3) tip centres
     joints: dict = field(default_factory=dict)  # robot → (N+1, dof) measured joint angles
     obstacle_contact: bool = False  # the object touched an obstacle (within 1 mm) at any step
+    others: dict = field(default_factory=dict)  # other object → (N+1, 3) poses
+    # objects outside the pusher's ``touches`` that it touched at some simulation step
+    forbidden_contacts: list = field(default_factory=list)
 
 
 def _obstacles(scene: Scene) -> list:
@@ -36,24 +39,35 @@ def _obstacles(scene: Scene) -> list:
 
 def execute_push(scene: Scene, obj: str, pusher: str, q_pusher: np.ndarray,
                  physics: Physics = PHYSICS) -> Execution:
-    """Run the planned pusher positions ``q_pusher (N+1, 2)`` open loop."""
+    """Run the planned pusher positions ``q_pusher (N+1, 2)`` open loop, with every object
+    of the scene in the world (``obj`` first); coverage is the goal object's."""
     body, tool = scene.bodies[obj], scene.bodies[pusher]
     spec = next(o for o in scene.objects if o.name == obj)
+    others = [o for o in scene.objects if o.name != obj]
+    allowed = next(p.touches for p in scene.pushers if p.name == pusher)
+    watch = [i for i, o in enumerate(others) if allowed is not None and o.name not in allowed]
     with PushWorld(physics) as world:
         world.reset(body.shape, spec.height, body.pose, tool.shape.radius, tool.pose[:2],
-                    _obstacles(scene))
+                    _obstacles(scene), [(scene.bodies[o.name].shape, o.height,
+                                         scene.bodies[o.name].pose) for o in others])
         poses = [world.object_pose()[0]]
+        other_poses = [world.other_poses()]
         pushers = [world.pusher_position()]
-        hit = False
+        hit, forbidden = False, set()
         for a, b in itertools.pairwise(q_pusher):
             for s in range(1, physics.keep_every + 1):
                 world.step(tuple(a + (b - a) * s / physics.keep_every))
                 hit = hit or world.touches_obstacle(OBSTACLE_GAP)
+                forbidden.update(others[i].name for i in watch if world.pusher_touches_other(i))
             poses.append(world.object_pose()[0])
+            other_poses.append(world.other_poses())
             pushers.append(world.pusher_position())
-    cov, touch = _outcome(scene, body, poses[-1], pushers[-1], tool.shape.radius)
+    by_name = {o.name: np.array([p[i] for p in other_poses]) for i, o in enumerate(others)}
+    goal_obj = getattr(scene.goal, "object", obj)
+    final = poses[-1] if goal_obj == obj else by_name[goal_obj][-1]
+    cov, touch = _outcome(scene, scene.bodies[goal_obj], final, pushers[-1], tool.shape.radius)
     return Execution(np.array(poses), np.array(pushers), poses[-1], cov, touch,
-                     obstacle_contact=hit)
+                     obstacle_contact=hit, others=by_name, forbidden_contacts=sorted(forbidden))
 
 
 def _outcome(scene: Scene, body, final: np.ndarray, tip_xy: np.ndarray, radius: float

@@ -176,13 +176,16 @@ def _along(route: np.ndarray, fraction: float) -> np.ndarray:
     return route[-1]
 
 
-def initial_guess(prog: PushProgram) -> dict[str, np.ndarray]:
+def initial_guess(prog: PushProgram, ends: np.ndarray | None = None
+                  ) -> dict[str, np.ndarray]:
     """Paper app. I.2: the pusher moves on a circle around the object to the phase's
-    init point, then pushes; the object slides towards the goal in push phases."""
+    init point, then pushes; the object slides towards the goal in push phases (to
+    ``ends (K, 2)`` after each push when given, else along :func:`push_ends`)."""
     T, N = prog.T, prog.N
     start = np.array(prog.obj.pose, dtype=float)
     goal = guess_goal(prog, start[:2])
-    ends = push_ends(prog, start[:2], goal) if prog.skeleton.pushes else None
+    if ends is None and prog.skeleton.pushes:
+        ends = push_ends(prog, start[:2], goal)
     q1 = np.tile(start, (N + 1, 1))
     q2 = np.zeros((N + 1, 2))
     q2[0] = prog.pusher.pose[:2]

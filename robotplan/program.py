@@ -166,6 +166,9 @@ class Solution:
     violations: dict = field(default_factory=dict)  # worst violation per constraint name
     q_joints: dict = field(default_factory=dict)  # robot name → (N+1, dof) joint angles
     touch_point: np.ndarray | None = None  # (1, 2): the touch goal's contact point
+    # a chained object's (N+1, 3) poses and its (·, 2) contact points (ChainPushProgram)
+    q_others: dict = field(default_factory=dict)
+    contact_others: dict = field(default_factory=dict)
 
     @property
     def dynamics_rms_mm(self) -> float:
@@ -211,7 +214,9 @@ class PushProgram:
         self.Q2 = prog.NewContinuousVariables(N + 1, 2, "q_pusher")
         self.P = prog.NewContinuousVariables(len(self.push_steps), 2, "p")
         self.P_touch: np.ndarray | None = None
-        self.guess = guess if guess is not None else initial_guess(self)
+        self.goal_body, self.goal_Q = self.obj, self.Q1  # the body H_g moves into the region
+        self._add_variables()
+        self.guess = guess if guess is not None else self._initial_guess()
         self.keep_start = guess is not None  # a given start is a plan worth keeping
         # state 0 is the scene's start
         prog.AddBoundingBoxConstraint(np.array(self.obj.pose), np.array(self.obj.pose),
@@ -228,7 +233,8 @@ class PushProgram:
             self._hold_object_while_reaching()
         self.dynamics = None
         if model is not None:
-            self._add_dynamics(model)
+            self.dynamics = self._add_dynamics(model, self.obj, self.Q1, self.pusher, self.Q2,
+                                               self.guess["q_obj"], "H_F")
             self._add_step_limits(settings.max_step, settings.max_turn)
             if settings.cone_in_learned and settings.push_friction > 0 and len(self.push_steps):
                 self._add_quasi_static(turn=settings.turn_in_learned)
@@ -242,36 +248,47 @@ class PushProgram:
         self._add_lever_cost()
         self._add_corner_clearance()
 
+    # ------------------------------------------------------------------ hooks
+    def _add_variables(self) -> None:
+        """More decision variables, before the guess (none here; see ChainPushProgram)."""
+
+    def _initial_guess(self) -> dict[str, np.ndarray]:
+        return initial_guess(self)
+
     # ------------------------------------------------------------ functionals
-    def _add_dynamics(self, model: PushDynamics) -> None:
+    def _add_dynamics(self, model: PushDynamics, obj, Q_obj: np.ndarray, actor,
+                      Q_actor: np.ndarray, path: np.ndarray, name: str) -> LearnedDynamics:
+        """H_F of ``obj`` (poses ``Q_obj (N+1, 3)``) pushed by ``actor`` (``Q_actor (N+1, 2)``
+        positions of a disc, or ``(N+1, 3)`` poses of an object) in every step, integrated
+        around ``path (N+1, ≥2)``, the object's guessed centres."""
         s = self.settings
-        path = torch.as_tensor(self.guess["q_obj"][:, :2], dtype=torch.float32)
-        quad = phase_quadrature(path, self.obj.shape.bound_radius, self.scene.workspace,
+        quad = phase_quadrature(torch.as_tensor(path[:, :2], dtype=torch.float32),
+                                obj.shape.bound_radius, self.scene.workspace,
                                 coarse=s.quad_coarse)
-        self.dynamics = LearnedDynamics(model, self.obj, self.pusher, quad)
-        N = self.N
+        dynamics = LearnedDynamics(model, obj, actor, quad)
+        N, d = self.N, Q_actor.shape[1]
         area = float(self.scene.workspace.size[0] * self.scene.workspace.size[1])
         scale = 1e6 / area  # H (m²) → mean squared residual in mm²
 
         def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
             X1 = torch.from_numpy(x[:3 * (N + 1)].reshape(N + 1, 3))
-            X2 = torch.from_numpy(x[3 * (N + 1):].reshape(N + 1, 2))
-            H, J1, J2 = self.dynamics.evaluate(X1, X2, jacobian=jac)
+            X2 = torch.from_numpy(x[3 * (N + 1):].reshape(N + 1, d))
+            H, J1, J2 = dynamics.evaluate(X1, X2, jacobian=jac)
             values = H.double().numpy() * scale
             if not jac:
                 return values, None
-            J = np.zeros((N, 5 * (N + 1)))
+            J = np.zeros((N, (3 + d) * (N + 1)))
             rows = np.arange(N)
             J1n, J2n = J1.double().numpy() * scale, J2.double().numpy() * scale
             for which in (0, 1):
                 states = rows + which
                 for k in range(3):
                     J[rows, 3 * states + k] = J1n[:, which, k]
-                for k in range(2):
-                    J[rows, 3 * (N + 1) + 2 * states + k] = J2n[:, which, k]
+                for k in range(d):
+                    J[rows, 3 * (N + 1) + d * states + k] = J2n[:, which, k]
             return values, J
 
-        variables = np.concatenate((self.Q1.ravel(), self.Q2.ravel()))
+        variables = np.concatenate((Q_obj.ravel(), Q_actor.ravel()))
         if s.dynamics_weight > 0:
             def total(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
                 values, J = fn(x, jac)
@@ -279,11 +296,12 @@ class PushProgram:
                 return (np.array([w * values.sum()]),
                         None if J is None else w * J.sum(axis=0, keepdims=True))
 
-            self._add_cost(total, variables, "H_F")
-            return
+            self._add_cost(total, variables, name)
+            return dynamics
         bound = (s.dynamics_rmse * 1e3) ** 2
-        self.prog.AddConstraint(bridge(fn, self.timings, "H_F"), np.zeros(N), np.full(N, bound),
-                                variables, "H_F")
+        self.prog.AddConstraint(bridge(fn, self.timings, name), np.zeros(N), np.full(N, bound),
+                                variables, name)
+        return dynamics
 
     def _hold_object_while_reaching(self) -> None:
         """A reach phase moves the pusher without touching (H_coll keeps it off), so the
@@ -453,11 +471,12 @@ class PushProgram:
         if self.region is None:
             return
         origin = torch.zeros(1, 2, dtype=torch.float64)
-        extent = np.ptp(self.obj.shape.outline(), axis=0).max() / 2
+        body = self.goal_body
+        extent = np.ptp(body.shape.outline(), axis=0).max() / 2
         room = -float(self.region.shape.sdf(origin)[0]) - extent
         inset = min(self.settings.goal_inset, max(0.0, room / 3))
-        H = GoalRegion(self.obj, self.region, a=self.settings.a_goal, inset=inset)
-        scale = 1.0 / self.obj.area
+        H = GoalRegion(body, self.region, a=self.settings.a_goal, inset=inset)
+        scale = 1.0 / body.area
 
         def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
             X = torch.from_numpy(x.reshape(1, 3))
@@ -468,7 +487,7 @@ class PushProgram:
 
         self.prog.AddConstraint(bridge(fn, self.timings, "H_g"), np.zeros(1),
                                 np.array([self.settings.goal_tol]),
-                                self.Q1[self.N], "H_g")
+                                self.goal_Q[self.N], "H_g")
 
     def _add_costs(self) -> None:
         def accel_cost(Q: np.ndarray, weight: float, prefix: bool) -> None:
@@ -540,9 +559,10 @@ class PushProgram:
         q1, q2, p = (self._values(x, V) for V in (self.Q1, self.Q2, self.P))
         violation = max(violations.values(), default=0.0)
         touch = None if self.P_touch is None else self._values(x, self.P_touch)
+        others, contacts = self._other_values(x)
         return Solution(self.skeleton, violation <= FEASIBLE, status, violation, cost, seconds,
-                        q1, q2, p.reshape(-1, 2), self.dynamics_mm2(q1, q2), timings,
-                        violations, self._joint_values(x), touch)
+                        q1, q2, p.reshape(-1, 2), self.dynamics_mm2(q1, q2, others), timings,
+                        violations, self._joint_values(x), touch, others, contacts)
 
     def _guess_pairs(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """(variables, initial values) for SetInitialGuess."""
@@ -551,6 +571,10 @@ class PushProgram:
         if self.P_touch is not None:
             pairs.append((self.P_touch, self.guess.get("p_touch", self.guess["q_pusher"][-1:])))
         return pairs
+
+    def _other_values(self, x: np.ndarray) -> tuple[dict, dict]:
+        """Other objects' poses and contact points by name (see ChainPushProgram)."""
+        return {}, {}
 
     def _joint_values(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """Joint trajectories by robot (none for free pushers; see ArmPushProgram)."""
@@ -585,9 +609,10 @@ class PushProgram:
         out["solver"] = round(max(0.0, seconds - sum(self.timings.values())), 3)
         return out
 
-    def dynamics_mm2(self, q_obj: np.ndarray, q_pusher: np.ndarray) -> np.ndarray:
+    def dynamics_mm2(self, q_obj: np.ndarray, q_pusher: np.ndarray,
+                     others: dict | None = None) -> np.ndarray:
         """H_F per step as the mean squared SDF residual over the table, mm² (none in the
-        kinematic program)."""
+        kinematic program; ``others``: other objects' poses, see ChainPushProgram)."""
         if self.dynamics is None:
             return np.zeros(0)
         H, _, _ = self.dynamics.evaluate(torch.from_numpy(q_obj), torch.from_numpy(q_pusher),
@@ -620,6 +645,10 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
         from robotplan.arm_program import ArmPushProgram
 
         program = ArmPushProgram
+    elif skeleton.chained:  # the pushed object pushes another one
+        from robotplan.chain_program import ChainPushProgram
+
+        program = ChainPushProgram
     guess = None
     warm_seconds = 0.0
     if settings.warm_start:

@@ -101,6 +101,7 @@ class PushWorld:
         self.client = connect_direct()
         self.object: int | None = None
         self.obstacles: list[int] = []
+        self.others: list[tuple[int, np.ndarray]] = []  # movable objects beside the first
         self.pusher: int | None = None
         self.table: int | None = None
         self._constraint: int | None = None
@@ -119,11 +120,13 @@ class PushWorld:
 
     def reset(self, shape: Shape2D, height: float, pose: tuple[float, float, float],
               pusher_radius: float | None, pusher_xy: tuple[float, float] = (0.0, 0.0),
-              obstacles: list[tuple[Shape2D, float, tuple[float, float, float]]] = ()
+              obstacles: list[tuple[Shape2D, float, tuple[float, float, float]]] = (),
+              movable: list[tuple[Shape2D, float, tuple[float, float, float]]] = ()
               ) -> None:
         """Place a new object (footprint ``shape``) at ``pose`` and a pusher at ``pusher_xy``
         (none if ``pusher_radius`` is None: arms push, see robotplan.sim_arms); fixed
-        ``obstacles`` as ``(footprint, height, pose)``."""
+        ``obstacles`` and more ``movable`` objects (same mass and friction) as
+        ``(footprint, height, pose)``."""
         pb, c, ph = self.pb, self.client, self.physics
         pb.resetSimulation(physicsClientId=c)  # a clean world: no ids reused across scenes
         pb.setGravity(0, 0, -ph.gravity, physicsClientId=c)
@@ -140,6 +143,8 @@ class PushWorld:
         self.object = self._footprint_body(shape, height, pose, ph.object_mass)
         self.obstacles = [self._footprint_body(o_shape, o_height, o_pose, 0.0)
                           for o_shape, o_height, o_pose in obstacles]
+        self.others = [(self._footprint_body(o_shape, o_height, o_pose, ph.object_mass),
+                        footprint_centroid(o_shape)) for o_shape, o_height, o_pose in movable]
         if pusher_radius is None:
             self._settle()
             return
@@ -200,8 +205,10 @@ class PushWorld:
                                            physicsClientId=c)
 
     def touches_obstacle(self, gap: float = 0.0) -> bool:
-        """Whether the object is within ``gap`` (m) of any obstacle."""
-        return any(self.pb.getClosestPoints(self.object, o, gap, physicsClientId=self.client)
+        """Whether an object (the first or a movable one) is within ``gap`` (m) of any
+        obstacle."""
+        return any(self.pb.getClosestPoints(body, o, gap, physicsClientId=self.client)
+                   for body in (self.object, *(b for b, _ in self.others))
                    for o in self.obstacles)
 
     def _settle(self) -> None:
@@ -221,12 +228,23 @@ class PushWorld:
 
     def object_pose(self) -> tuple[np.ndarray, float]:
         """Planar pose ``(x, y, yaw)`` of the shape frame and the tilt (rad) of the object."""
-        pos, quat = self.pb.getBasePositionAndOrientation(self.object,
-                                                          physicsClientId=self.client)
+        return self._planar_pose(self.object, self._com)
+
+    def other_poses(self) -> list[np.ndarray]:
+        """Planar poses ``(x, y, yaw)`` of the ``movable`` objects, in their order."""
+        return [self._planar_pose(body, com)[0] for body, com in self.others]
+
+    def pusher_touches_other(self, index: int) -> bool:
+        """Whether the pusher is in contact with the ``index``-th movable object."""
+        return bool(self.pb.getContactPoints(self.pusher, self.others[index][0],
+                                             physicsClientId=self.client))
+
+    def _planar_pose(self, body: int, com: np.ndarray) -> tuple[np.ndarray, float]:
+        pos, quat = self.pb.getBasePositionAndOrientation(body, physicsClientId=self.client)
         roll, pitch, yaw = self.pb.getEulerFromQuaternion(quat)
         cs, sn = np.cos(yaw), np.sin(yaw)
-        x = pos[0] - (cs * self._com[0] - sn * self._com[1])
-        y = pos[1] - (sn * self._com[0] + cs * self._com[1])
+        x = pos[0] - (cs * com[0] - sn * com[1])
+        y = pos[1] - (sn * com[0] + cs * com[1])
         return np.array([x, y, yaw]), float(max(abs(roll), abs(pitch)))
 
     def pusher_position(self) -> np.ndarray:

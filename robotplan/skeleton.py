@@ -15,8 +15,8 @@ from typing import Literal
 
 import yaml
 
-__all__ = ["Phase", "Skeleton", "SkeletonSpace", "actor_candidates", "load_skeleton_space",
-           "parse_skeleton", "space_for"]
+__all__ = ["Phase", "Skeleton", "SkeletonSpace", "actor_candidates", "chain_candidates",
+           "load_skeleton_space", "parse_skeleton", "space_for"]
 
 SKELETONS_DIR = Path(__file__).resolve().parents[1] / "skeletons"
 
@@ -24,12 +24,15 @@ SKELETONS_DIR = Path(__file__).resolve().parents[1] / "skeletons"
 @dataclass(frozen=True)
 class Phase:
     """One phase of T steps: ``mode`` of ``actor`` (a pusher) on ``object``, initialised
-    from the fixed point ``init`` around the object (index into the init directions)."""
+    from the fixed point ``init`` around the object (index into the init directions). In a
+    push phase with a ``chain``, ``object`` pushes the object named ``chain`` in turn (the
+    pairs actor–object and object–chain interact, paper Fig. 9)."""
 
     mode: Literal["reach", "push"]
     actor: str
     object: str
     init: int
+    chain: str | None = None
 
 
 @dataclass(frozen=True)
@@ -40,12 +43,24 @@ class Skeleton:
     def pushes(self) -> int:
         return sum(p.mode == "push" for p in self.phases)
 
+    @property
+    def chained(self) -> str | None:
+        """The object that another object pushes in some phase (one per skeleton), if any."""
+        return next((p.chain for p in self.phases if p.chain), None)
+
     def describe(self) -> str:
-        return " ".join(f"{p.mode}({p.actor}->{p.object}@{p.init})" for p in self.phases)
+        return " ".join(f"{p.mode}({p.actor}->{p.object}{'->' + p.chain if p.chain else ''}"
+                        f"@{p.init})" for p in self.phases)
 
     def as_rows(self) -> list[dict]:
-        return [{"phase": k, "mode": p.mode, "actor": p.actor, "object": p.object,
-                 "init": p.init} for k, p in enumerate(self.phases)]
+        rows = []
+        for k, p in enumerate(self.phases):
+            row = {"phase": k, "mode": p.mode, "actor": p.actor, "object": p.object,
+                   "init": p.init}
+            if p.chain:
+                row["pushes"] = p.chain
+            rows.append(row)
+        return rows
 
 
 @dataclass(frozen=True)
@@ -85,6 +100,26 @@ class SkeletonSpace:
                         k += 1
                 out.append(Skeleton(tuple(phases)))
         return out
+
+
+def chain_candidates(space: SkeletonSpace, actor: str, obj: str, target: str,
+                     max_pushes: int = 2, min_alone: int = 0) -> list[Skeleton]:
+    """Skeletons in which ``actor`` may touch ``obj`` only and ``obj`` pushes ``target``:
+    every template with up to ``max_pushes`` pushes, each push either ``obj`` alone or the
+    chain ``obj`` → ``target``; once the chain is in contact it stays so (alone pushes come
+    first, at least ``min_alone`` of them, then at least one chained push), × every init per
+    push."""
+    out = []
+    for base in space.candidates(actor, obj, max_pushes):
+        n = base.pushes
+        for alone in range(min_alone, n):  # the first ``alone`` pushes move obj by itself
+            phases, k = [], 0
+            for ph in base.phases:
+                chain = target if ph.mode == "push" and k >= alone else None
+                phases.append(Phase(ph.mode, ph.actor, ph.object, ph.init, chain))
+                k += ph.mode == "push"
+            out.append(Skeleton(tuple(phases)))
+    return out
 
 
 def actor_candidates(space: SkeletonSpace, actors: list[str], obj: str, max_pushes: int = 2,
@@ -132,10 +167,12 @@ def space_for(scene) -> SkeletonSpace:
 
 def parse_skeleton(text: str, actor: str, obj: str) -> Skeleton:
     """``"push@2"`` (one push from init 2), ``"push@0,push@3"`` (two pushes); an item may
-    name its actor, ``"left:push@1,right:push@3"``, and a touch goal ends with
-    ``"right:touch@2"`` (the arm reaches the object from init 2)."""
+    name its actor, ``"left:push@1,right:push@3"``, a touch goal ends with
+    ``"right:touch@2"`` (the arm reaches the object from init 2), and ``"push@0>blue"`` is a
+    push in which the object pushes ``blue``."""
     phases = []
     for item in text.replace(" ", "").split(","):
+        item, _, chain = item.partition(">")
         who, _, rest = item.rpartition(":")
         mode, _, init = rest.partition("@")
         if mode not in ("push", "touch") or not init.isdigit():
@@ -145,5 +182,6 @@ def parse_skeleton(text: str, actor: str, obj: str) -> Skeleton:
         if mode == "touch":
             phases.append(Phase("reach", name, obj, int(init)))
         else:
-            phases += [Phase("reach", name, obj, int(init)), Phase("push", name, obj, int(init))]
+            phases += [Phase("reach", name, obj, int(init)),
+                       Phase("push", name, obj, int(init), chain or None)]
     return Skeleton(tuple(phases))

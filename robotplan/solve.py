@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robotplan.chain_program import objects_touch
 from robotplan.execute import execute_arms, execute_push
 from robotplan.planner import (
     FEASIBLE,
@@ -20,7 +21,13 @@ from robotplan.program import ProgramSettings
 from robotplan.render import write_atomically
 from robotplan.scene import Scene
 from robotplan.sim import PHYSICS
-from robotplan.skeleton import SkeletonSpace, actor_candidates, parse_skeleton, space_for
+from robotplan.skeleton import (
+    SkeletonSpace,
+    actor_candidates,
+    chain_candidates,
+    parse_skeleton,
+    space_for,
+)
 
 __all__ = ["UnsupportedScene", "candidate_table", "solve_scene"]
 
@@ -29,10 +36,29 @@ class UnsupportedScene(ValueError):
     """The scene is valid but needs a planner feature that is not built yet."""
 
 
+def _chain_target(scene: Scene) -> tuple[str, str] | None:
+    """``(obj, target)`` when the only free pusher may not touch the goal's object but may
+    touch the one other object: it pushes ``obj``, which pushes ``target`` (paper Fig. 9)."""
+    if scene.robots or len(scene.pushers) != 1 or len(scene.objects) != 2:
+        return None
+    goal_obj = getattr(scene.goal, "object", None)
+    allowed = scene.pushers[0].touches
+    others = [o.name for o in scene.objects if o.name != goal_obj]
+    if allowed is None or goal_obj in allowed or others[0] not in allowed:
+        return None
+    return others[0], goal_obj
+
+
 def _check_supported(scene: Scene) -> tuple[str, list[str]]:
-    """The object and the actors (pushers or arms) of a scene the planner handles."""
+    """The object the actors touch and the actors (pushers or arms) of a scene the
+    planner handles."""
+    chain = _chain_target(scene)
+    if chain is not None and scene.goal.type == "region":
+        return chain[0], [scene.pushers[0].name]
     if len(scene.objects) != 1:
-        raise UnsupportedScene("objects: only one movable object is planned yet")
+        raise UnsupportedScene("objects: more than one movable object is planned only when "
+                               "the pusher touches one of two and it pushes the goal's object "
+                               "(pushers[0].touches)")
     if scene.robots and scene.pushers:
         raise UnsupportedScene("pushers: free pushers beside robot arms are not planned yet")
     if not scene.robots and len(scene.pushers) != 1:
@@ -51,6 +77,12 @@ def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
     space = space_for(scene)
     if skeleton:
         return [parse_skeleton(skeleton, actors[0], obj)], space
+    chain = _chain_target(scene)
+    if chain is not None:
+        # one push more than max_pushes: the first push alone brings obj to the target
+        apart = not objects_touch(scene.bodies[chain[0]], scene.bodies[chain[1]])
+        return chain_candidates(space, actors[0], *chain, max_pushes + apart,
+                                min_alone=int(apart)), space
     if not scene.robots:
         return space.candidates(actors[0], obj, max_pushes), space
     from robotplan.arm_program import reach_check
@@ -112,6 +144,9 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                  "cost": float(best.cost) if best else None,
                  "dynamics_rms_mm": round(best.dynamics_rms_mm, 3) if best else None}
     if best is not None:
+        if not quiet and best.q_others:
+            print(f"plan: {' and '.join([obj, *best.q_others])} pushed by "
+                  f"{actors[0]}; executing in pybullet")
         doc.update(_execute_and_show(scene, obj, best, out))
         doc["candidates"] = [{"skeleton": s.skeleton.describe(), "violation": s.violation,
                               "cost": s.cost, "seconds": round(s.seconds, 2),
@@ -142,22 +177,29 @@ def _execute_and_show(scene: Scene, obj: str, best, out: Path) -> dict:
     else:
         ex = execute_push(scene, obj, scene.pushers[0].name, best.q_pusher)
         t = np.arange(steps + 1) * dt
+    planned = {obj: best.q_obj, **best.q_others}
+    simulated = {obj: ex.object_poses, **{k: v for k, v in ex.others.items() if k in planned}}
+    final = {obj: ex.final_pose, **{k: v[-1] for k, v in ex.others.items()}}
     doc = {"execution": {"simulator": "pybullet", "coverage": ex.coverage,
-                         "final_poses": {obj: [float(v) for v in ex.final_pose]},
+                         "final_poses": {k: [float(x) for x in v] for k, v in final.items()},
                          "touch_distance": ex.touch_distance,
-                         "obstacle_contact": ex.obstacle_contact},
+                         "obstacle_contact": ex.obstacle_contact,
+                         "forbidden_contacts": ex.forbidden_contacts},
            "trajectory": {"t": [round(float(v), 6) for v in t],
                           "pusher": best.q_pusher.tolist(),
-                          "objects": {obj: best.q_obj.tolist()},
+                          "objects": {k: v.tolist() for k, v in planned.items()},
                           "contact_points": best.contact.tolist(),
                           "joints": {k: v.tolist() for k, v in best.q_joints.items()}},
            "executed": {"pusher": ex.pusher_positions.tolist(),
-                        "objects": {obj: ex.object_poses.tolist()},
+                        "objects": {k: v.tolist() for k, v in simulated.items()},
                         "joints": {k: v.tolist() for k, v in ex.joints.items()},
                         "tips": {k: v.tolist() for k, v in ex.tips.items()}}}
+    if best.contact_others:
+        doc["trajectory"]["object_contact_points"] = {
+            k: v.tolist() for k, v in best.contact_others.items()}
     actor = scene.pushers[0].name if scene.pushers else None
-    plan = {obj: best.q_obj, **({actor: best.q_pusher} if actor else {})}
-    executed = {obj: ex.object_poses, **({actor: ex.pusher_positions} if actor else {})}
+    plan = {**planned, **({actor: best.q_pusher} if actor else {})}
+    executed = {**simulated, **({actor: ex.pusher_positions} if actor else {})}
     write_playback(scene, out / "playback.html", plan, executed,
                    joints=(best.q_joints, ex.joints), times=t)
     doc["playback"] = "playback.html"

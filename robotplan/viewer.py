@@ -46,6 +46,13 @@ def _pose(x: float, y: float, yaw: float, z: float = 0.0):
     return RigidTransform(RollPitchYaw(0.0, 0.0, yaw), [x, y, z])
 
 
+# objects named after a colour get it; the others take the palette in scene order
+OBJECT_COLORS = {"red": (0.85, 0.2, 0.2), "blue": (0.2, 0.4, 0.9), "green": (0.2, 0.7, 0.3),
+                 "yellow": (0.95, 0.85, 0.2), "orange": (0.95, 0.55, 0.15),
+                 "purple": (0.6, 0.3, 0.8)}
+PALETTE = ((0.95, 0.55, 0.15), (0.2, 0.4, 0.9), (0.85, 0.2, 0.2), (0.2, 0.7, 0.3))
+
+
 def write_playback(scene: Scene, path: Path, plan: dict[str, np.ndarray],
                    executed: dict[str, np.ndarray], fps: float = 12.0,
                    joints: tuple[dict, dict] | None = None,
@@ -76,13 +83,16 @@ def write_playback(scene: Scene, path: Path, plan: dict[str, np.ndarray],
     colors = {"object": Rgba(0.95, 0.55, 0.15, 1), "obstacle": Rgba(0.35, 0.35, 0.35, 1),
               "pusher": Rgba(0.95, 0.8, 0.1, 1), "robot": Rgba(0.6, 0.3, 0.8, 1)}
     for spec_list in (scene.objects, scene.obstacles):
-        for spec in spec_list:
+        for i, spec in enumerate(spec_list):
             body = scene.bodies[spec.name]
             mesh = extrude(body.shape.outline(), spec.height)
-            meshcat.SetObject(f"/executed/{body.name}", mesh, colors[body.role])
+            color = colors[body.role]
+            if body.role == "object":  # its own name's colour ("red"), else the palette
+                color = Rgba(*OBJECT_COLORS.get(body.name, PALETTE[i % len(PALETTE)]), 1)
+            meshcat.SetObject(f"/executed/{body.name}", mesh, color)
             meshcat.SetTransform(f"/executed/{body.name}", _pose(*body.pose))
             if body.name in plan:
-                ghost = colors[body.role]
+                ghost = color
                 meshcat.SetObject(f"/plan/{body.name}", mesh,
                                   Rgba(ghost.r(), ghost.g(), ghost.b(), 0.3))
     for p in scene.pushers:

@@ -98,7 +98,12 @@ def test_bench_functional_refuses_a_non_model(tmp_path):
 
 
 def test_solve_refuses_unsupported_scenes_and_used_folders(tmp_path):
-    res = run("solve", str(TASKS / "three_objects.yaml"), "--out", str(tmp_path / "a"))
+    # two objects the pusher may both touch: no chain, not planned yet
+    text = (TASKS / "three_objects.yaml").read_text().replace("touches: [red]", "")
+    assert "touches" not in text.split("goal:")[0].split("pushers:")[1]
+    scene = tmp_path / "two_free.yaml"
+    scene.write_text(text)
+    res = run("solve", str(scene), "--out", str(tmp_path / "a"))
     assert res.returncode == 2 and "objects" in res.stderr and "Traceback" not in res.stderr
     used = tmp_path / "b"
     used.mkdir()

@@ -89,6 +89,22 @@ def test_obstacles_are_fixed_bodies_and_contact_is_reported():
     assert not short.obstacle_contact and short.final_pose[0] > -0.25 + 0.01
 
 
+def test_every_object_is_simulated_and_forbidden_touches_are_reported():
+    """three_objects: a straight push of red into blue moves both (blue's coverage is
+    reported); driving the pusher into blue, which it may not touch, is reported."""
+    scene = load_scene(TASKS / "three_objects.yaml")
+    through_red = np.vstack([np.linspace([-0.40, -0.10], [-0.26, 0.02], 8),
+                             np.linspace([-0.26, 0.02], [0.10, 0.02], 13)[1:]])
+    ex = execute_push(scene, "red", "pusher", through_red)
+    assert set(ex.others) == {"blue"} and ex.others["blue"].shape == (len(through_red), 3)
+    assert ex.others["blue"][-1, 0] > scene.bodies["blue"].pose[0] + 0.1  # red pushed blue
+    assert ex.forbidden_contacts == [] and 0.0 <= ex.coverage < 0.95
+    at_blue = np.vstack([np.linspace([-0.40, -0.10], [0.05, -0.10], 10),
+                         np.linspace([0.05, -0.10], [0.05, -0.02], 5)[1:]])
+    ex = execute_push(scene, "red", "pusher", at_blue)
+    assert ex.forbidden_contacts == ["blue"]
+
+
 def test_guess_routes_the_object_around_the_obstacle():
     from robotplan.guess import object_route
     from robotplan.program import PushProgram

@@ -154,15 +154,22 @@ def test_learned_program_never_ends_worse_than_its_warm_start():
 def test_arm_touch_program_ends_in_contact_and_hands_its_touch_point_on():
     """The touch goal's last state is a contact (H_coll allows touching there, not the
     reach clearance that contradicted H_touch), the kinematic stage of left-push,
-    right-touch solves, and its contact point goes into the next stage's guess."""
+    right-touch solves, and its contact point goes into the next stage's guess.
+
+    SNOPT's path depends on the CPU's arithmetic: with the touch from init 0 it solved on
+    an AMD EPYC and stopped at violation 4.0 on an Intel Xeon, where init 1 solves (the
+    skeleton search tries both): the first of the two that solves is checked."""
     from robotplan.arm_program import ArmPushProgram
     from robotplan.skeleton import space_for
 
     scene = load_scene(TASKS / "two_arm_touch.yaml")
     space = space_for(scene)
-    skeleton = parse_skeleton("left:push@2,right:touch@0", "left", "box")
-    prog = ArmPushProgram(scene, skeleton, None, space)
-    sol = prog.solve()
+    for init in (0, 1):
+        skeleton = parse_skeleton(f"left:push@2,right:touch@{init}", "left", "box")
+        prog = ArmPushProgram(scene, skeleton, None, space)
+        sol = prog.solve()
+        if sol.violation < 1e-2:
+            break
     assert sol.violation < 1e-2, sol.violations
     tip = prog.kin["right"].tip(sol.q_joints["right"][-1])
     gap = float(scene.bodies["box"].sdf(torch.tensor(tip[None, :2]),

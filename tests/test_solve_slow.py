@@ -1,4 +1,4 @@
-"""End to end, slow: the skeleton search on box_push through the CLI, the pybullet
+"""End to end, slow: the skeleton search on the task scenes through the CLI, the pybullet
 execution and the result page. Run with `make test-slow`."""
 
 import json
@@ -10,15 +10,22 @@ import pytest
 from tests.conftest import ROOT, TASKS
 
 
+def solve(task: str, out) -> dict:
+    """``robotplan solve tasks/TASK.yaml --out OUT`` succeeds; its result.json."""
+    res = subprocess.run([sys.executable, "-m", "robotplan.cli", "solve",
+                          str(TASKS / f"{task}.yaml"), "--out", str(out)], cwd=ROOT,
+                         capture_output=True, text=True, timeout=1800)
+    assert res.returncode == 0, res.stderr
+    doc = json.loads((out / "result.json").read_text())
+    doc["stdout"] = res.stdout
+    return doc
+
+
 @pytest.mark.slow
 def test_solve_box_push(tmp_path):
     out = tmp_path / "out"
-    res = subprocess.run([sys.executable, "-m", "robotplan.cli", "solve",
-                          str(TASKS / "box_push.yaml"), "--out", str(out)], cwd=ROOT,
-                         capture_output=True, text=True, timeout=1800)
-    assert res.returncode == 0, res.stderr
-    assert "<- best" in res.stdout  # the table of candidates
-    doc = json.loads((out / "result.json").read_text())
+    doc = solve("box_push", out)
+    assert "<- best" in doc["stdout"]  # the table of candidates
     assert doc["status"] == "solved"
     assert doc["execution"]["simulator"] == "pybullet"
     assert doc["execution"]["coverage"] >= 0.95
@@ -35,11 +42,7 @@ def test_solve_two_arm_scenes(tmp_path, task, actors):
     """The arm scenes through the CLI: the right arms push, pybullet executes the joint
     trajectories of both arms, coverage ≥ 0.95 (#6), joint trajectories in result.json."""
     out = tmp_path / "out"
-    res = subprocess.run([sys.executable, "-m", "robotplan.cli", "solve",
-                          str(TASKS / f"{task}.yaml"), "--out", str(out)], cwd=ROOT,
-                         capture_output=True, text=True, timeout=1800)
-    assert res.returncode == 0, res.stderr
-    doc = json.loads((out / "result.json").read_text())
+    doc = solve(task, out)
     assert {row["actor"] for row in doc["skeleton"] if row["mode"] == "push"} == actors
     assert doc["execution"]["coverage"] >= 0.95
     steps = len(doc["trajectory"]["t"])
@@ -54,10 +57,20 @@ def test_solve_two_arm_touch(tmp_path):
     """Left pushes the box into the right arm's reach, the right tip ends on it (#6: within
     1 cm in pybullet)."""
     out = tmp_path / "out"
-    res = subprocess.run([sys.executable, "-m", "robotplan.cli", "solve",
-                          str(TASKS / "two_arm_touch.yaml"), "--out", str(out)], cwd=ROOT,
-                         capture_output=True, text=True, timeout=1800)
-    assert res.returncode == 0, res.stderr
-    doc = json.loads((out / "result.json").read_text())
+    doc = solve("two_arm_touch", out)
     assert doc["skeleton"][-1]["actor"] == "right" and doc["skeleton"][-1]["mode"] == "reach"
     assert doc["execution"]["touch_distance"] <= 0.01
+
+
+@pytest.mark.slow
+def test_solve_three_objects(tmp_path):
+    """#7: the pusher may touch red only; the search chains red into blue, and pybullet
+    executes it with blue in the goal (coverage ≥ 0.95) and the pusher never on blue."""
+    out = tmp_path / "out"
+    doc = solve("three_objects", out)
+    assert doc["status"] == "solved"
+    assert any(row.get("pushes") == "blue" for row in doc["skeleton"])
+    assert doc["execution"]["coverage"] >= 0.95
+    assert doc["execution"]["forbidden_contacts"] == []
+    assert set(doc["trajectory"]["objects"]) == set(doc["executed"]["objects"]) == {"red", "blue"}
+    assert (out / "playback.html").stat().st_size > 100_000

@@ -16,8 +16,9 @@ from torch import Tensor
 
 from robotplan.functionals.base import Functional
 
-__all__ = ["CornerClearance", "PushLever", "PushingDirection", "QuasiStaticPush",
-           "StickingContact", "centroid", "convex_corners", "limit_surface_radius"]
+__all__ = ["CornerClearance", "PushLever", "PushingDirection", "QuasiStaticObjectPush",
+           "QuasiStaticPush", "StickingContact", "centroid", "convex_corners",
+           "limit_surface_radius"]
 
 
 def centroid(outline: np.ndarray) -> np.ndarray:
@@ -114,16 +115,41 @@ class QuasiStaticPush(Functional):
         return X[:, :2] + torch.stack((c * cB[0] - s * cB[1], s * cB[0] + c * cB[1]), -1)
 
     def residual(self, X_prev: Tensor, X: Tensor, x: Tensor, p: Tensor) -> Tensor:
+        n = p - x
+        return self._rows(X_prev, X, p, n / n.norm(dim=-1, keepdim=True).clamp_min(1e-9))
+
+    def _rows(self, X_prev: Tensor, X: Tensor, p: Tensor, n: Tensor) -> Tensor:
+        """The rows for a push at ``p (T, 2)`` along the unit normal ``n (T, 2)``."""
         c_W = self._centroid(X)
         d = c_W - self._centroid(X_prev)
         r = p - c_W
-        n = p - x
-        n = n / n.norm(dim=-1, keepdim=True).clamp_min(1e-9)
         turn = self.c * (X[:, 2] - X_prev[:, 2]) - (r[:, 0] * d[:, 1] - r[:, 1] * d[:, 0]) / self.c
         along = (d * n).sum(-1)
         across = d[:, 0] * n[:, 1] - d[:, 1] * n[:, 0]
         rows = (turn, self.mu * along - across, self.mu * along + across)
         return torch.stack(rows if self.turn else rows[1:], -1)
+
+
+class QuasiStaticObjectPush(QuasiStaticPush):
+    """:class:`QuasiStaticPush` of ``body`` by another object touching it at ``p``: the
+    pushing normal is ``body``'s inward surface normal at p, −R(θ) ∇φ_B(p_B)/|∇φ_B|, its
+    body-frame part held fixed in the derivatives (exact on a face, where it is constant).
+
+    ``residual(X_prev (T, 3), X (T, 3), p_W (T, 2)) → (T, 3 | 2)`` as QuasiStaticPush.
+    """
+
+    def __init__(self, body, radius: float, mu: float, turn: bool = True) -> None:
+        super().__init__(centroid(body.shape.outline()), radius, mu, turn)
+        self.body = body
+
+    def residual(self, X_prev: Tensor, X: Tensor, p: Tensor) -> Tensor:
+        p_B = _in_body_frame(X, p).detach()
+        _, gx, gy = self.body.shape.sdf_and_grad_planes(p_B[:, 0], p_B[:, 1])
+        g = torch.stack((gx, gy), -1)
+        g = g / g.norm(dim=-1, keepdim=True).clamp_min(1e-9)
+        c, s = torch.cos(X[:, 2]), torch.sin(X[:, 2])
+        n = -torch.stack((c * g[:, 0] - s * g[:, 1], s * g[:, 0] + c * g[:, 1]), -1)
+        return self._rows(X_prev, X, p, n)
 
 
 def convex_corners(outline: np.ndarray, min_turn_deg: float = 20.0) -> np.ndarray:
