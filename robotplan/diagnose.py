@@ -52,9 +52,11 @@ def _delta(a: np.ndarray, b: np.ndarray) -> list[float]:
 def check_steps(scene: Scene, result: dict, model_dir: str | Path) -> list[StepCheck]:
     """One :class:`StepCheck` per push step of a free-pusher plan (``result.json``)."""
     traj = result.get("trajectory") or {}
-    if "pusher" not in traj:
+    if "pusher" not in traj or scene.robots or not scene.pushers:
         raise ValueError("result.json has no free-pusher trajectory (arm plans are not "
                          "diagnosed yet)")
+    if len(traj.get("objects", {})) > 1:
+        raise ValueError("plans that push one object with another are not diagnosed yet")
     obj_name, poses = next(iter(traj["objects"].items()))
     Q1, Q2 = np.asarray(poses, dtype=float), np.asarray(traj["pusher"], dtype=float)
     body, spec = scene.bodies[obj_name], next(o for o in scene.objects if o.name == obj_name)

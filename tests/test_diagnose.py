@@ -54,3 +54,17 @@ def test_cli_diagnose(tmp_path):
     assert res.returncode == 0, res.stderr
     out = json.loads(res.stdout)
     assert out["summary"]["push_steps"] == len(out["steps"]) >= 3
+
+
+def test_cli_diagnose_refuses_arm_and_chained_plans_in_one_line(tmp_path):
+    """Plans it cannot check (arms; one object pushing another) get one line, exit 2."""
+    from tests.conftest import TASKS
+
+    for task, objects in (("two_arm_left_only", {"box": [[0.0, 0.0, 0.0]]}),
+                          ("three_objects", {"red": [[0.0, 0.0, 0.0]],
+                                             "blue": [[0.0, 0.0, 0.0]]})):
+        (tmp_path / "result.json").write_text(json.dumps(
+            {"trajectory": {"pusher": [[0.0, 0.0]], "objects": objects}}))
+        res = run("diagnose", str(tmp_path), str(TASKS / f"{task}.yaml"))
+        assert res.returncode == 2 and res.stderr.count("\n") == 1, res.stderr
+        assert "not diagnosed yet" in res.stderr and "Traceback" not in res.stderr
