@@ -99,17 +99,11 @@ class ChainPushProgram(PushProgram):
         obj, target, Q1, Q3, P3 = self.obj, self.target, self.Q1, self.Q3, self.P3
         pose = np.array(target.pose, dtype=float)
         prog.AddBoundingBoxConstraint(pose, pose, Q3[0])
-        x0, x1, y0, y1 = self.scene.workspace.bounds
-        for Q in (Q3[:, :2], P3):
-            if Q.size:
-                prog.AddBoundingBoxConstraint(np.tile([x0, y0], (Q.shape[0], 1)).ravel(),
-                                              np.tile([x1, y1], (Q.shape[0], 1)).ravel(),
-                                              Q.ravel())
+        self._bound_to_workspace(Q3[:, :2], P3)
         chained = set(self.chain_steps.tolist())
         for t in range(1, N + 1):  # the target holds still unless obj pushes it
             if t not in chained:
-                prog.AddLinearEqualityConstraint(np.hstack((np.eye(3), -np.eye(3))),
-                                                 np.zeros(3), np.concatenate((Q3[t], Q3[t - 1])))
+                self._hold(Q3, t)
         # the two objects may touch along a face, pressed in by at most coll_depth
         face = min(np.ptp(b.shape.outline(), axis=0).min() for b in (obj, target))
         touch = face * (1.0 / s.a_coll + s.coll_depth)
@@ -144,12 +138,7 @@ class ChainPushProgram(PushProgram):
                     self._add_rows(StickingContact(), [Q[a], P3[pairs - 1], Q[b], P3[pairs]], 2,
                                    100, 0.0, 0.0, "sticking_chain")
             self._add_object_push(turn=True)
-            w = s.object_motion_weight
-            scale = np.array([1.0, 1.0, s.turn_length])
-            D = np.hstack((np.diag(scale), -np.diag(scale)))
-            for t in range(1, N + 1):
-                prog.AddQuadraticCost(2 * w * D.T @ D, np.zeros(6),
-                                      np.concatenate((Q3[t], Q3[t - 1])), is_convex=True)
+            self._add_motion_cost(Q3)
             return
         self.chain_dynamics = self._add_dynamics(model, target, Q3, obj, Q1,
                                                  self.guess["q_chain"], "H_F_chain")

@@ -107,6 +107,11 @@ class ProgramSettings:
     # benchmark (seed 0) it was worse on 7 and better on 3 (L median 0.86 → 0.48) in the
     # same total time: kept at 30
     iterations: int = 30
+    # SNOPT's limit on minor (QP) iterations over a whole solve (None: SNOPT's default,
+    # max(10,000, 20 × rows)); the default ended the kinematic stage of a 60-step chained
+    # push (three objects, pushed north) at violation 0.17 ("info 31"), where 20,000 let it
+    # converge (info 1, 3.8e-5) in 10 s
+    minor_iterations: int | None = 20000
     quad_coarse: float = QUADRATURE_COARSE  # H_F quadrature (see phase_quadrature)
     # warm start: first solve the kinematic program (sticking contact, pushing direction,
     # no H_F: milliseconds per iteration) and start the learned program from its solution
@@ -223,12 +228,7 @@ class PushProgram:
                                       self.Q1[0])
         prog.AddBoundingBoxConstraint(np.array(self.pusher.pose[:2]),
                                       np.array(self.pusher.pose[:2]), self.Q2[0])
-        x0, x1, y0, y1 = scene.workspace.bounds
-        for Q in (self.Q1[:, :2], self.Q2, self.P):
-            if Q.size:
-                prog.AddBoundingBoxConstraint(np.tile([x0, y0], (Q.shape[0], 1)).ravel(),
-                                              np.tile([x1, y1], (Q.shape[0], 1)).ravel(),
-                                              Q.ravel())
+        self._bound_to_workspace(self.Q1[:, :2], self.Q2, self.P)
         if settings.hold_while_reaching:
             self._hold_object_while_reaching()
         self.dynamics = None
@@ -312,9 +312,31 @@ class PushProgram:
             if ph.mode != "reach":
                 continue
             for t in range(k * T + 1, (k + 1) * T + 1):
-                self.prog.AddLinearEqualityConstraint(
-                    np.hstack((np.eye(3), -np.eye(3))), np.zeros(3),
-                    np.concatenate((self.Q1[t], self.Q1[t - 1])))
+                self._hold(self.Q1, t)
+
+    def _hold(self, Q: np.ndarray, t: int) -> None:
+        """Pose row t of ``Q`` equals row t − 1."""
+        d = Q.shape[1]
+        self.prog.AddLinearEqualityConstraint(np.hstack((np.eye(d), -np.eye(d))), np.zeros(d),
+                                              np.concatenate((Q[t], Q[t - 1])))
+
+    def _bound_to_workspace(self, *arrays: np.ndarray) -> None:
+        """Every row ``(x, y)`` of the variable arrays on the table."""
+        x0, x1, y0, y1 = self.scene.workspace.bounds
+        for Q in arrays:
+            if Q.size:
+                self.prog.AddBoundingBoxConstraint(np.tile([x0, y0], (Q.shape[0], 1)).ravel(),
+                                                   np.tile([x1, y1], (Q.shape[0], 1)).ravel(),
+                                                   Q.ravel())
+
+    def _add_motion_cost(self, Q: np.ndarray) -> None:
+        """``object_motion_weight`` · Σ_t |Δq_t|² of poses ``Q`` (yaw in ``turn_length`` m)."""
+        w = self.settings.object_motion_weight
+        scale = np.array([1.0, 1.0, self.settings.turn_length])
+        D = np.hstack((np.diag(scale), -np.diag(scale)))
+        for t in range(1, self.N + 1):
+            self.prog.AddQuadraticCost(2 * w * D.T @ D, np.zeros(6),
+                                       np.concatenate((Q[t], Q[t - 1])), is_convex=True)
 
     def _add_step_limits(self, max_step: float | None, max_turn: float | None) -> None:
         """Pusher travel per push step and axis ≤ ``max_step`` (the speeds of the push data)
@@ -452,13 +474,7 @@ class PushProgram:
                            1, 100, 0.0, np.inf, "pushing")
         if steps and self.settings.push_friction > 0:
             self._add_quasi_static(turn=True)
-        w = self.settings.object_motion_weight
-        scale = np.array([1.0, 1.0, self.settings.turn_length])
-        for t in range(1, self.N + 1):
-            D = np.hstack((np.diag(scale), -np.diag(scale)))
-            self.prog.AddQuadraticCost(2 * w * D.T @ D, np.zeros(6),
-                                       np.concatenate((self.Q1[t], self.Q1[t - 1])),
-                                       is_convex=True)
+        self._add_motion_cost(self.Q1)
 
     def _add_goal(self) -> None:
         if self.scene.goal.type == "touch":
@@ -523,6 +539,8 @@ class PushProgram:
             opts.SetOption(solver.id(), "Major optimality tolerance", s.optimality_tol)
             opts.SetOption(solver.id(), "Major feasibility tolerance", s.feasibility_tol)
             opts.SetOption(solver.id(), "Major iterations limit", iterations)
+            if s.minor_iterations is not None:
+                opts.SetOption(solver.id(), "Iterations limit", s.minor_iterations)
         else:
             solver = IpoptSolver()
             opts.SetOption(solver.id(), "tol", s.optimality_tol)
