@@ -60,6 +60,10 @@ ARM_PROGRAM_SETTINGS = replace(
     # scenarios were tuned and pass that way (the free pushers' default turns too)
     turn_in_learned=False,
     sparse_jacobians=True,  # dense rows over every joint: kinematic stage 30 s, sparse 11 s
+    # SNOPT's default minor iteration limit (their 2,000-4,500 rows, mostly per joint, would
+    # raise it to 27,000-54,000; with 100,000 a failing touch candidate of two_arm_touch took
+    # 38 s instead of 8 s and still failed)
+    minor_iterations_per_row=0,
 )
 """The program settings of scenes with arms (the free pushers' are ``ProgramSettings()``)."""
 # m beyond the goal region's inradius that straight face pushes may end from its centre and

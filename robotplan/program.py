@@ -107,11 +107,14 @@ class ProgramSettings:
     # benchmark (seed 0) it was worse on 7 and better on 3 (L median 0.86 → 0.48) in the
     # same total time: kept at 30
     iterations: int = 30
-    # SNOPT's limit on minor (QP) iterations over a whole solve (None: SNOPT's default,
-    # max(10,000, 20 × rows)); the default ended the kinematic stage of a 60-step chained
-    # push (three objects, pushed north) at violation 0.17 ("info 31"), where 20,000 let it
-    # converge (info 1, 3.8e-5) in 10 s
-    minor_iterations: int | None = 20000
+    # SNOPT's limit on minor (QP) iterations over a whole solve: this many per constraint
+    # row, at least SNOPT's default 10,000 (so programs of up to two free pushes, ≤ 666
+    # rows, keep the default). The default ended the kinematic stage of a 60-step chained
+    # push (1,781 rows; three objects pushed north) at violation 0.17 ("info 31"), 15,000 at
+    # 0.14, 20,000 converged (info 1, 3.8e-5) in 10 s. Raising it for two-push programs
+    # too (20,000) was no better on the first 5 + 5 official benchmark scenes (seed 0):
+    # worse on 2, better on 1, 7 the same, plan time median 77 -> 104 s
+    minor_iterations_per_row: int = 12
     quad_coarse: float = QUADRATURE_COARSE  # H_F quadrature (see phase_quadrature)
     # warm start: first solve the kinematic program (sticking contact, pushing direction,
     # no H_F: milliseconds per iteration) and start the learned program from its solution
@@ -181,6 +184,7 @@ class Solution:
         return float(np.sqrt(self.dynamics_mm2.mean())) if self.dynamics_mm2.size else 0.0
 
 
+SNOPT_MINOR_DEFAULT = 10_000  # SNOPT's own "Iterations limit"
 WARM_USABLE = 0.1  # largest violation of a kinematic solution worth starting from
 FEASIBLE = 1e-2  # largest scaled constraint violation that counts as solved
 
@@ -539,8 +543,9 @@ class PushProgram:
             opts.SetOption(solver.id(), "Major optimality tolerance", s.optimality_tol)
             opts.SetOption(solver.id(), "Major feasibility tolerance", s.feasibility_tol)
             opts.SetOption(solver.id(), "Major iterations limit", iterations)
-            if s.minor_iterations is not None:
-                opts.SetOption(solver.id(), "Iterations limit", s.minor_iterations)
+            rows = sum(b.evaluator().num_constraints() for b in prog.GetAllConstraints())
+            opts.SetOption(solver.id(), "Iterations limit",
+                           max(SNOPT_MINOR_DEFAULT, s.minor_iterations_per_row * rows))
         else:
             solver = IpoptSolver()
             opts.SetOption(solver.id(), "tol", s.optimality_tol)
