@@ -75,9 +75,16 @@ def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
     choice of arm, pruned by reach before any program is solved; init points on the
     object's faces, or around it as seen from the goal when no face push is in reach)."""
     space = space_for(scene)
-    if skeleton:
-        return [parse_skeleton(skeleton, actors[0], obj)], space
     chain = _chain_target(scene)
+    if skeleton:
+        given = parse_skeleton(skeleton, actors[0], obj)
+        if given.chained is not None and (chain is None or given.chained != chain[1]):
+            raise ValueError(f"{skeleton!r}: {obj} may push {given.chained!r} only in a scene "
+                             f"where the pusher touches {obj} and not the goal's object")
+        if chain is not None and given.chained is None:
+            raise ValueError(f"{skeleton!r}: the pusher may not touch {chain[1]}: end with a "
+                             f"push in which {obj} pushes it, e.g. 'push@0,push@0>{chain[1]}'")
+        return [given], space
     if chain is not None:
         # one push more than max_pushes: the first push alone brings obj to the target
         apart = not objects_touch(scene.bodies[chain[0]], scene.bodies[chain[1]])

@@ -105,6 +105,11 @@ def test_solve_refuses_unsupported_scenes_and_used_folders(tmp_path):
     scene.write_text(text)
     res = run("solve", str(scene), "--out", str(tmp_path / "a"))
     assert res.returncode == 2 and "objects" in res.stderr and "Traceback" not in res.stderr
+    for task, skeleton in (("box_push", "push@0>blue"), ("three_objects", "push@0")):
+        res = run("solve", str(TASKS / f"{task}.yaml"), "--out", str(tmp_path / task),
+                  "--skeleton", skeleton)
+        assert res.returncode == 2 and "--skeleton" in res.stderr, res.stderr
+        assert res.stderr.count("\n") == 1 and "Traceback" not in res.stderr
     used = tmp_path / "b"
     used.mkdir()
     (used / "mine.txt").write_text("keep me")
