@@ -35,7 +35,7 @@ from robotplan.functionals.sticking import (
 )
 from robotplan.guess import guess_goal, initial_guess
 from robotplan.learned.dynamics import PushDynamics
-from robotplan.program import ProgramSettings, PushProgram, Solution
+from robotplan.program import DEFAULT_SETTINGS, ProgramSettings, PushProgram, Solution
 from robotplan.scene import Scene
 from robotplan.sim import support_corners
 from robotplan.skeleton import Skeleton, SkeletonSpace
@@ -47,9 +47,9 @@ class ChainPushProgram(PushProgram):
     """A skeleton with chained push phases (``Phase.chain``) as one nonlinear program."""
 
     def __init__(self, scene: Scene, skeleton: Skeleton, model: PushDynamics | None,
-                 space: SkeletonSpace, settings: ProgramSettings | None = None,
+                 space: SkeletonSpace, settings: ProgramSettings = DEFAULT_SETTINGS,
                  guess: dict[str, np.ndarray] | None = None) -> None:
-        super().__init__(scene, skeleton, model, space, settings or ProgramSettings(), guess)
+        super().__init__(scene, skeleton, model, space, settings, guess)
         self._add_chain(model)
 
     # ------------------------------------------------------------------ hooks
@@ -88,10 +88,8 @@ class ChainPushProgram(PushProgram):
         first = super().dynamics_mm2(q_obj, q_pusher)
         if self.chain_dynamics is None or not others:
             return first
-        H, _, _ = self.chain_dynamics.evaluate(torch.from_numpy(others[self.target.name]),
-                                               torch.from_numpy(q_obj), jacobian=False)
-        area = float(self.scene.workspace.size[0] * self.scene.workspace.size[1])
-        return np.concatenate((first, H.double().numpy() * 1e6 / area))
+        return np.concatenate((first, self._residual_mm2(
+            self.chain_dynamics, others[self.target.name], q_obj)))
 
     # ------------------------------------------------------------ constraints
     def _add_chain(self, model) -> None:
@@ -151,19 +149,12 @@ class ChainPushProgram(PushProgram):
         radius = limit_surface_radius(support_corners(target.shape),
                                       centroid(target.shape.outline()))
         H = QuasiStaticObjectPush(target, radius, self.settings.push_friction, turn=turn)
-        m = 3 if turn else 2
-        lb, ub = np.zeros((1, m)), np.full((1, m), np.inf)
-        if turn:
-            ub[0, 0] = 0.0
-        self._add_rows(H, [self.Q3[k - 1], self.Q3[k], self.P3], m, 100, lb, ub,
-                       "quasi_static_chain" if turn else "friction_cone_chain")
+        self._add_quasi_static_rows(H, [self.Q3[k - 1], self.Q3[k], self.P3], "_chain")
 
 
 def _world_outline(body, X: np.ndarray) -> torch.Tensor:
-    """``body``'s outline ``(V, 2)`` at the planar pose ``X (3,)``."""
-    c, s = np.cos(X[2]), np.sin(X[2])
-    return torch.as_tensor(body.shape.outline() @ np.array([[c, s], [-s, c]]) + X[:2],
-                           dtype=torch.float64)
+    """``body``'s outline ``(V, 2)`` at the planar pose ``X (3,)``, as a float64 tensor."""
+    return torch.as_tensor(body.outline_world(X), dtype=torch.float64)
 
 
 def objects_touch(a, b, gap: float = 0.002) -> bool:

@@ -354,12 +354,17 @@ class PushProgram:
         radius = limit_surface_radius(support_corners(self.obj.shape), c_B)
         H = QuasiStaticPush(c_B, radius, self.settings.push_friction, turn=turn)
         k = self.push_steps
-        m = 3 if turn else 2  # [turn (= 0)], cone edge, cone edge (≥ 0)
+        self._add_quasi_static_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P])
+
+    def _add_quasi_static_rows(self, H: QuasiStaticPush, blocks: list[np.ndarray],
+                               suffix: str = "") -> None:
+        """``H``'s rows on ``blocks``: [turn (= 0)], cone edge, cone edge (≥ 0), in cm."""
+        m = 3 if H.turn else 2
         lb, ub = np.zeros((1, m)), np.full((1, m), np.inf)
-        if turn:
+        if H.turn:
             ub[0, 0] = 0.0
-        self._add_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P], m, 100, lb, ub,
-                       "quasi_static" if turn else "friction_cone")
+        self._add_rows(H, blocks, m, 100, lb, ub,
+                       ("quasi_static" if H.turn else "friction_cone") + suffix)
 
     def _add_kinematic_pushing(self) -> None:
         """The kinematic stand-in for H_F: in push steps the contact point sticks to the
@@ -538,8 +543,13 @@ class PushProgram:
         kinematic program; ``others``: other objects' poses, see ChainPushProgram)."""
         if self.dynamics is None:
             return np.zeros(0)
-        H, _, _ = self.dynamics.evaluate(torch.from_numpy(q_obj), torch.from_numpy(q_pusher),
-                                         jacobian=False)
+        return self._residual_mm2(self.dynamics, q_obj, q_pusher)
+
+    def _residual_mm2(self, dynamics: LearnedDynamics, q_obj: np.ndarray, q_actor: np.ndarray
+                      ) -> np.ndarray:
+        """``dynamics``' H_F per step as the mean squared SDF residual over the table (mm²)."""
+        H, _, _ = dynamics.evaluate(torch.from_numpy(q_obj), torch.from_numpy(q_actor),
+                                    jacobian=False)
         area = float(self.scene.workspace.size[0] * self.scene.workspace.size[1])
         return H.double().numpy() * 1e6 / area
 
