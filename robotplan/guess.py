@@ -184,6 +184,9 @@ def initial_guess(prog: PushProgram, ends: np.ndarray | None = None
     T, N = prog.T, prog.N
     start = np.array(prog.obj.pose, dtype=float)
     goal = guess_goal(prog, start[:2])
+    vias = [ph.via for ph in prog.skeleton.phases if ph.mode == "push"]
+    if ends is None and vias and all(v is not None for v in vias):
+        ends = np.array(vias, dtype=float)
     if ends is None and prog.skeleton.pushes:
         ends = push_ends(prog, start[:2], goal)
     q1 = np.tile(start, (N + 1, 1))

@@ -26,13 +26,16 @@ class Phase:
     """One phase of T steps: ``mode`` of ``actor`` (a pusher) on ``object``, initialised
     from the fixed point ``init`` around the object (index into the init directions). In a
     push phase with a ``chain``, ``object`` pushes the object named ``chain`` in turn (the
-    pairs actor–object and object–chain interact, paper Fig. 9)."""
+    pairs actor–object and object–chain interact, paper Fig. 9). ``via``: where the initial
+    guess leaves the object's centre at the end of a push (table frame, m), e.g. a corner of
+    a route around obstacles (robotplan.route)."""
 
     mode: Literal["reach", "push"]
     actor: str
     object: str
     init: int
     chain: str | None = None
+    via: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -50,7 +53,8 @@ class Skeleton:
 
     def describe(self) -> str:
         return " ".join(f"{p.mode}({p.actor}->{p.object}{'->' + p.chain if p.chain else ''}"
-                        f"@{p.init})" for p in self.phases)
+                        f"@{p.init}{' to ({:.2f}, {:.2f})'.format(*p.via) if p.via else ''})"
+                        for p in self.phases)
 
     def as_rows(self) -> list[dict]:
         rows = []
@@ -59,6 +63,8 @@ class Skeleton:
                    "init": p.init}
             if p.chain:
                 row["pushes"] = p.chain
+            if p.via:
+                row["via"] = [round(v, 4) for v in p.via]
             rows.append(row)
         return rows
 

@@ -19,6 +19,7 @@ from robotplan.planner import (
 )
 from robotplan.program import ProgramSettings
 from robotplan.render import write_atomically
+from robotplan.route import route_settings, routed_candidates
 from robotplan.scene import Scene
 from robotplan.sim import PHYSICS
 from robotplan.skeleton import (
@@ -107,6 +108,25 @@ def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
     return kept, space
 
 
+def _search_routes(scene: Scene, obj: str, actor: str, model_dir: Path,
+                   settings: ProgramSettings, space: SkeletonSpace, max_pushes: int,
+                   workers: int, progress: bool, quiet: bool,
+                   time_budget: float | None) -> tuple[SkeletonSpace, SearchResult]:
+    """Around obstacles, when the pushes of the plain search fail: straight face pushes
+    along routes that keep the object clear of every obstacle (robotplan.route)."""
+    region = scene.goal_region
+    routed, skeletons = routed_candidates(scene, actor, obj, space,
+                                          np.array(region.pose[:2], dtype=float),
+                                          settings.guess_speed)
+    if not quiet:
+        print(f"no plan with up to {max_pushes} pushes; trying {len(skeletons)} routes around "
+              f"the obstacles ({routed.steps_per_phase} steps per phase)")
+    if not skeletons:
+        return routed, SearchResult(None)
+    return routed, search_push(scene, model_dir, skeletons, route_settings(settings), workers,
+                               progress, False, time_budget, routed)
+
+
 def candidate_table(result: SearchResult) -> str:
     lines = [f"{'#':>2}  {'skeleton':<40} {'violation':>10} {'cost':>9} {'H_F rms mm':>10} "
              f"{'seconds':>8}  status"]
@@ -131,20 +151,21 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
         settings = replace(ARM_PROGRAM_SETTINGS, solver=solver)
     result = search_push(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
                          time_budget, space)
+    spaces = {sk: space for sk in skeletons}
     if not result.solved and scene.obstacles and skeleton is None and not scene.robots:
-        # around obstacles: three pushes when fewer fail (the object's route is longer)
-        more = [sk for sk in space.candidates(actors[0], obj, 3) if sk.pushes == 3]
-        if not quiet:
-            print(f"no plan with up to {max_pushes} pushes; trying {len(more)} with three")
-        left = None if time_budget is None else max(0.0, time_budget - result.seconds)
-        extra = search_push(scene, model_dir, more, settings, workers, progress, exhaustive,
-                            left)
+        routed, extra = _search_routes(
+            scene, obj, actors[0], model_dir, settings, space, max_pushes, workers, progress,
+            quiet, None if time_budget is None else max(0.0, time_budget - result.seconds))
+        spaces.update({s.skeleton: routed for s in extra.candidates})
         result = merge_results(result, extra)
     if not quiet:
         print(candidate_table(result))
     best = result.best
     doc: dict = {"scene": scene.name, "status": "solved" if result.solved else "no_solution",
                  "skeleton": best.skeleton.as_rows() if best else [],
+                 "skeleton_space": ({"steps_per_phase": spaces[best.skeleton].steps_per_phase,
+                                     "init_frame": spaces[best.skeleton].init_frame}
+                                    if best else None),
                  "plan_seconds": round(result.seconds, 2),
                  "programs_solved": len(result.candidates),
                  "violation": float(best.violation) if best else None,

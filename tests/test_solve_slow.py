@@ -74,3 +74,16 @@ def test_solve_three_objects(tmp_path):
     assert doc["execution"]["forbidden_contacts"] == []
     assert set(doc["trajectory"]["objects"]) == set(doc["executed"]["objects"]) == {"red", "blue"}
     assert (out / "playback.html").stat().st_size > 100_000
+
+
+@pytest.mark.slow
+def test_solve_obstacle_push(tmp_path):
+    """Around the wall (#7): no plan of one or two pushes, then straight face pushes along a
+    route past the wall's end; coverage ≥ 0.95 in pybullet and the box never touches it."""
+    out = tmp_path / "out"
+    doc = solve("obstacle_push", out)
+    assert "routes around the obstacles" in doc["stdout"]
+    assert doc["status"] == "solved" and doc["skeleton_space"]["init_frame"] == "object"
+    assert [row["via"] for row in doc["skeleton"] if row["mode"] == "push"][-1] == [0.38, 0.0]
+    assert doc["execution"]["coverage"] >= 0.95
+    assert doc["execution"]["obstacle_contact"] is False
