@@ -110,21 +110,24 @@ def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
 
 def _search_routes(scene: Scene, obj: str, actor: str, model_dir: Path,
                    settings: ProgramSettings, space: SkeletonSpace, max_pushes: int,
-                   workers: int, progress: bool, quiet: bool,
+                   workers: int, progress: bool, exhaustive: bool, quiet: bool,
                    time_budget: float | None) -> tuple[SkeletonSpace, SearchResult]:
     """Around obstacles, when the pushes of the plain search fail: straight face pushes
-    along routes that keep the object clear of every obstacle (robotplan.route)."""
+    along routes that keep the object clear of every obstacle to the goal region's centre
+    (robotplan.route; none for a touch goal)."""
     region = scene.goal_region
-    routed, skeletons = routed_candidates(scene, actor, obj, space,
-                                          np.array(region.pose[:2], dtype=float),
-                                          settings.guess_speed)
+    routed, skeletons = space, []
+    if region is not None:
+        routed, skeletons = routed_candidates(scene, actor, obj, space,
+                                              np.array(region.pose[:2], dtype=float),
+                                              settings.guess_speed)
     if not quiet:
         print(f"no plan with up to {max_pushes} pushes; trying {len(skeletons)} routes around "
               f"the obstacles ({routed.steps_per_phase} steps per phase)")
     if not skeletons:
         return routed, SearchResult(None)
     return routed, search_push(scene, model_dir, skeletons, route_settings(settings), workers,
-                               progress, False, time_budget, routed)
+                               progress, exhaustive, time_budget, routed)
 
 
 def candidate_table(result: SearchResult) -> str:
@@ -153,9 +156,9 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                          time_budget, space)
     spaces = {sk: space for sk in skeletons}
     if not result.solved and scene.obstacles and skeleton is None and not scene.robots:
-        routed, extra = _search_routes(
-            scene, obj, actors[0], model_dir, settings, space, max_pushes, workers, progress,
-            quiet, None if time_budget is None else max(0.0, time_budget - result.seconds))
+        left = None if time_budget is None else max(0.0, time_budget - result.seconds)
+        routed, extra = _search_routes(scene, obj, actors[0], model_dir, settings, space,
+                                       max_pushes, workers, progress, exhaustive, quiet, left)
         spaces.update({s.skeleton: routed for s in extra.candidates})
         result = merge_results(result, extra)
     if not quiet:
