@@ -44,7 +44,10 @@ __all__ = ["ROUTE_SETTINGS", "Route", "centred_pushes", "face_routes", "route_se
 # lever 100 (final yaw −0.04 rad, no wall contact). Hard limits instead (the object within
 # 1 mm of the segment's line and 0.005 rad of its yaw in every step, the pusher on the
 # centroid's line) made SNOPT stop infeasible on a variant (a 0.14 × 0.10 box) and still
-# turned the box by 0.06 rad in pybullet in the first push of obstacle_push.
+# turned the box by 0.06 rad in pybullet in the first push of obstacle_push. Not the
+# default elsewhere: in the plain search (init points around the object, seed 0 benchmark)
+# the first three scenes went 0.98 / 1.0 / 0.74 -> 1.0 / 0.0 / 0.0, and the arms' failing
+# variants 0.59 / 0.68 / 0.28 -> 0.65 / 0.41 / 0.21.
 ROUTE_SETTINGS = {"push_friction": 0.02, "lever_weight": 100.0}
 ROUTE_CLEARANCE = 0.04  # m between the routed footprint and every obstacle
 MAX_STEPS_PER_PHASE = 30  # longer segments are split into several pushes
