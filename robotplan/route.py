@@ -87,7 +87,7 @@ def _legs(moves: list[tuple[int, float]]) -> list[tuple[int, float]]:
             out[-1] = (axis, out[-1][1] + d)
         else:
             out.append((axis, d))
-    return [(a, d) for a, d in out if abs(d) >= 1e-3]
+    return [(a, d) for a, d in out if abs(d) >= 1e-3]  # merged moves may cancel
 
 
 def _clear(scene: Scene, obj: str, points: np.ndarray, yaw: float, clearance: float,
@@ -171,12 +171,12 @@ def face_routes(scene: Scene, obj: str, goal_xy: np.ndarray,
         legs = _legs(plan)
         if not legs:
             continue
+        dirs = tuple(a + (2 if x < 0 else 0) for a, x in legs)
+        if pushable is not None and not set(dirs) <= pushable:
+            continue
         rel = np.cumsum([np.eye(2)[a] * x for a, x in legs], axis=0)
         waypoints = np.vstack((start, start + rel @ R.T))
         if not _clear(scene, obj, waypoints, yaw, 0.9 * clearance):  # detours at exactly it
-            continue
-        dirs = tuple(a + (2 if x < 0 else 0) for a, x in legs)
-        if pushable is not None and not set(dirs) <= pushable:
             continue
         key = tuple(np.round(waypoints, 4).ravel())
         routes.setdefault(key, Route(waypoints, dirs))
