@@ -30,9 +30,11 @@ through the whole network, autograd) in far less time:
   and 2.5 cm within r + 1 cm of the object's path; ~350–650 points, worst per-step error
   of H_t 3.8 % against the 19,600-point grid over 3 × 24 real pushes), instead of X_h;
 * **no autograd**: the head's reverse mode is written out (through its ReLU outputs, like the
-  encoder's), and its hidden-to-hidden products run in bfloat16 for a float32 model
-  (float32 accumulation; AVX512-BF16 halves their cost): per step 0.5 % on H_t and 2.4 %
-  on its gradient at worst over 24 realistic pushes, well below the quadrature's error;
+  encoder's), and its hidden-to-hidden products run in bfloat16 for a float32 model on CPUs
+  that multiply bfloat16 natively (float32 accumulation; AVX512-BF16 or AMX halve their
+  cost): per step 0.5 % on H_t and 2.4 % on its gradient at worst over 24 realistic
+  pushes, well below the quadrature's error. Elsewhere (AVX2 only) they stay in float32,
+  since emulated bfloat16 is ~8x slower (:func:`~robotplan.learned.dynamics.head_matmul_dtype`);
   a float64 model (the tests) computes in float64 throughout;
 * **separable rendering**: on the grid a body-frame coordinate is a row term plus a
   column term, and the shapes give φ and ∇φ in closed form (:func:`render_on_grid`);
@@ -54,7 +56,7 @@ import torch
 from torch import Tensor
 
 from robotplan.functionals.base import Quadrature, sdf_pose_gradients
-from robotplan.learned.dynamics import PushDynamics
+from robotplan.learned.dynamics import PushDynamics, head_matmul_dtype
 from robotplan.memory import keep_freed_memory
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Circle, Workspace
@@ -213,9 +215,9 @@ class LearnedDynamics:
         self.workspace = Workspace(spec.workspace_center, spec.workspace_size,
                                    spec.workspace_size[0] / spec.grid[1])
         self.dtype = next(model.parameters()).dtype  # float32, or float64 for checks
-        # the head's hidden products: bfloat16 for a float32 model (see the module notes)
-        self.matmul_dtype = matmul_dtype or (
-            torch.bfloat16 if self.dtype == torch.float32 else self.dtype)
+        # the head's hidden products: bfloat16 for a float32 model where the CPU multiplies
+        # bfloat16 natively (see the module notes), else the model's dtype
+        self.matmul_dtype = matmul_dtype or head_matmul_dtype(self.dtype)
         self.grid = self.workspace.points(self.dtype).reshape(-1, 2)
         self.quadrature = Quadrature(quadrature.points.to(self.dtype),
                                      quadrature.weights.to(self.dtype))

@@ -135,3 +135,25 @@ def test_render_on_grid_matches_the_pointwise_rendering(shape):
     values, none = render_on_grid(body, X[:, :2], ws, tangents=False)
     expected = body.sdf(ws.points(F64).reshape(-1, 2), X[:, :2])
     assert none is None and (values - expected).abs().max() < 1e-12
+
+
+def test_bfloat16_head_products_only_where_the_cpu_multiplies_them(monkeypatch):
+    from robotplan.learned import dynamics as learned_dynamics
+
+    avx2 = "processor\t: 0\nflags\t\t: fpu sse2 avx avx2 fma\n"
+    assert not learned_dynamics.cpu_multiplies_bfloat16(avx2)
+    assert learned_dynamics.cpu_multiplies_bfloat16(avx2.replace("fma", "fma avx512_bf16"))
+    assert learned_dynamics.cpu_multiplies_bfloat16(avx2.replace("fma", "amx_bf16 amx_tile"))
+    assert not learned_dynamics.cpu_multiplies_bfloat16("")
+
+    torch.manual_seed(7)
+    model32 = PushDynamics(DynamicsSpec(**SPEC)).float()
+    obj = Body("o", "object", Box((0.2, 0.12)), (0.0, 0.0, 0.0), 0.0, 0.06)
+    pusher = Body("p", "pusher", Circle(0.03), (0.0, 0.0, 0.0), 0.0, 0.06)
+    quad = Quadrature(torch.zeros(4, 2), torch.ones(4))
+    for native, expected in ((False, torch.float32), (True, torch.bfloat16)):
+        monkeypatch.setattr(learned_dynamics, "cpu_multiplies_bfloat16", lambda n=native: n)
+        assert LearnedDynamics(model32, obj, pusher, quad).matmul_dtype == expected
+        assert LearnedDynamics(model32.double(), obj, pusher,
+                               quad).matmul_dtype == torch.float64
+        model32.float()
