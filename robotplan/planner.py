@@ -1,7 +1,8 @@
 """Skeleton search (paper §4, app. I.2): solve one program per candidate skeleton in parallel
 processes, keep the one with the least constraint violation, then the least learned-dynamics
 residual H_F, then the least cost. A plan is *solved* when it meets the constraints and its
-H_F residual stays below the no-motion baseline (``PLAUSIBLE_RMS_MM``).
+H_F residual stays below the no-motion baseline (``PLAUSIBLE_RMS_MM``), and, around
+obstacles, its objects keep ``OBSTACLE_MARGIN`` from them (open-loop pushing drifts).
 
 Candidates are tried most promising first (init points behind the object as seen from the
 goal) and the search stops at the first one that is *good enough*: feasible, with the
@@ -19,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from robotplan.clearance import OBSTACLE_MARGIN, obstacle_clearance
 from robotplan.program import FEASIBLE, ProgramSettings, Solution, solve_skeleton
 from robotplan.scene import Scene
 from robotplan.skeleton import Skeleton, SkeletonSpace, space_for
@@ -42,7 +44,8 @@ class SearchResult:
     @property
     def solved(self) -> bool:
         return (self.best is not None and self.best.violation <= FEASIBLE
-                and self.best.dynamics_rms_mm <= PLAUSIBLE_RMS_MM)
+                and self.best.dynamics_rms_mm <= PLAUSIBLE_RMS_MM
+                and _clearance_short(self.best) == 0.0)
 
 
 def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings,
@@ -56,18 +59,34 @@ def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings,
 
 def _solve(skeleton: Skeleton) -> Solution:
     w = _worker
-    return solve_skeleton(w["scene"], skeleton, w["model"], w["space"], w["settings"])
+    sol = solve_skeleton(w["scene"], skeleton, w["model"], w["space"], w["settings"])
+    sol.clearance = plan_clearance(w["scene"], sol)
+    return sol
 
 
-def _rank(s: Solution) -> tuple[float, float, float]:
-    """The least constraint violation, then the least H_F residual (ties below the noise
-    floor GOOD_RMS_MM), then the least cost."""
+def plan_clearance(scene: Scene, sol: Solution) -> float:
+    """How close the plan's moved objects come to the obstacles (m; inf without any)."""
+    obj = sol.skeleton.phases[0].object
+    moved = {obj: sol.q_obj, **sol.q_others}
+    return min((obstacle_clearance(scene, name, np.asarray(q)) for name, q in moved.items()
+                if len(q)), default=math.inf)
+
+
+def _clearance_short(s: Solution) -> float:
+    """How much the plan misses OBSTACLE_MARGIN by (m; 0 when it keeps it)."""
+    return max(0.0, OBSTACLE_MARGIN - s.clearance)
+
+
+def _rank(s: Solution) -> tuple[float, float, float, float]:
+    """The least constraint violation, then the least shortfall of the obstacle margin, then
+    the least H_F residual (ties below the noise floor GOOD_RMS_MM), then the least cost."""
     rms = s.dynamics_rms_mm if s.dynamics_mm2.size else float("inf")
-    return (max(s.violation, FEASIBLE), max(rms, GOOD_RMS_MM), s.cost)
+    return (max(s.violation, FEASIBLE), _clearance_short(s), max(rms, GOOD_RMS_MM), s.cost)
 
 
 def good_enough(s: Solution) -> bool:
-    return s.violation <= FEASIBLE and s.dynamics_rms_mm <= GOOD_RMS_MM
+    return (s.violation <= FEASIBLE and s.dynamics_rms_mm <= GOOD_RMS_MM
+            and _clearance_short(s) == 0.0)
 
 
 def order_candidates(scene: Scene, skeletons: list[Skeleton],

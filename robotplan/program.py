@@ -25,6 +25,7 @@ few seconds from the circle-and-push guess; the learned program starts from its 
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -77,6 +78,9 @@ class Solution:
     # a chained object's (N+1, 3) poses and its (·, 2) contact points (ChainPushProgram)
     q_others: dict = field(default_factory=dict)
     contact_others: dict = field(default_factory=dict)
+    # least distance (m) of the moved objects from the obstacles along the plan (the search
+    # sets it: robotplan.clearance); inf without obstacles
+    clearance: float = math.inf
 
     @property
     def dynamics_rms_mm(self) -> float:

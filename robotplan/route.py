@@ -20,13 +20,13 @@ directions in which the pusher can meet a face on the centroid's line
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, replace
 
 import numpy as np
 import torch
 
+from robotplan.clearance import densify, obstacle_clearance
 from robotplan.functionals.sticking import centroid
 from robotplan.program_settings import ProgramSettings
 from robotplan.scene import Scene
@@ -94,32 +94,16 @@ def _clear(scene: Scene, obj: str, points: np.ndarray, yaw: float, clearance: fl
            step: float = 0.005) -> bool:
     """Whether the object at yaw ``yaw`` moving along the polyline ``points (W, 2)`` keeps
     ``clearance`` from every obstacle and stays on the workspace."""
-    body = scene.bodies[obj]
     ws = scene.workspace
     lo = np.asarray(ws.center) - np.asarray(ws.size) / 2
     hi = np.asarray(ws.center) + np.asarray(ws.size) / 2
-    outline = body.shape.outline(n_arc=64)
     c, s = math.cos(yaw), math.sin(yaw)
-    local = outline @ np.array([[c, s], [-s, c]])
-    centres = [points[0]]
-    for a, b in itertools.pairwise(points):
-        n = max(1, math.ceil(float(np.linalg.norm(b - a)) / step))
-        centres += [a + (b - a) * k / n for k in range(1, n + 1)]
-    centres = np.array(centres)  # (C, 2)
-    every = centres[:, None, :] + local[None]  # (C, V, 2)
+    local = scene.bodies[obj].shape.outline(n_arc=64) @ np.array([[c, s], [-s, c]])
+    every = densify(points, step)[:, None, :] + local[None]  # (C, V, 2)
     if (every < lo).any() or (every > hi).any():
         return False
-    X = torch.as_tensor(np.column_stack((centres, np.full(len(centres), yaw))))
-    for spec in scene.obstacles:
-        wall = scene.bodies[spec.name]
-        phi = wall.sdf(torch.as_tensor(every.reshape(-1, 2)))
-        if float(phi.min()) < clearance:
-            return False
-        # the obstacle's rim against the moving object (thin walls between samples)
-        rim = torch.as_tensor(wall.outline_world())
-        if float(body.sdf(rim, X).min()) < clearance:
-            return False
-    return True
+    poses = np.column_stack((points, np.full(len(points), yaw)))
+    return obstacle_clearance(scene, obj, poses, step) >= clearance
 
 
 def centred_pushes(shape: Shape2D, radius: float, tilt_deg: float = 5.0) -> set[int]:

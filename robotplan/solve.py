@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from robotplan.chain_program import objects_touch
+from robotplan.clearance import OBSTACLE_MARGIN
 from robotplan.execute import execute_arms, execute_push
 from robotplan.planner import (
     FEASIBLE,
@@ -130,6 +132,17 @@ def _search_routes(scene: Scene, obj: str, actor: str, model_dir: Path,
                                progress, exhaustive, time_budget, routed)
 
 
+def _margin_note(s) -> str:
+    """Why a feasible plan around obstacles was not taken, if that is the reason."""
+    if s.clearance >= OBSTACLE_MARGIN or s.violation > FEASIBLE:
+        return ""
+    return f", {100 * s.clearance:.1f} cm from an obstacle (margin {100 * OBSTACLE_MARGIN:g})"
+
+
+def _metres(value: float) -> float | None:
+    return round(value, 4) if math.isfinite(value) else None
+
+
 def candidate_table(result: SearchResult) -> str:
     lines = [f"{'#':>2}  {'skeleton':<40} {'violation':>10} {'cost':>9} {'H_F rms mm':>10} "
              f"{'seconds':>8}  status"]
@@ -137,7 +150,7 @@ def candidate_table(result: SearchResult) -> str:
         mark = " <- best" if s is result.best else ""
         lines.append(f"{i:>2}  {s.skeleton.describe():<40} {s.violation:>10.3g} "
                      f"{s.cost:>9.3g} {s.dynamics_rms_mm:>10.2f} {s.seconds:>8.1f}  "
-                     f"{s.status}{mark}")
+                     f"{s.status}{_margin_note(s)}{mark}")
     return "\n".join(lines)
 
 
@@ -173,7 +186,8 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                  "programs_solved": len(result.candidates),
                  "violation": float(best.violation) if best else None,
                  "cost": float(best.cost) if best else None,
-                 "dynamics_rms_mm": round(best.dynamics_rms_mm, 3) if best else None}
+                 "dynamics_rms_mm": round(best.dynamics_rms_mm, 3) if best else None,
+                 "obstacle_clearance": _metres(best.clearance) if best else None}
     if best is not None:
         if not quiet and best.q_others:
             print(f"plan: {' and '.join([obj, *best.q_others])} pushed by "
@@ -182,10 +196,12 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
         doc["candidates"] = [{"skeleton": s.skeleton.describe(), "violation": s.violation,
                               "cost": s.cost, "seconds": round(s.seconds, 2),
                               "dynamics_rms_mm": round(s.dynamics_rms_mm, 3),
+                              "obstacle_clearance": _metres(s.clearance),
                               "timings": s.timings,
                               "status": s.status} for s in result.candidates]
     doc["feasibility_threshold"] = FEASIBLE
     doc["plausible_dynamics_rms_mm"] = PLAUSIBLE_RMS_MM
+    doc["obstacle_margin"] = OBSTACLE_MARGIN
     write_atomically(out / "result.json",
                      lambda tmp: tmp.write_text(json.dumps(doc, indent=1, default=_json)))
     return doc

@@ -50,3 +50,33 @@ def test_ranking_prefers_plans_the_learned_dynamics_believe():
     assert _rank(plan(1e-4, 2.0, 5.0)) < _rank(plan(1e-4, 4.0, 6.0))  # both at the floor
     assert SearchResult(doubted).solved
     assert not SearchResult(plan(1e-4, PLAUSIBLE_RMS_MM + 1, 1.0)).solved
+
+
+def test_plans_around_obstacles_must_keep_the_margin():
+    """A feasible plan that skims an obstacle is neither good enough nor solved, and ranks
+    behind one that keeps OBSTACLE_MARGIN, whatever their costs."""
+    from robotplan.planner import OBSTACLE_MARGIN, SearchResult, _rank, good_enough
+    from robotplan.program import Solution
+
+    sk = parse_skeleton("push@0", "pusher", "box")
+
+    def plan(clearance, cost):
+        return Solution(sk, True, "", 1e-4, cost, 1.0, np.zeros((21, 3)), np.zeros((21, 2)),
+                        dynamics_mm2=np.full(20, 9.0), clearance=clearance)
+
+    skims, clear, free = plan(0.01, 1.0), plan(OBSTACLE_MARGIN + 0.01, 5.0), plan(np.inf, 7.0)
+    assert not good_enough(skims) and not SearchResult(skims).solved
+    assert good_enough(clear) and SearchResult(clear).solved and good_enough(free)
+    assert min([skims, clear], key=_rank) is clear
+    assert _rank(plan(0.015, 1.0)) < _rank(plan(0.005, 1.0))  # the shortfall itself ranks
+
+
+def test_search_measures_the_clearance_of_its_plans():
+    from robotplan.planner import plan_clearance
+    from robotplan.program import Solution
+
+    scene = load_scene(ROOT / "tasks" / "obstacle_push.yaml")
+    sk = parse_skeleton("push@0", "pusher", "box")
+    q = np.column_stack((np.linspace(-0.25, 0.35, 21), np.full(21, 0.23), np.zeros(21)))
+    sol = Solution(sk, True, "", 1e-4, 1.0, 1.0, q, np.zeros((21, 2)))
+    assert plan_clearance(scene, sol) == pytest.approx(0.02, abs=1e-9)
