@@ -39,8 +39,8 @@ def densify(poses: np.ndarray, step: float) -> np.ndarray:
 def obstacle_clearance(scene: Scene, obj: str, poses: np.ndarray, step: float = 0.005
                        ) -> float:
     """The least distance (m) between the footprint of ``obj`` at ``poses (N, 3)`` (and
-    between them, every ``step`` m) and every obstacle of ``scene``; negative where they
-    overlap, ``inf`` without obstacles.
+    between them, every ``step`` m; ``inf``: the poses as given) and every obstacle of
+    ``scene``; negative where they overlap, ``inf`` without obstacles.
 
     Both ways, sampled: φ_obstacle at the object's outline points and φ_object at the
     obstacle's outline points (a thin wall can fall between the object's samples).
@@ -49,8 +49,6 @@ def obstacle_clearance(scene: Scene, obj: str, poses: np.ndarray, step: float = 
         return math.inf
     body = scene.bodies[obj]
     X = densify(poses, step)
-    if X.shape[1] == 2:
-        X = np.column_stack((X, np.zeros(len(X))))
     outline = body.shape.outline(n_arc=64)
     c, s = np.cos(X[:, 2:3]), np.sin(X[:, 2:3])
     every = np.stack((c * outline[:, 0] - s * outline[:, 1] + X[:, 0:1],

@@ -99,11 +99,11 @@ def _clear(scene: Scene, obj: str, points: np.ndarray, yaw: float, clearance: fl
     hi = np.asarray(ws.center) + np.asarray(ws.size) / 2
     c, s = math.cos(yaw), math.sin(yaw)
     local = scene.bodies[obj].shape.outline(n_arc=64) @ np.array([[c, s], [-s, c]])
-    every = densify(points, step)[:, None, :] + local[None]  # (C, V, 2)
+    poses = densify(np.column_stack((points, np.full(len(points), yaw))), step)
+    every = poses[:, None, :2] + local[None]  # (C, V, 2)
     if (every < lo).any() or (every > hi).any():
         return False
-    poses = np.column_stack((points, np.full(len(points), yaw)))
-    return obstacle_clearance(scene, obj, poses, step) >= clearance
+    return obstacle_clearance(scene, obj, poses, step=math.inf) >= clearance  # dense already
 
 
 def centred_pushes(shape: Shape2D, radius: float, tilt_deg: float = 5.0) -> set[int]:

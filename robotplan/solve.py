@@ -19,7 +19,7 @@ from robotplan.planner import (
     merge_results,
     search_push,
 )
-from robotplan.program import ProgramSettings
+from robotplan.program import ProgramSettings, Solution
 from robotplan.render import write_atomically
 from robotplan.route import route_settings, routed_candidates
 from robotplan.scene import Scene
@@ -132,7 +132,7 @@ def _search_routes(scene: Scene, obj: str, actor: str, model_dir: Path,
                                progress, exhaustive, time_budget, routed)
 
 
-def _margin_note(s) -> str:
+def _margin_note(s: Solution) -> str:
     """Why a feasible plan around obstacles was not taken, if that is the reason."""
     if s.clearance >= OBSTACLE_MARGIN or s.violation > FEASIBLE:
         return ""
