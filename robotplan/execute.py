@@ -1,6 +1,12 @@
 """Open-loop execution of a push plan in pybullet (paper §7.2.3): the pusher follows the
 planned positions with ``keep_every`` (20) linear interpolation steps between consecutive
-ones, in the same world as the push data; the result comes from the simulator alone."""
+ones, in the same world as the push data; the result comes from the simulator alone.
+
+Free moves (reach steps, where the plan holds the object still) are not bound to the
+data's speeds in the program and can be long (up to 60 cm a step); squeezed into 20
+simulation steps the pusher then moves at ~5 m/s, lags its target by up to 12 cm and clips
+the object it was meant to pass. They run at most ``REACH_SPEED`` per kept step instead
+(:func:`reach_substeps`); push steps keep the 20 steps of the data."""
 
 from __future__ import annotations
 
@@ -13,9 +19,10 @@ from robotplan.coverage import coverage
 from robotplan.scene import Scene
 from robotplan.sim import PHYSICS, Physics, PushWorld
 
-__all__ = ["Execution", "execute_arms", "execute_push"]
+__all__ = ["REACH_SPEED", "Execution", "execute_arms", "execute_push", "reach_substeps"]
 
 OBSTACLE_GAP = 0.001  # m: closer than this counts as the object touching an obstacle
+REACH_SPEED = 0.03  # m per kept step (20 × 1/240 s) in free moves: the data's top push speed
 
 
 @dataclass
@@ -37,10 +44,23 @@ def _obstacles(scene: Scene) -> list:
     return [(o.shape, o.height, o.pose) for o in scene.obstacles]
 
 
+def reach_substeps(q_pusher: np.ndarray, push_step: np.ndarray, physics: Physics = PHYSICS
+                   ) -> list[int]:
+    """Simulation steps for each planned step t = 1…N of ``q_pusher (N+1, 2)``:
+    ``keep_every`` in push steps (``push_step (N,)`` True), and in free moves enough
+    multiples of it that the pusher moves at most ``REACH_SPEED`` per ``keep_every``."""
+    moves = np.linalg.norm(np.diff(np.asarray(q_pusher)[:, :2], axis=0), axis=1)
+    slow = np.maximum(1, np.ceil(moves / REACH_SPEED - 1e-9)).astype(int)
+    return [physics.keep_every * (1 if push else int(k))
+            for push, k in zip(push_step, slow, strict=True)]
+
+
 def execute_push(scene: Scene, obj: str, pusher: str, q_pusher: np.ndarray,
-                 physics: Physics = PHYSICS) -> Execution:
+                 physics: Physics = PHYSICS, substeps: list[int] | None = None) -> Execution:
     """Run the planned pusher positions ``q_pusher (N+1, 2)`` open loop, with every object
-    of the scene in the world (``obj`` first); coverage is the goal object's."""
+    of the scene in the world (``obj`` first); coverage is the goal object's. Step t
+    interpolates linearly over ``substeps[t−1]`` simulation steps (default ``keep_every``
+    each; see :func:`reach_substeps`)."""
     body, tool = scene.bodies[obj], scene.bodies[pusher]
     spec = next(o for o in scene.objects if o.name == obj)
     others = [o for o in scene.objects if o.name != obj]
@@ -54,9 +74,11 @@ def execute_push(scene: Scene, obj: str, pusher: str, q_pusher: np.ndarray,
         other_poses = [world.other_poses()]
         pushers = [world.pusher_position()]
         hit, forbidden = False, set()
-        for a, b in itertools.pairwise(q_pusher):
-            for s in range(1, physics.keep_every + 1):
-                world.step(tuple(a + (b - a) * s / physics.keep_every))
+        if substeps is None:
+            substeps = [physics.keep_every] * (len(q_pusher) - 1)
+        for (a, b), n in zip(itertools.pairwise(q_pusher), substeps, strict=True):
+            for s in range(1, n + 1):
+                world.step(tuple(a + (b - a) * s / n))
                 hit = hit or world.touches_obstacle(OBSTACLE_GAP)
                 forbidden.update(others[i].name for i in watch if world.pusher_touches_other(i))
             poses.append(world.object_pose()[0])

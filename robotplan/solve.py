@@ -11,7 +11,7 @@ import numpy as np
 
 from robotplan.chain_program import objects_touch
 from robotplan.clearance import OBSTACLE_MARGIN
-from robotplan.execute import execute_arms, execute_push
+from robotplan.execute import execute_arms, execute_push, reach_substeps
 from robotplan.planner import (
     FEASIBLE,
     PLAUSIBLE_RMS_MM,
@@ -222,8 +222,11 @@ def _execute_and_show(scene: Scene, obj: str, best, out: Path) -> dict:
         ex = execute_arms(scene, obj, best.q_joints, [PHYSICS.keep_every * k for k in slow])
         t = np.concatenate(([0.0], np.cumsum(slow) * dt))
     else:
-        ex = execute_push(scene, obj, scene.pushers[0].name, best.q_pusher)
-        t = np.arange(steps + 1) * dt
+        T = steps // len(best.skeleton.phases)
+        push = np.array([best.skeleton.phases[t // T].mode == "push" for t in range(steps)])
+        substeps = reach_substeps(best.q_pusher, push)
+        ex = execute_push(scene, obj, scene.pushers[0].name, best.q_pusher, substeps=substeps)
+        t = np.concatenate(([0.0], np.cumsum(substeps) / PHYSICS.keep_every * dt))
     planned = {obj: best.q_obj, **best.q_others}
     simulated = {obj: ex.object_poses, **{k: v for k, v in ex.others.items() if k in planned}}
     final = {obj: ex.final_pose, **{k: v[-1] for k, v in ex.others.items()}}

@@ -1,14 +1,17 @@
 """Open-loop execution in real pybullet physics, and the MeshCat playback page."""
 
+import json
+
 import numpy as np
 import pytest
 
 from robotplan import load_scene
-from robotplan.execute import execute_push
+from robotplan.execute import REACH_SPEED, execute_push, reach_substeps
+from robotplan.scene import parse_scene
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape, Polygon
 from robotplan.viewer import write_playback
-from tests.conftest import TASKS
+from tests.conftest import DATA, TASKS
 
 
 def hand_made_push() -> np.ndarray:
@@ -154,3 +157,30 @@ def test_footprints_are_simulated_as_their_outlines(shape, rng):
             gap = min(f[8] for f in found) + 0.005
             assert abs(gap - d) < 2e-3, (p, gap, d)
             pb.removeBody(ball, physicsClientId=c)
+
+
+def test_reach_substeps_slow_free_moves_to_the_data_speed():
+    q = np.array([[0.0, 0.0], [0.30, 0.40], [0.31, 0.40], [0.32, 0.40]])  # 50, 1, 1 cm
+    steps = reach_substeps(q, np.array([False, False, True]))
+    assert steps == [20 * int(np.ceil(0.5 / REACH_SPEED)), 20, 20]
+    assert reach_substeps(q, np.array([True, True, True])) == [20, 20, 20]
+
+
+def test_fast_reach_no_longer_clips_the_object():
+    """A real plan's reach phase (tests/data/lshape_fast_reach.json) jumps up to 60 cm a
+    step: in 20 simulation steps a step the pusher lags, clips the L and flings it; at the
+    data's speed the L stays within 1 cm of where the plan holds it until the push."""
+    case = json.loads((DATA / "lshape_fast_reach.json").read_text())
+    scene = parse_scene(case["scene"], DATA / "lshape_fast_reach.json")
+    q = np.array(case["pusher"])
+    T = (len(q) - 1) // len(case["phases"])
+    push = np.array([case["phases"][t // T] == "push" for t in range(len(q) - 1)])
+    start = np.array(scene.bodies["object"].pose)
+    fast = execute_push(scene, "object", "pusher", q)
+    slow = execute_push(scene, "object", "pusher", q, substeps=reach_substeps(q, push))
+    reach_end = int(np.argmax(push))  # the last state of the reach phase
+    assert np.abs(fast.object_poses[reach_end, :2] - start[:2]).max() > 0.05
+    assert np.abs(slow.object_poses[reach_end, :2] - start[:2]).max() < 0.01
+    lag = lambda ex: np.abs(ex.pusher_positions - q)[:reach_end + 1].max()  # noqa: E731
+    assert lag(fast) > 0.05 and lag(slow) < 0.01  # the slow pusher tracks its reach
+    assert slow.coverage > 0.5 > fast.coverage
