@@ -13,7 +13,7 @@ from robotplan import SceneError, load_scene
 from robotplan.scene import RegionGoal, TouchGoal
 from tests.conftest import TASKS
 
-GOOD = sorted(TASKS.glob("*.yaml"))
+GOOD = sorted(TASKS.rglob("*.yaml"))  # the task scenes and their variants
 BASE = yaml.safe_load((TASKS / "box_push.yaml").read_text())
 ARMS = yaml.safe_load((TASKS / "two_arm_touch.yaml").read_text())
 
