@@ -213,20 +213,19 @@ def _execute_and_show(scene: Scene, obj: str, best, out: Path) -> dict:
 
     dt = 1.0 / 12.0  # a kept step of the push data: 20 × 1/240 s
     steps = len(best.q_pusher) - 1
+    T = steps // len(best.skeleton.phases)
+    push = np.array([best.skeleton.phases[t // T].mode == "push" for t in range(steps)])
+    # simulation steps per planned step: reaches run slower than the data's pushes
     if scene.robots:
         from robotplan.arm_program import ARM_SETTINGS
 
-        T = steps // len(best.skeleton.phases)
-        slow = [1 if best.skeleton.phases[t // T].mode == "push"
-                else round(ARM_SETTINGS.reach_slowdown) for t in range(steps)]
-        ex = execute_arms(scene, obj, best.q_joints, [PHYSICS.keep_every * k for k in slow])
-        t = np.concatenate(([0.0], np.cumsum(slow) * dt))
+        slow = round(ARM_SETTINGS.reach_slowdown)
+        substeps = [PHYSICS.keep_every * (1 if p else slow) for p in push]
+        ex = execute_arms(scene, obj, best.q_joints, substeps)
     else:
-        T = steps // len(best.skeleton.phases)
-        push = np.array([best.skeleton.phases[t // T].mode == "push" for t in range(steps)])
         substeps = reach_substeps(best.q_pusher, push)
         ex = execute_push(scene, obj, scene.pushers[0].name, best.q_pusher, substeps=substeps)
-        t = np.concatenate(([0.0], np.cumsum(substeps) / PHYSICS.keep_every * dt))
+    t = np.concatenate(([0.0], np.cumsum(substeps) / PHYSICS.keep_every * dt))
     planned = {obj: best.q_obj, **best.q_others}
     simulated = {obj: ex.object_poses, **{k: v for k, v in ex.others.items() if k in planned}}
     final = {obj: ex.final_pose, **{k: v[-1] for k, v in ex.others.items()}}
