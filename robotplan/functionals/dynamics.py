@@ -57,6 +57,7 @@ from torch import Tensor
 
 from robotplan.functionals.base import Quadrature, sdf_pose_gradients
 from robotplan.learned.dynamics import PushDynamics, head_matmul_dtype
+from robotplan.learned.tiled_head import TiledHead, tile_points
 from robotplan.memory import keep_freed_memory
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Circle, Workspace
@@ -219,8 +220,13 @@ class LearnedDynamics:
         # bfloat16 natively (see the module notes), else the model's dtype
         self.matmul_dtype = matmul_dtype or head_matmul_dtype(self.dtype)
         self.grid = self.workspace.points(self.dtype).reshape(-1, 2)
-        self.quadrature = Quadrature(quadrature.points.to(self.dtype),
-                                     quadrature.weights.to(self.dtype))
+        points, weights = quadrature.points.to(self.dtype), quadrature.weights.to(self.dtype)
+        self.tiled_head: TiledHead | None = None
+        if len(model.spec.hidden) == 2:  # the paper's head: evaluated tile by tile
+            index, real = tile_points(points)
+            points, weights = points[index.flatten()], (weights[index] * real).flatten()
+            self.tiled_head = TiledHead(model, points, len(index), self.matmul_dtype)
+        self.quadrature = Quadrature(points, weights)  # in tile order, padding weighs 0
         with torch.no_grad():
             self.point_term = model.point_term(self.quadrature.points[None])  # (1, N, H1)
             # joint encoder: its linear layer and the head's SDF part folded into one map,
@@ -242,7 +248,9 @@ class LearnedDynamics:
         phi1, dphi1 = render_on_grid(self.obj, X1[:-1], self.workspace, jacobian)
         phi2, dphi2 = render_on_grid(self.pusher, X2, self.workspace, jacobian)
         if joint:  # one encoding per step of the stacked φ1_{t−1}, φ2_{t−1}, φ2_t
-            images = torch.stack((phi1, phi2[:-1], phi2[1:]), dim=1).reshape(T, 3, *shape)
+            # stacked channels-last, the layout the encoder's oneDNN convolutions take
+            images = torch.stack((phi1, phi2[:-1], phi2[1:]), dim=-1)
+            images = images.reshape(T, *shape, 3).permute(0, 3, 1, 2)
         else:  # one encoding per grid; each pusher grid feeds two steps
             images = torch.cat((phi1, phi2)).reshape(2 * T + 1, 1, *shape)
         f, acts = m.encode_with_activations(images, linear=not joint)
@@ -251,7 +259,10 @@ class LearnedDynamics:
         else:
             f = torch.cat((f[:T], f[T:2 * T], f[T + 1:]), dim=1)  # (T, 3F) per step
             S = m.sdf_term(f)
-        out, head_acts = m.head_with_activations(S, self.point_term, self.matmul_dtype)  # (T, N)
+        if self.tiled_head is not None:
+            out, head_acts = self.tiled_head.forward(S)  # (T, N)
+        else:
+            out, head_acts = m.head_with_activations(S, self.point_term, self.matmul_dtype)
         # φ1 at the quadrature points for states 0…T: state t is "now" of step t and
         # "prev" of step t + 1
         x, w = self.quadrature.points, self.quadrature.weights
@@ -265,7 +276,10 @@ class LearnedDynamics:
         if not jacobian:
             return H, None, None
         c = 2.0 * residual * w  # ∂H_t/∂φ1_t(x_n); −c is ∂H_t/∂output(x_n)
-        g_hidden = m.head_input_grad(head_acts, -c, self.matmul_dtype)  # ∂H_t/∂S_t (T, H1)
+        if self.tiled_head is not None:  # ∂H_t/∂S_t (T, H1)
+            g_hidden = self.tiled_head.input_grad(head_acts, -c)
+        else:
+            g_hidden = m.head_input_grad(head_acts, -c, self.matmul_dtype)
         g_now = torch.einsum("tn,tkn->tk", c, dphi_q[1:])
         g_prev = -torch.einsum("tn,tkn->tk", c, dphi_q[:-1]) if flow else torch.zeros_like(g_now)
         # reverse mode through the encoder to the input grids, then along the tangent grids
