@@ -95,19 +95,26 @@ def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
                                 min_alone=int(apart)), space
     if not scene.robots:
         return space.candidates(actors[0], obj, max_pushes), space
-    from robotplan.arm_program import reach_check
-
-    touch = scene.goal.actor if scene.goal.type == "touch" else None
     for frame in dict.fromkeys((space.init_frame, "goal")):
         space = replace(space, init_frame=frame)
-        every = actor_candidates(space, actors, obj, max_pushes, touch)
-        kept = [sk for sk in every if reach_check(scene, sk, space) is None]
-        if not quiet:
-            print(f"skeletons: {len(kept)} of {len(every)} within the arms' reach "
-                  f"(init points in the {frame} frame)")
+        kept = _arm_candidates(scene, space, obj, actors, max_pushes, quiet)
         if kept:
             break
     return kept, space
+
+
+def _arm_candidates(scene: Scene, space: SkeletonSpace, obj: str, actors: list[str],
+                    max_pushes: int, quiet: bool) -> list:
+    """Every choice of arm per phase and init point in ``space``, pruned by reach."""
+    from robotplan.arm_program import reach_check
+
+    touch = scene.goal.actor if scene.goal.type == "touch" else None
+    every = actor_candidates(space, actors, obj, max_pushes, touch)
+    kept = [sk for sk in every if reach_check(scene, sk, space) is None]
+    if not quiet:
+        print(f"skeletons: {len(kept)} of {len(every)} within the arms' reach "
+              f"(init points in the {space.init_frame} frame)")
+    return kept
 
 
 def _search_routes(scene: Scene, obj: str, actor: str, model_dir: Path,
@@ -167,20 +174,30 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
         settings = replace(ARM_PROGRAM_SETTINGS, solver=solver)
     result = search_push(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
                          time_budget, space)
-    spaces = {sk: space for sk in skeletons}
+    spaces = {id(s): space for s in result.candidates}  # a skeleton may recur in two spaces
+    if not result.solved and scene.robots and skeleton is None and space.init_frame != "goal":
+        # the arms' face pushes all failed: init points around the object as seen from the goal
+        around = replace(space, init_frame="goal")
+        extra = _arm_candidates(scene, around, obj, actors, max_pushes, quiet)
+        if extra:
+            left = None if time_budget is None else max(0.0, time_budget - result.seconds)
+            more = search_push(scene, model_dir, extra, settings, workers, progress,
+                               exhaustive, left, around)
+            spaces.update({id(s): around for s in more.candidates})
+            result = merge_results(result, more)
     if not result.solved and scene.obstacles and skeleton is None and not scene.robots:
         left = None if time_budget is None else max(0.0, time_budget - result.seconds)
         routed, extra = _search_routes(scene, obj, actors[0], model_dir, settings, space,
                                        max_pushes, workers, progress, exhaustive, quiet, left)
-        spaces.update({s.skeleton: routed for s in extra.candidates})
+        spaces.update({id(s): routed for s in extra.candidates})
         result = merge_results(result, extra)
     if not quiet:
         print(candidate_table(result))
     best = result.best
     doc: dict = {"scene": scene.name, "status": "solved" if result.solved else "no_solution",
                  "skeleton": best.skeleton.as_rows() if best else [],
-                 "skeleton_space": ({"steps_per_phase": spaces[best.skeleton].steps_per_phase,
-                                     "init_frame": spaces[best.skeleton].init_frame}
+                 "skeleton_space": ({"steps_per_phase": spaces[id(best)].steps_per_phase,
+                                     "init_frame": spaces[id(best)].init_frame}
                                     if best else None),
                  "plan_seconds": round(result.seconds, 2),
                  "programs_solved": len(result.candidates),
