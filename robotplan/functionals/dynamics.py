@@ -208,6 +208,13 @@ class LearnedDynamics:
     ``evaluate(X1 (T+1, 3), X2 (T+1, 2))`` → ``H (T,)`` (m²), ``J1 (T, 2, 3)`` and
     ``J2 (T, 2, 2)``: row t holds ∂H_t/∂(state t−1) in ``[:, 0]`` and ∂H_t/∂(state t) in
     ``[:, 1]``, where H_t couples states t−1 and t (t = 1…T).
+
+    Quadrature: the caller's, by default :func:`phase_quadrature` (multi-level midpoint,
+    10 cm cells, 5 cm within r + 5 cm and 2.5 cm within r + 1 cm of the object's path;
+    ~350–650 points). ``robotplan bench functional`` on an AVX2-only AMD EPYC, one thread,
+    shipped F_flow, a real 10-step push with 532 points: value + Jacobian 31–33 ms (value
+    only 17 ms) against 4.0 s for :meth:`evaluate_naive` (124–130x); worst per-step error
+    of H_t against the 19,600-point grid over 24 real pushes 3.75 % (median 0.44 %).
     """
 
     def __init__(self, model: PushDynamics, obj: Body, pusher: Body,
