@@ -239,7 +239,9 @@ class LearnedDynamics:
             self.tiled_head = TiledHead(model, points, len(index), self.matmul_dtype)
         self.quadrature = Quadrature(points, weights)  # in tile order, padding weighs 0
         with torch.no_grad():
-            self.point_term = model.point_term(self.quadrature.points[None])  # (1, N, H1)
+            # the dense head's point part (the tiled head keeps its own, tile by tile)
+            self.point_term = (None if self.tiled_head is not None
+                               else model.point_term(self.quadrature.points[None]))  # (1, N, H1)
             # joint encoder: its linear layer and the head's SDF part folded into one map,
             # stored as (C'·h·w, H1) (both products read it row by row); half the products
             # and half the weights to read per call

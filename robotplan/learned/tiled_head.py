@@ -87,7 +87,7 @@ class TiledHead:
         H2, H1 = second.weight.shape
         self.H1, self.tiles = H1, tiles
         self.size = len(points) // tiles
-        one, zero = H1, H1 + 1  # two extra units: always 1 (carries the bias), always 0
+        # two extra units after the H1 real ones: always 1 (carries the bias), always 0
         with torch.no_grad():
             P = model.point_term(points).reshape(tiles, self.size, H1)
             extra = torch.tensor([1.0, -1.0], dtype=dtype).expand(tiles, self.size, 2)
@@ -98,7 +98,7 @@ class TiledHead:
                                         torch.zeros(1, H2, dtype=dtype))).contiguous()
             self.last = torch.cat((last.weight[0], torch.zeros(1, dtype=dtype)))  # (H2 + 1,)
             self.last_bias = last.bias[0]
-        self.one, self.zero = one, zero
+        self.zero = H1 + 1  # the padding unit
 
     @staticmethod
     def _columns(live: Tensor, pad: int) -> Tensor:
