@@ -95,13 +95,12 @@ def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
                                 min_alone=int(apart)), space
     if not scene.robots:
         return space.candidates(actors[0], obj, max_pushes), space
-    return [], space  # arms: solve_scene prunes each frame's candidates in turn
-
-
-def _arm_frames(space: SkeletonSpace) -> list[SkeletonSpace]:
-    """The arms' init frames in the order tried: the space's own (face pushes), then around
-    the object as seen from the goal when no face push in reach plans."""
-    return [replace(space, init_frame=f) for f in dict.fromkeys((space.init_frame, "goal"))]
+    for frame in dict.fromkeys((space.init_frame, "goal")):
+        space = replace(space, init_frame=frame)
+        kept = _arm_candidates(scene, space, obj, actors, max_pushes, quiet)
+        if kept:
+            break
+    return kept, space
 
 
 def _arm_candidates(scene: Scene, space: SkeletonSpace, obj: str, actors: list[str],
@@ -173,22 +172,19 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
         from robotplan.arm_program import ARM_PROGRAM_SETTINGS
 
         settings = replace(ARM_PROGRAM_SETTINGS, solver=solver)
-    # one search per tier of candidates until one plans: the given or free-pusher skeletons,
-    # or each arm frame's reach-pruned ones (a skeleton may recur in two frames)
-    tiers = [space] if skeletons or not scene.robots else _arm_frames(space)
-    result, spaces = SearchResult(None), {}
-    for tier_space in tiers:
-        candidates = skeletons or _arm_candidates(scene, tier_space, obj, actors, max_pushes,
-                                                  quiet)
-        if not candidates:
-            continue
-        left = None if time_budget is None else max(0.0, time_budget - result.seconds)
-        more = search_push(scene, model_dir, candidates, settings, workers, progress,
-                           exhaustive, left, tier_space)
-        spaces.update({id(s): tier_space for s in more.candidates})
-        result = merge_results(result, more) if result.seconds else more  # 0: first search
-        if result.solved:
-            break
+    result = search_push(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
+                         time_budget, space)
+    spaces = {id(s): space for s in result.candidates}  # a skeleton may recur in two spaces
+    if not result.solved and scene.robots and skeleton is None and space.init_frame != "goal":
+        # the arms' face pushes all failed: init points around the object as seen from the goal
+        around = replace(space, init_frame="goal")
+        extra = _arm_candidates(scene, around, obj, actors, max_pushes, quiet)
+        if extra:
+            left = None if time_budget is None else max(0.0, time_budget - result.seconds)
+            more = search_push(scene, model_dir, extra, settings, workers, progress,
+                               exhaustive, left, around)
+            spaces.update({id(s): around for s in more.candidates})
+            result = merge_results(result, more)
     if not result.solved and scene.obstacles and skeleton is None and not scene.robots:
         left = None if time_budget is None else max(0.0, time_budget - result.seconds)
         routed, extra = _search_routes(scene, obj, actors[0], model_dir, settings, space,
