@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
 
@@ -72,11 +73,13 @@ def _check_supported(scene: Scene) -> tuple[str, list[str]]:
     return scene.objects[0].name, actors
 
 
-def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
-               max_pushes: int, quiet: bool) -> tuple[list, SkeletonSpace]:
-    """The candidates and their space: one given skeleton, or the search space (arms: every
-    choice of arm, pruned by reach before any program is solved; init points on the
-    object's faces, or around it as seen from the goal when no face push is in reach)."""
+def _candidate_tiers(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
+                     max_pushes: int, quiet: bool) -> Iterator[tuple[list, SkeletonSpace]]:
+    """The candidates tier by tier, each with its space; the search moves on to the next tier
+    only when no candidate of a tier plans. One tier for a given skeleton, a chain or the
+    free pusher; for arms one per init frame (the object's faces, then around the object as
+    seen from the goal), every choice of arm pruned by reach before any program is solved,
+    and a frame with nothing in reach skipped. Lazy: a frame is pruned when it is reached."""
     space = space_for(scene)
     chain = _chain_target(scene)
     if skeleton:
@@ -87,20 +90,27 @@ def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
         if chain is not None and given.chained is None:
             raise ValueError(f"{skeleton!r}: the pusher may not touch {chain[1]}: end with a "
                              f"push in which {obj} pushes it, e.g. 'push@0,push@0>{chain[1]}'")
-        return [given], space
-    if chain is not None:
+        yield [given], space
+    elif chain is not None:
         # one push more than max_pushes: the first push alone brings obj to the target
         apart = not objects_touch(scene.bodies[chain[0]], scene.bodies[chain[1]])
-        return chain_candidates(space, actors[0], *chain, max_pushes + apart,
-                                min_alone=int(apart)), space
-    if not scene.robots:
-        return space.candidates(actors[0], obj, max_pushes), space
-    for frame in dict.fromkeys((space.init_frame, "goal")):
-        space = replace(space, init_frame=frame)
-        kept = _arm_candidates(scene, space, obj, actors, max_pushes, quiet)
-        if kept:
-            break
-    return kept, space
+        yield chain_candidates(space, actors[0], *chain, max_pushes + apart,
+                               min_alone=int(apart)), space
+    elif not scene.robots:
+        yield space.candidates(actors[0], obj, max_pushes), space
+    else:
+        for frame in dict.fromkeys((space.init_frame, "goal")):
+            framed = replace(space, init_frame=frame)
+            kept = _arm_candidates(scene, framed, obj, actors, max_pushes, quiet)
+            if kept:
+                yield kept, framed
+
+
+def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
+               max_pushes: int, quiet: bool) -> tuple[list, SkeletonSpace]:
+    """The first tier of :func:`_candidate_tiers` (none: no candidate, the scene's space)."""
+    tiers = _candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet)
+    return next(tiers, ([], space_for(scene)))
 
 
 def _arm_candidates(scene: Scene, space: SkeletonSpace, obj: str, actors: list[str],
@@ -166,25 +176,21 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                 progress: bool = True, exhaustive: bool = False, quiet: bool = False,
                 time_budget: float | None = None) -> dict:
     obj, actors = _check_supported(scene)
-    skeletons, space = _skeletons(scene, obj, actors, skeleton, max_pushes, quiet)
     settings = ProgramSettings(solver=solver)
     if scene.robots:
         from robotplan.arm_program import ARM_PROGRAM_SETTINGS
 
         settings = replace(ARM_PROGRAM_SETTINGS, solver=solver)
-    result = search_push(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-                         time_budget, space)
-    spaces = {id(s): space for s in result.candidates}  # a skeleton may recur in two spaces
-    if not result.solved and scene.robots and skeleton is None and space.init_frame != "goal":
-        # the arms' face pushes all failed: init points around the object as seen from the goal
-        around = replace(space, init_frame="goal")
-        extra = _arm_candidates(scene, around, obj, actors, max_pushes, quiet)
-        if extra:
-            left = None if time_budget is None else max(0.0, time_budget - result.seconds)
-            more = search_push(scene, model_dir, extra, settings, workers, progress,
-                               exhaustive, left, around)
-            spaces.update({id(s): around for s in more.candidates})
-            result = merge_results(result, more)
+    result, spaces = SearchResult(None), {}  # spaces: a skeleton may recur in two tiers
+    space = space_for(scene)
+    for candidates, space in _candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet):
+        left = None if time_budget is None else max(0.0, time_budget - result.seconds)
+        more = search_push(scene, model_dir, candidates, settings, workers, progress,
+                           exhaustive, left, space)
+        spaces.update({id(s): space for s in more.candidates})
+        result = merge_results(result, more)
+        if result.solved:
+            break
     if not result.solved and scene.obstacles and skeleton is None and not scene.robots:
         left = None if time_budget is None else max(0.0, time_budget - result.seconds)
         routed, extra = _search_routes(scene, obj, actors[0], model_dir, settings, space,
