@@ -249,6 +249,18 @@ class LearnedDynamics:
             self.conv_to_hidden = (((first.weight @ linear.weight).T.contiguous(),
                                     first(linear.bias))
                                    if model.spec.encoder == "joint" else None)
+        self.last_channels = model.spec.channels[-1]
+        self._rows: dict[tuple[int, ...], Tensor] = {}
+
+    def _live_rows(self, live: Tensor) -> Tensor:
+        """The rows of the folded (C'·h·w, H1) map that read the last convolution's ``live``
+        channels, kept per set of live channels (it rarely changes between calls)."""
+        key = tuple(live.tolist())
+        if key not in self._rows:
+            full = self.conv_to_hidden[0]
+            by_channel = full.view(self.last_channels, -1, full.shape[1])
+            self._rows[key] = by_channel[live].reshape(-1, full.shape[1]).contiguous()
+        return self._rows[key]
 
     # ---------------------------------------------------------------- fast path
     def evaluate(self, X1: Tensor, X2: Tensor, jacobian: bool = True
@@ -268,7 +280,8 @@ class LearnedDynamics:
             images = torch.cat((phi1, phi2)).reshape(2 * T + 1, 1, *shape)
         f, acts = m.encode_with_activations(images, linear=not joint)
         if joint:
-            S = torch.addmm(self.conv_to_hidden[1], f, self.conv_to_hidden[0])  # (T, H1)
+            rows = self._live_rows(acts.live[-1])  # only the live channels' rows
+            S = torch.addmm(self.conv_to_hidden[1], f, rows)  # (T, H1)
         else:
             f = torch.cat((f[:T], f[T:2 * T], f[T + 1:]), dim=1)  # (T, 3F) per step
             S = m.sdf_term(f)
@@ -297,8 +310,7 @@ class LearnedDynamics:
         g_prev = -torch.einsum("tn,tkn->tk", c, dphi_q[:-1]) if flow else torch.zeros_like(g_now)
         # reverse mode through the encoder to the input grids, then along the tangent grids
         if joint:
-            G = m.encoder_input_grad(acts, g_hidden @ self.conv_to_hidden[0].T,
-                                     linear=False).flatten(2)
+            G = m.encoder_input_grad(acts, g_hidden @ rows.T, linear=False).flatten(2)
             G1, G2p, G2n = G[:, 0], G[:, 1], G[:, 2]  # each (T, N)
         else:
             steps = torch.arange(T)

@@ -72,6 +72,31 @@ def test_joint_encoder_variant():
     assert grad.abs().sum() > 0
 
 
+@pytest.mark.parametrize("linear", [True, False], ids=["features", "last-convolution"])
+def test_encoder_skips_dead_channels_exactly(linear):
+    """Channels that are zero on the whole batch drop out of the later layers and of reverse
+    mode; features and input gradients stay those of autograd on the whole encoder."""
+    torch.manual_seed(3)
+    m = PushDynamics(DynamicsSpec(encoder="joint", **TINY_SPEC)).double()
+    convs = [mod for mod in m.encoder.conv if isinstance(mod, torch.nn.Conv2d)]
+    with torch.no_grad():
+        convs[0].bias[0] = convs[-1].bias[1] = -1e3
+    x = torch.rand(2, 3, 140, 140, dtype=torch.float64)
+    f, cache = m.encode_with_activations(x, linear=linear)
+    assert 0 not in cache.live[0].tolist() and 1 not in cache.live[-1].tolist()
+    assert len(cache.live[0]) == convs[0].out_channels - 1
+    g = torch.rand_like(f)
+    grad = m.encoder_input_grad(cache, g, linear=linear)
+    xr = x.clone().requires_grad_(True)
+    out = m.encoder(xr) if linear else m.encoder.conv(xr * m.encoder.scale)
+    if not linear:  # the live channels of the last convolution, flattened
+        out = out[:, cache.live[-1]].flatten(1)
+    (out * g).sum().backward()
+    assert torch.allclose(f, out.detach(), atol=1e-12)
+    assert torch.allclose(grad, xr.grad, rtol=1e-9, atol=1e-12)
+    assert grad.abs().sum() > 0
+
+
 def test_shared_encoder_input_grad_with_repeated_rows():
     m = PushDynamics(DynamicsSpec(**TINY_SPEC)).double()
     x = torch.rand(3, 1, 140, 140, dtype=torch.float64)
