@@ -14,7 +14,9 @@ through the whole network, autograd) in far less time:
   (transposed convolutions masked by the primal's ReLU outputs, no autograd graph) gives
   ∂H_t/∂φ(X_h), which is contracted with the tangents; forward mode would need one pass
   per tangent (7 per step), and was 1.5× slower overall. The transposed convolutions run
-  as ordinary ones in polyphase form (``conv_input_grad``; 2–3x faster at stride 2);
+  as ordinary ones in polyphase form (``conv_input_grad``; 2–3x faster at stride 2), and
+  only between channels that are non-zero somewhere in the batch (F_flow's encoder has 1,
+  2 and 1 dead channels on real pushes; the backward pass 5.9 → 4.3 ms per phase);
 * **split first layer**: the SDF part is one (600 → 300) product per step, the point part
   (100 → 300) is computed once for the fixed quadrature points; for the joint encoder its
   linear layer and this SDF part are folded into one (5120 × 300) map (half the products
@@ -212,8 +214,8 @@ class LearnedDynamics:
     Quadrature: the caller's, by default :func:`phase_quadrature` (multi-level midpoint,
     10 cm cells, 5 cm within r + 5 cm and 2.5 cm within r + 1 cm of the object's path;
     ~350–650 points). ``robotplan bench functional`` on an AVX2-only AMD EPYC, one thread,
-    shipped F_flow, a real 10-step push with 532 points: value + Jacobian 31–33 ms (value
-    only 17 ms) against 4.0 s for :meth:`evaluate_naive` (124–130x); worst per-step error
+    shipped F_flow, a real 10-step push with 532 points: value + Jacobian 27.5–29 ms (value
+    only 16.5–17.5 ms) against 3.8–4.0 s for :meth:`evaluate_naive` (~140x); worst per-step error
     of H_t against the 19,600-point grid over 24 real pushes 3.75 % (median 0.44 %).
     """
 
