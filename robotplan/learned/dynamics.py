@@ -309,6 +309,8 @@ class PushDynamics(nn.Module):
         if index is not None:
             activations = [a[index] for a in activations]
         last = activations[-1]
+        if any(len(live) == 0 for live in lives):  # a layer all zeros: no gradient passes
+            return last.new_zeros(grad_features.shape[0], convs[0].in_channels, *self.spec.grid)
         if linear:
             g = (grad_features @ enc.linear.weight).reshape(last.shape)[:, lives[-1]]
         else:

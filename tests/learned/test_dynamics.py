@@ -97,6 +97,17 @@ def test_encoder_skips_dead_channels_exactly(linear):
     assert grad.abs().sum() > 0
 
 
+def test_encoder_with_a_dead_layer_passes_no_gradient():
+    m = PushDynamics(DynamicsSpec(encoder="joint", **TINY_SPEC)).double()
+    with torch.no_grad():
+        m.encoder.conv[2].bias.fill_(-1e3)  # every channel of the second convolution dead
+    x = torch.rand(2, 3, 140, 140, dtype=torch.float64)
+    f, cache = m.encode_with_activations(x, linear=False)
+    assert len(cache.live[1]) == 0 and f.shape == (2, 0)
+    grad = m.encoder_input_grad(cache, torch.rand_like(f), linear=False)
+    assert grad.shape == x.shape and not grad.any()
+
+
 def test_shared_encoder_input_grad_with_repeated_rows():
     m = PushDynamics(DynamicsSpec(**TINY_SPEC)).double()
     x = torch.rand(3, 1, 140, 140, dtype=torch.float64)
