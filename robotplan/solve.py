@@ -106,13 +106,6 @@ def _candidate_tiers(scene: Scene, obj: str, actors: list[str], skeleton: str | 
                 yield kept, framed
 
 
-def _skeletons(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
-               max_pushes: int, quiet: bool) -> tuple[list, SkeletonSpace]:
-    """The first tier of :func:`_candidate_tiers` (none: no candidate, the scene's space)."""
-    tiers = _candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet)
-    return next(tiers, ([], space_for(scene)))
-
-
 def _arm_candidates(scene: Scene, space: SkeletonSpace, obj: str, actors: list[str],
                     max_pushes: int, quiet: bool) -> list:
     """Every choice of arm per phase and init point in ``space``, pruned by reach."""
