@@ -28,7 +28,8 @@ from robotplan.learned.push_data import PushDataSpec, draw_shape
 from robotplan.render import write_atomically
 from robotplan.scene import parse_scene
 
-__all__ = ["OOD_FAMILIES", "draw_ood_shape", "draw_scene", "run_bench_push", "summarize"]
+__all__ = ["OOD_FAMILIES", "candidate_timings", "draw_ood_shape", "draw_scene", "run_bench_push",
+           "summarize", "time_profile"]
 
 GOAL_DISTANCE = 0.35  # m from the object to the goal centre
 GOAL_NOISE = 0.02  # m, standard deviation per axis
@@ -133,6 +134,34 @@ def _quartiles(values: list[float]) -> dict:
             "q3": round(float(q[2]), 4), "min": round(float(min(values)), 4)}
 
 
+def candidate_timings(candidates: list[dict]) -> dict[str, float]:
+    """Seconds per timer summed over a search's ``candidates`` (``result.json``): each
+    functional's callbacks, ``solver`` (SNOPT itself), ``warm_start``…, plus ``programs``
+    (their count) and ``total`` (the candidates' own seconds; with parallel workers more
+    than the wall-clock plan time)."""
+    out: dict[str, float] = {"programs": float(len(candidates)), "total": 0.0}
+    for cand in candidates:
+        out["total"] += float(cand.get("seconds") or 0.0)
+        for name, seconds in (cand.get("timings") or {}).items():
+            out[name] = out.get(name, 0.0) + float(seconds)
+    return {k: round(v, 3) for k, v in out.items()}
+
+
+def time_profile(rows: list[dict]) -> dict:
+    """Where the planning time goes over a benchmark: each timer's seconds summed over all
+    scenes' candidates and its share of the candidates' total, largest first. Rows without
+    ``timings`` (written before they were recorded) are left out and counted."""
+    timed = [r["timings"] for r in rows if r.get("timings")]
+    total = sum(t["total"] for t in timed)
+    names = sorted({k for t in timed for k in t} - {"programs", "total"},
+                   key=lambda k: -sum(t.get(k, 0.0) for t in timed))
+    seconds = {k: round(sum(t.get(k, 0.0) for t in timed), 1) for k in names}
+    return {"scenes": len(timed), "untimed_scenes": len(rows) - len(timed),
+            "programs": int(sum(t["programs"] for t in timed)),
+            "candidate_seconds": round(total, 1), "seconds": seconds,
+            "share": {k: round(v / total, 3) if total else 0.0 for k, v in seconds.items()}}
+
+
 def summarize(rows: list[dict]) -> dict:
     out: dict = {"scenes": len(rows), "coverage": {}, "plan_seconds": {}}
     for kind in sorted({r["shape"] for r in rows}):
@@ -145,6 +174,7 @@ def summarize(rows: list[dict]) -> dict:
         out["coverage_by_family"] = {
             fam: _quartiles([r["coverage"] for r in ood if r.get("family") == fam])
             for fam in sorted({r.get("family") for r in ood})}
+    out["time_profile"] = time_profile(rows)
     return out
 
 
@@ -209,7 +239,8 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: Path, workers: 
                "programs": result["programs_solved"],
                "skeleton": " ".join(f"{p['mode']}@{p['init']}" for p in result["skeleton"]),
                "violation": result["violation"],
-               "dynamics_rms_mm": result.get("dynamics_rms_mm")}
+               "dynamics_rms_mm": result.get("dynamics_rms_mm"),
+               "timings": candidate_timings(result.get("candidates") or [])}
         done[name] = row
         with rows_path.open("a") as f:
             f.write(json.dumps(row) + "\n")
@@ -220,9 +251,11 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: Path, workers: 
     summary.update({"seed": seed, "model": str(model_dir), "exhaustive": exhaustive,
                     "time_budget_s": time_budget})
     buf = io.StringIO()
-    writer = csv.DictWriter(buf, fieldnames=list(rows[0].keys()))
+    flat = [{k: v for k, v in r.items() if k != "timings"} for r in rows]
+    fields = list(dict.fromkeys(k for r in flat for k in r))
+    writer = csv.DictWriter(buf, fieldnames=fields)
     writer.writeheader()
-    writer.writerows(rows)
+    writer.writerows(flat)
     write_atomically(out / "results.csv", lambda tmp: tmp.write_text(buf.getvalue()))
     _box_plot(rows, out / "coverage.png")
     write_atomically(out / "summary.json",

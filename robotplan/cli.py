@@ -187,6 +187,11 @@ def _cmd_bench_push(args: argparse.Namespace) -> int:
             print(f"{kind:>7}: coverage median {q['median']:.3f} (quartiles {q['q1']:.3f}–"
                   f"{q['q3']:.3f}, min {q['min']:.3f}, n={q['n']}); plan time median "
                   f"{t['median']:.1f} s (quartiles {t['q1']:.1f}–{t['q3']:.1f})")
+        prof = summary["time_profile"]
+        if prof["candidate_seconds"]:
+            top = ", ".join(f"{k} {100 * v:.0f} %" for k, v in list(prof["share"].items())[:6])
+            print(f"time: {prof['programs']} programs, {prof['candidate_seconds']:.0f} s in "
+                  f"their callbacks and solver: {top}")
         print(f"wrote {out / 'results.csv'}, {out / 'coverage.png'}, {summary_path}")
     return 0
 

@@ -6,7 +6,13 @@ import math
 import numpy as np
 import pytest
 
-from robotplan.bench_push import GOAL_DISTANCE, draw_scene, summarize
+from robotplan.bench_push import (
+    GOAL_DISTANCE,
+    candidate_timings,
+    draw_scene,
+    summarize,
+    time_profile,
+)
 from robotplan.coverage import coverage
 from robotplan.planner import order_candidates
 from robotplan.scene import parse_scene
@@ -51,6 +57,22 @@ def test_summary_quartiles():
     assert s["coverage"]["box"]["q1"] == pytest.approx(0.5)
     assert s["coverage"]["box"]["min"] == 0.0
     assert s["plan_seconds"]["all"]["median"] == pytest.approx(20.0)
+
+
+def test_time_profile_sums_the_candidates_timers_over_scenes():
+    a = candidate_timings([
+        {"seconds": 3.0, "timings": {"H_F": 2.0, "solver": 1.0}},
+        {"seconds": 1.5, "timings": {"H_F": 0.5, "H_coll": 1.0}}])
+    assert a == {"programs": 2.0, "total": 4.5, "H_F": 2.5, "solver": 1.0, "H_coll": 1.0}
+    b = candidate_timings([{"seconds": 0.5, "timings": {"solver": 0.5}}])
+    rows = [{"timings": a}, {"timings": b}, {"coverage": 1.0}]  # the last one: an old row
+    prof = time_profile(rows)
+    assert prof["scenes"] == 2 and prof["untimed_scenes"] == 1 and prof["programs"] == 3
+    assert prof["candidate_seconds"] == pytest.approx(5.0)
+    assert list(prof["seconds"]) == ["H_F", "solver", "H_coll"]  # largest first
+    assert prof["seconds"]["solver"] == pytest.approx(1.5)
+    assert prof["share"]["H_F"] == pytest.approx(0.5)
+    assert time_profile([])["candidate_seconds"] == 0.0
 
 
 def test_candidates_behind_the_object_come_first():
