@@ -33,7 +33,7 @@ from robotplan.skeleton import (
     space_for,
 )
 
-__all__ = ["UnsupportedScene", "candidate_table", "solve_scene"]
+__all__ = ["UnsupportedScene", "budget_spent", "candidate_table", "solve_scene"]
 
 
 class UnsupportedScene(ValueError):
@@ -71,6 +71,14 @@ def _check_supported(scene: Scene) -> tuple[str, list[str]]:
         raise UnsupportedScene("goal: touch goals are planned for robot arms only")
     actors = [r.name for r in scene.robots] or [scene.pushers[0].name]
     return scene.objects[0].name, actors
+
+
+def budget_spent(result: SearchResult, time_budget: float | None) -> bool:
+    """Whether the search is past ``time_budget`` seconds with some plan in hand: then it
+    starts no further tier or route search (each would solve at least one program per
+    worker before looking at the clock). Without any plan it goes on."""
+    return (time_budget is not None and result.best is not None
+            and result.seconds >= time_budget)
 
 
 def _candidate_tiers(scene: Scene, obj: str, actors: list[str], skeleton: str | None,
@@ -182,9 +190,10 @@ def solve_scene(scene: Scene, out: Path, model_dir: Path, solver: str = "snopt",
                            exhaustive, left, space)
         spaces.update({id(s): space for s in more.candidates})
         result = merge_results(result, more)
-        if result.solved:
+        if result.solved or budget_spent(result, time_budget):
             break
-    if not result.solved and scene.obstacles and skeleton is None and not scene.robots:
+    if (not result.solved and not budget_spent(result, time_budget) and scene.obstacles
+            and skeleton is None and not scene.robots):
         left = None if time_budget is None else max(0.0, time_budget - result.seconds)
         routed, extra = _search_routes(scene, obj, actors[0], model_dir, settings, space,
                                        max_pushes, workers, progress, exhaustive, quiet, left)

@@ -42,3 +42,20 @@ def test_a_given_skeleton_gets_no_fallback(monkeypatch, tmp_path):
     solve_module.solve_scene(scene, tmp_path, TASKS.parent / "learned" / "push_flow",
                              skeleton="push@0", progress=False, quiet=True)
     assert len(calls) == 1
+
+
+def test_no_further_tier_once_the_budget_is_spent_with_a_plan_in_hand():
+    import numpy as np
+
+    from robotplan.program import Solution
+    from robotplan.skeleton import parse_skeleton
+
+    scene = load_scene(TASKS / "box_push.yaml")
+    sk = parse_skeleton("push@0", scene.pushers[0].name, scene.objects[0].name)
+    sol = Solution(sk, False, "snopt info 31", 0.5, 1.0, 60.0, np.zeros((11, 3)),
+                   np.zeros((11, 2)))
+    with_plan = SearchResult(sol, [sol], 60.0)
+    assert solve_module.budget_spent(with_plan, 50.0)
+    assert not solve_module.budget_spent(with_plan, 70.0)  # time left
+    assert not solve_module.budget_spent(with_plan, None)  # no budget
+    assert not solve_module.budget_spent(SearchResult(None, [], 60.0), 50.0)  # nothing yet
