@@ -52,6 +52,30 @@ def test_ranking_prefers_plans_the_learned_dynamics_believe():
     assert not SearchResult(plan(1e-4, PLAUSIBLE_RMS_MM + 1, 1.0)).solved
 
 
+def test_the_search_stops_on_a_good_plan_or_after_its_patience_with_a_solved_one():
+    from robotplan.planner import PATIENCE_S, is_solved, stops_search
+    from robotplan.program import Solution
+
+    sk = parse_skeleton("push@0", "pusher", "box")
+
+    def plan(violation, rms_mm):
+        return Solution(sk, True, "", violation, 1.0, 1.0, np.zeros((21, 3)),
+                        np.zeros((21, 2)), dynamics_mm2=np.full(20, rms_mm**2))
+
+    good, solved, broken = plan(1e-4, 3.0), plan(1e-4, 8.0), plan(0.5, 1.0)
+    assert is_solved(solved) and not is_solved(broken)
+    early, late = PATIENCE_S - 1.0, PATIENCE_S + 1.0
+    assert stops_search(good, True, 1.0, None, PATIENCE_S, False)
+    assert not stops_search(solved, True, early, None, PATIENCE_S, False)
+    assert stops_search(solved, True, late, None, PATIENCE_S, False)
+    # a broken plan collected late stops the search only if a solved one came before
+    assert stops_search(broken, True, late, None, PATIENCE_S, False)
+    assert not stops_search(broken, False, late, None, PATIENCE_S, False)
+    # exhaustive: only the time budget stops it
+    assert not stops_search(good, True, late, None, PATIENCE_S, True)
+    assert stops_search(broken, False, 101.0, 100.0, PATIENCE_S, True)
+
+
 def test_plans_around_obstacles_must_keep_the_margin():
     """A feasible plan that skims an obstacle is neither good enough nor solved, and ranks
     behind one that keeps OBSTACLE_MARGIN, whatever their costs."""
