@@ -26,7 +26,8 @@ from robotplan.program import FEASIBLE, ProgramSettings, Solution, solve_skeleto
 from robotplan.scene import Scene
 from robotplan.skeleton import Skeleton, SkeletonSpace, space_for
 
-__all__ = ["PATIENCE_S", "SearchResult", "is_solved", "merge_results", "search_push", "stops_search"]
+__all__ = ["PATIENCE_S", "SearchResult", "is_solved", "merge_results", "search_push",
+           "stops_search"]
 
 GOOD_RMS_MM = 5.0  # H_F residual (RMS over steps) good enough to stop: F_flow errs ~4.2 mm
 # a plan whose H_F residual exceeds the no-motion baseline (10.8 mm) is one the learned
