@@ -15,6 +15,15 @@ __all__ = ["render_scene_sdf", "write_atomically"]
 
 
 def _umask() -> int:
+    """The process's umask, read without changing it where Linux shows it (setting and
+    restoring it would briefly give other threads' new files the wrong mode)."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except OSError:
+        pass
     mask = os.umask(0)
     os.umask(mask)
     return mask

@@ -204,6 +204,9 @@ def phase_quadrature(centers: Tensor, bound_radius: float, workspace: Workspace,
     return Quadrature(torch.cat(points).to(dtype), torch.cat(weights).to(dtype))
 
 
+LIVE_ROW_SETS = 4  # sets of live channels whose rows of the folded map are kept
+
+
 class LearnedDynamics:
     """H_F between an object (φ1, planar pose) and a pusher (φ2, position) for T steps.
 
@@ -256,9 +259,12 @@ class LearnedDynamics:
 
     def _live_rows(self, live: Tensor) -> Tensor:
         """The rows of the folded (C'·h·w, H1) map that read the last convolution's ``live``
-        channels, kept per set of live channels (it rarely changes between calls)."""
+        channels, kept per set of live channels (it rarely changes between calls; the
+        last ``LIVE_ROW_SETS`` sets are kept, each up to the map's 4.9 MB)."""
         key = tuple(live.tolist())
         if key not in self._rows:
+            if len(self._rows) >= LIVE_ROW_SETS:
+                del self._rows[next(iter(self._rows))]  # the oldest
             full = self.conv_to_hidden[0]
             by_channel = full.view(self.last_channels, -1, full.shape[1])
             self._rows[key] = by_channel[live].reshape(-1, full.shape[1]).contiguous()
