@@ -153,9 +153,9 @@ def time_profile(rows: list[dict]) -> dict:
     ``timings`` (written before they were recorded) are left out and counted."""
     timed = [r["timings"] for r in rows if r.get("timings")]
     total = sum(t["total"] for t in timed)
-    names = sorted({k for t in timed for k in t} - {"programs", "total"},
-                   key=lambda k: -sum(t.get(k, 0.0) for t in timed))
-    seconds = {k: round(sum(t.get(k, 0.0) for t in timed), 1) for k in names}
+    names = {k for t in timed for k in t} - {"programs", "total"}
+    sums = sorted(((sum(t.get(k, 0.0) for t in timed), k) for k in names), reverse=True)
+    seconds = {k: round(v, 1) for v, k in sums}  # largest first
     return {"scenes": len(timed), "untimed_scenes": len(rows) - len(timed),
             "programs": int(sum(t["programs"] for t in timed)),
             "candidate_seconds": round(total, 1), "seconds": seconds,
