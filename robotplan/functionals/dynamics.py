@@ -281,9 +281,7 @@ class LearnedDynamics:
         phi1, dphi1 = render_on_grid(self.obj, X1[:-1], self.workspace, jacobian)
         phi2, dphi2 = render_on_grid(self.pusher, X2, self.workspace, jacobian)
         if joint:  # one encoding per step of the stacked φ1_{t−1}, φ2_{t−1}, φ2_t
-            # stacked channels-last, the layout the encoder's oneDNN convolutions take
-            images = torch.stack((phi1, phi2[:-1], phi2[1:]), dim=-1)
-            images = images.reshape(T, *shape, 3).permute(0, 3, 1, 2)
+            images = torch.stack((phi1, phi2[:-1], phi2[1:]), dim=1).reshape(T, 3, *shape)
         else:  # one encoding per grid; each pusher grid feeds two steps
             images = torch.cat((phi1, phi2)).reshape(2 * T + 1, 1, *shape)
         f, acts = m.encode_with_activations(images, linear=not joint)

@@ -25,6 +25,8 @@ from typing import Literal
 import torch
 from torch import Tensor, nn
 
+from robotplan.learned.native import conv_relu_forward, conv_relu_input_grad
+
 __all__ = ["DynamicsSpec", "EncoderPass", "PushDynamics", "cpu_multiplies_bfloat16",
            "head_matmul_dtype", "load_model", "save_model"]
 
@@ -271,6 +273,15 @@ class PushDynamics(nn.Module):
         y = grids
         for j, conv in enumerate(convs):
             weight = conv.weight * enc.scale if j == 0 else conv.weight
+            # our own kernels (float32 CPU): bias, ReLU and channel sums in one pass, and
+            # the previous layer's dead channels skipped
+            native = conv_relu_forward(y, weight, conv.bias, conv.stride[0],
+                                       lives[-1] if lives else None)
+            if native is not None:
+                y, sums = native
+                activations.append(y)
+                lives.append(torch.nonzero(sums > 0)[:, 0])
+                continue
             if j == 0 and conv.in_channels == 1:  # oneDNN is slower for one input channel
                 with _no_onednn():
                     y = nn.functional.conv2d(y, weight, conv.bias, conv.stride)
@@ -284,7 +295,7 @@ class PushDynamics(nn.Module):
             lives.append(live)
         if linear:  # dead channels are zeros: the linear layer reads all of them
             return enc.linear(y.flatten(1)), EncoderPass(activations, lives)
-        return y[:, live].flatten(1), EncoderPass(activations, lives)
+        return y[:, lives[-1]].flatten(1), EncoderPass(activations, lives)
 
     @torch.no_grad()
     def encoder_input_grad(self, cache: EncoderPass, grad_features: Tensor,
@@ -316,13 +327,18 @@ class PushDynamics(nn.Module):
         else:
             g = grad_features.reshape(last.shape[0], len(lives[-1]), *last.shape[2:])
         for j in range(len(convs) - 1, -1, -1):
-            g = relu_backward(g, activations[j][:, lives[j]])
             conv = convs[j]
-            size = activations[j - 1].shape[-2:] if j > 0 else self.spec.grid
+            size = tuple(activations[j - 1].shape[-2:] if j > 0 else self.spec.grid)
             weight = (conv.weight * enc.scale if j == 0 else conv.weight)[lives[j]]
             if j > 0:  # only the previous layer's live channels pass gradient further
                 weight = weight[:, lives[j - 1]]
-            g = conv_input_grad(g, weight, conv.stride[0], tuple(size))
+            native = conv_relu_input_grad(g, activations[j], lives[j], weight,
+                                          conv.stride[0], size)
+            if native is not None:  # our own kernel, the ReLU mask fused
+                g = native
+                continue
+            g = relu_backward(g, activations[j][:, lives[j]])
+            g = conv_input_grad(g, weight, conv.stride[0], size)
         return g
 
     @torch.no_grad()

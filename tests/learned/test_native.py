@@ -1,0 +1,110 @@
+"""Our own encoder convolutions (encoder_kernels.c) against PyTorch's, and the fallback."""
+
+import pytest
+import torch
+from torch import nn
+
+from robotplan.learned import dynamics as dyn
+from robotplan.learned import native
+from robotplan.learned.dynamics import DynamicsSpec, PushDynamics
+
+F32, F64 = torch.float32, torch.float64
+
+needs_kernels = pytest.mark.skipif(native.kernels() is None, reason="no C compiler here")
+
+# (images, channels in, H, W, channels out, kernel, stride): the shipped encoder's layers at
+# T = 10, and odd sizes that end mid-vector, narrower than a block, one channel in
+LAYERS = [(10, 3, 140, 140, 3, 3, 1), (10, 3, 138, 138, 5, 5, 2), (10, 5, 67, 67, 5, 5, 2),
+          (2, 2, 31, 29, 4, 5, 2), (3, 1, 20, 23, 2, 3, 1), (1, 4, 12, 9, 8, 3, 2),
+          (2, 3, 45, 70, 7, 4, 1), (2, 2, 30, 33, 3, 4, 2)]
+
+
+def _layer(case, seed=0):
+    M, C, H, W, N, K, S = case
+    g = torch.Generator().manual_seed(seed)
+    x = torch.randn(M, C, H, W, dtype=F64, generator=g)
+    w = torch.randn(N, C, K, K, dtype=F64, generator=g) / K
+    b = torch.randn(N, dtype=F64, generator=g) * 0.3
+    return x, w, b, S
+
+
+@needs_kernels
+@pytest.mark.parametrize("case", LAYERS, ids=str)
+def test_forward_matches_relu_of_conv2d(case):
+    x, w, b, S = _layer(case)
+    expected = nn.functional.conv2d(x, w, b, S).clamp_min(0)  # float64 reference
+    y, sums = native.conv_relu_forward(x.float(), w.float(), b.float(), S)
+    assert y.shape == expected.shape and y.is_contiguous()
+    assert (y.double() - expected).abs().max() < 2e-5 * expected.abs().max()
+    assert torch.allclose(sums.double(), expected.sum((0, 2, 3)), rtol=1e-4)
+    # only some input channels: the others are read as zeros
+    C = x.shape[1]
+    channels = torch.tensor([C - 1, 0][: max(1, C - 1)])
+    zeroed = torch.zeros_like(x)
+    zeroed[:, channels] = x[:, channels]
+    expected = nn.functional.conv2d(zeroed, w, b, S).clamp_min(0)
+    y, _ = native.conv_relu_forward(x.float(), w.float(), b.float(), S, channels)
+    assert (y.double() - expected).abs().max() < 2e-5 * expected.abs().max()
+
+
+@needs_kernels
+@pytest.mark.parametrize("case", LAYERS, ids=str)
+def test_input_grad_matches_autograd(case):
+    x, w, b, S = _layer(case, seed=1)
+    N, C = w.shape[:2]
+    live = torch.arange(N) if N == 1 else torch.tensor([N - 1, 0])  # any order
+    wanted = torch.arange(C) if C == 1 else torch.tensor([0, C - 1])
+    x_ = x.clone().requires_grad_(True)
+    y = nn.functional.conv2d(x_, w, b, S).clamp_min(0)
+    grad = torch.randn(x.shape[0], len(live), *y.shape[2:], dtype=F64,
+                       generator=torch.Generator().manual_seed(2))
+    (expected,) = torch.autograd.grad((y[:, live] * grad).sum(), x_)
+    expected = expected[:, wanted]
+    out = native.conv_relu_input_grad(grad.float(), y.detach().float(), live,
+                                      w[live][:, wanted].float(), S, tuple(x.shape[2:]))
+    assert out.shape == expected.shape
+    assert (out.double() - expected).abs().max() < 2e-5 * expected.abs().max()
+
+
+def test_kernels_decline_what_they_do_not_handle():
+    x = torch.randn(1, 2, 9, 9, dtype=F64)
+    assert native.conv_relu_forward(x, torch.randn(2, 2, 3, 3, dtype=F64),
+                                    torch.zeros(2, dtype=F64), 1) is None  # float64
+    if native.kernels() is not None:  # more output channels than compiled for
+        w = torch.randn(native.MAX_CHANNELS + 1, 2, 3, 3)
+        assert native.conv_relu_forward(x.float(), w, torch.zeros(len(w)), 1) is None
+
+
+def test_a_missing_compiler_is_one_clear_error(monkeypatch, tmp_path):
+    monkeypatch.setenv("CC", str(tmp_path / "no-such-cc"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    with pytest.raises(OSError):
+        native._build()
+    assert not list((tmp_path / "cache").rglob("*.so"))  # nothing half-written
+
+
+@needs_kernels
+def test_encoder_pass_equals_the_pytorch_path(monkeypatch):
+    """encode_with_activations / encoder_input_grad of a float32 joint encoder: our kernels
+    against PyTorch's convolutions (the fallback), including the dead-channel bookkeeping."""
+    spec = DynamicsSpec(encoder="joint", grid=(40, 40), channels=(3, 5, 5), sdf_features=8,
+                        point_features=8, hidden=(16, 16))
+    torch.manual_seed(3)
+    m = PushDynamics(spec).eval()
+    with torch.no_grad():
+        m.encoder.conv[0].bias[1] = -50.0  # a dead channel in the first layer
+    grids = torch.rand(4, 3, 40, 40) - 0.3
+
+    def run():
+        f, acts = m.encode_with_activations(grids, linear=False)
+        g = torch.randn(f.shape, generator=torch.Generator().manual_seed(4))
+        return f, acts, m.encoder_input_grad(acts, g, linear=False)
+
+    f, acts, G = run()
+    assert acts.live[0].tolist() == [0, 2]
+    monkeypatch.setattr(dyn, "conv_relu_forward", lambda *a, **k: None)
+    monkeypatch.setattr(dyn, "conv_relu_input_grad", lambda *a, **k: None)
+    f_ref, acts_ref, G_ref = run()
+    assert [a.tolist() for a in acts.live] == [a.tolist() for a in acts_ref.live]
+    assert (f - f_ref).abs().max() < 1e-5 * f_ref.abs().max()
+    assert (G - G_ref).abs().max() < 1e-5 * G_ref.abs().max() and G_ref.abs().max() > 0
