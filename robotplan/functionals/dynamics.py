@@ -65,6 +65,7 @@ from robotplan.functionals.base import Quadrature, sdf_pose_gradients
 from robotplan.learned.dynamics import PushDynamics, head_matmul_dtype
 from robotplan.learned.tiled_head import TiledHead, tile_points
 from robotplan.memory import keep_freed_memory
+from robotplan.native import render_planes
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Circle, Workspace
 
@@ -139,11 +140,20 @@ def render_on_grid(body: Body, X_WB: Tensor, workspace: Workspace, tangents: boo
     x0, _, y0, _ = workspace.bounds
     rows, cols = workspace.shape
     r = workspace.resolution
-    dx = x0 + (torch.arange(cols, dtype=X.dtype) + 0.5) * r - X[:, 0:1]  # (S, W)
-    dy = y0 + (torch.arange(rows, dtype=X.dtype) + 0.5) * r - X[:, 1:2]  # (S, H)
     turns = X.shape[-1] == 3 and not isinstance(body.shape, Circle)
     if turns:
         c, s = torch.cos(X[:, 2:3]), torch.sin(X[:, 2:3])
+    if tangents:  # our own kernel (float32 circles, boxes, L-shapes): one pass, ~5x faster
+        native = render_planes(body.shape, X, torch.cat((c, s), 1) if turns else None,
+                               (x0, y0), r, (rows, cols))
+        if native is not None:
+            phi, gx, gy, px, py = native
+            if not turns:
+                return phi, GridTangents(gx, gy, X.shape[-1])
+            return phi, GridTangents(gx, gy, 3, px, py, c, s)
+    dx = x0 + (torch.arange(cols, dtype=X.dtype) + 0.5) * r - X[:, 0:1]  # (S, W)
+    dy = y0 + (torch.arange(rows, dtype=X.dtype) + 0.5) * r - X[:, 1:2]  # (S, H)
+    if turns:
         px = (c * dx)[:, None, :] + (s * dy)[:, :, None]  # (S, H, W)
         py = (c * dy)[:, :, None] - (s * dx)[:, None, :]
     else:

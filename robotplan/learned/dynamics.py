@@ -25,7 +25,7 @@ from typing import Literal
 import torch
 from torch import Tensor, nn
 
-from robotplan.learned.native import conv_relu_forward, conv_relu_input_grad
+from robotplan.native import conv_relu_forward, conv_relu_input_grad
 
 __all__ = ["DynamicsSpec", "EncoderPass", "PushDynamics", "cpu_multiplies_bfloat16",
            "head_matmul_dtype", "load_model", "save_model"]

@@ -164,7 +164,7 @@ def _box_sdf_and_grad(px: Tensor, py: Tensor, cx: Tensor | float, cy: Tensor | f
 
 
 @lru_cache(maxsize=256)
-def _lshape_boxes(size: tuple[float, float], thickness: float, dtype: torch.dtype
+def lshape_boxes(size: tuple[float, float], thickness: float, dtype: torch.dtype
                   ) -> tuple[Tensor, Tensor]:
     """The four boxes of an L-shape's closed form: parameters ``(cx, cy, hx, hy) × (bottom
     strip, left strip, bounding box, notch)`` and the sign of each box's SDF in it."""
@@ -297,7 +297,7 @@ class LShape(_PolygonalShape):
         """Closed form from the boxes of :func:`lshape_sdf`, all four in one pass: outside,
         the nearer strip; inside, the bounding box or the notch (its negated SDF),
         whichever is larger."""
-        params, sign = _lshape_boxes(self.size, self.thickness, px.dtype)
+        params, sign = lshape_boxes(self.size, self.thickness, px.dtype)
         ones = [1] * px.dim()
         phi, gx, gy = _box_sdf_and_grad(px, py, *params.view(4, 4, *ones))  # (4 boxes, ...)
         values = torch.stack((phi, gx, gy)) * sign.view(1, 4, *ones)  # the notch negated

@@ -16,6 +16,7 @@
  * its transposed form computes the even and odd output columns together and interleaves them.
  */
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 
 typedef float v8 __attribute__((vector_size(32)));
@@ -25,6 +26,7 @@ typedef float v8u __attribute__((vector_size(32), aligned(4)));
 #define LOAD(p) (*(const v8u *)(p))
 #define STORE(p, v) (*(v8u *)(p) = (v))
 #define MAXC 8   /* channels per layer handled here */
+#define MAXK 16  /* kernel size */
 #define BLOCK 32 /* the widest row block of the forward kernel (four vectors) */
 
 static inline v8 relu8(v8 a) {
@@ -77,6 +79,8 @@ static void stage_input(const float *x, int H, int W, int S, const int *in_ch, i
                             float *sums, int relu) {                                        \
         const long KK = (long)K * K, wo_stride = (long)nci * KK;                            \
         const int block = 8 * NV;                                                           \
+        long offset[MAXK]; /* where tap kx reads, relative to the row: no division inside */ \
+        for (int kx = 0; kx < K; ++kx) offset[kx] = (kx % S) * PS + kx / S;                 \
         v8 total[N];                                                                        \
         float tail_total[N];                                                                \
         for (int o = 0; o < N; ++o) total[o] = (v8){0}, tail_total[o] = 0.f;                \
@@ -92,7 +96,7 @@ static void stage_input(const float *x, int H, int W, int S, const int *in_ch, i
                                            + x0;                                            \
                         const float *wr = w + c * KK + ky * K;                              \
                         for (int kx = 0; kx < K; ++kx) {                                    \
-                            const float *p = row + (kx % S) * PS + kx / S;                  \
+                            const float *p = row + offset[kx];                              \
                             v8 s[NV];                                                       \
                             _Pragma("GCC unroll 4") for (int v = 0; v < NV; ++v)            \
                                 s[v] = LOAD(p + 8 * v);                                     \
@@ -147,7 +151,8 @@ static const forward_fn FORWARD[MAXC + 1] = {0,         forward_1, forward_2, fo
 int rp_conv_forward(const float *x, int M, int Cx, int H, int W, const int *in_ch, int nci,
                     const float *w, const float *b, int N, int K, int S, float *y,
                     float *sums) {
-    if (N < 1 || N > MAXC || nci < 1 || nci > MAXC || (S != 1 && S != 2) || K > H || K > W)
+    if (N < 1 || N > MAXC || nci < 1 || nci > MAXC || (S != 1 && S != 2) || K > H || K > W
+        || K > MAXK)
         return -1;
     for (int c = 0; c < nci; ++c)
         if (in_ch[c] < 0 || in_ch[c] >= Cx) return -1;
@@ -262,7 +267,7 @@ static const backward2_fn BACKWARD2[MAXC + 1] = {0,           backward2_1, backw
 int rp_conv_backward(const float *g, const float *y, int M, int Cy, const int *live, int ng,
                      int Ho, int Wo, const float *w, int N, int K, int S, int H, int W,
                      float *gx) {
-    if (N < 1 || N > MAXC || ng < 1 || ng > MAXC || (S != 1 && S != 2)
+    if (N < 1 || N > MAXC || ng < 1 || ng > MAXC || (S != 1 && S != 2) || K > MAXK
         || Ho != (H - K) / S + 1 || Wo != (W - K) / S + 1)
         return -1;
     for (int c = 0; c < ng; ++c)
@@ -297,5 +302,153 @@ int rp_conv_backward(const float *g, const float *y, int M, int Cy, const int *l
         BACKWARD2[N](scr, ng, RS, PS, K, P, w, H, W, gx + (long)m * N * H * W);
     }
     free(scr);
+    return 0;
+}
+
+/* ------------------------------------------------------------------ grid rendering
+ * φ of a planar shape at S poses on the H × W grid X_h (cell centres x0 + (j + ½)·res,
+ * y0 + (i + ½)·res), with its body-frame gradient (gx, gy) and, for a turning body, the
+ * body-frame coordinates (px, py): what robotplan.functionals.dynamics.render_on_grid
+ * computes with PyTorch, in one pass. Same closed forms as robotplan/sdf/shapes2d.py. */
+
+/* Float selects and max/min vectorize only when NaNs and signed zeros may be ignored: for
+ * the functions from here on (finite poses; a signed zero is multiplied by a sign of 0). */
+#pragma GCC optimize("finite-math-only", "no-signed-zeros")
+
+static inline float sign1(float v) { return (float)((v > 0.f) - (v < 0.f)); }
+
+/* the box of half extents (hx, hy) centred at (cx, cy): φ, ∂φ/∂x, ∂φ/∂y (_box_sdf_and_grad) */
+static inline void box_sdf(float px, float py, float cx, float cy, float hx, float hy,
+                           float *phi, float *gx, float *gy) {
+    const float dx = px - cx, dy = py - cy;
+    const float qx = fabsf(dx) - hx, qy = fabsf(dy) - hy;
+    const float ox = qx > 0.f ? qx : 0.f, oy = qy > 0.f ? qy : 0.f;
+    const float out = sqrtf(ox * ox + oy * oy);
+    const float inv = 1.f / (out > 1e-30f ? out : 1e-30f);
+    const float deepest = qx > qy ? qx : qy;
+    const int inner = deepest <= 0.f, x_face = (qx > qy) & inner; /* & and ^: no branches */
+    *gx = (ox * inv + (float)x_face) * sign1(dx);
+    *gy = (oy * inv + (float)(inner ^ x_face)) * sign1(dy);
+    *phi = out + (deepest < 0.f ? deepest : 0.f);
+}
+
+static inline void circle_pixel(float px, float py, const float *q, float *f, float *a,
+                                float *b) {
+    const float norm = sqrtf(px * px + py * py + 1e-30f) - 1e-15f; /* safe_hypot */
+    const float inv = 1.f / (norm > 1e-12f ? norm : 1e-12f);
+    *f = norm - q[0], *a = px * inv, *b = py * inv;
+}
+
+static inline void box_pixel(float px, float py, const float *q, float *f, float *a,
+                             float *b) {
+    box_sdf(px, py, 0.f, 0.f, q[0], q[1], f, a, b);
+}
+
+/* a if m else b, for m 0 or 1: arithmetic, so that the loop stays free of branches */
+static inline float pick(float m, float a, float b) { return m * a + (1.f - m) * b; }
+
+/* One box over a row of body-frame points (a loop simple enough to vectorize). */
+static void box_row(const float *restrict px, const float *restrict py, int W,
+                    const float *restrict q, float *restrict f, float *restrict a,
+                    float *restrict b) {
+    const float cx = q[0], cy = q[1], hx = q[2], hy = q[3];
+    for (int j = 0; j < W; ++j) box_sdf(px[j], py[j], cx, cy, hx, hy, f + j, a + j, b + j);
+}
+
+/* The L-shape over a row: its four boxes (bottom strip, left strip, bounding box, notch),
+ * then outside the nearer strip, inside the larger of the bounding box and the negated
+ * notch (LShape.sdf_and_grad_planes). `tmp`: 12·W floats. */
+static void lshape_row(const float *restrict px, const float *restrict py, int W,
+                       const float *restrict q, float *restrict f, float *restrict a,
+                       float *restrict b, float *restrict tmp) {
+    float *v[4], *u[4], *w[4];
+    for (int k = 0; k < 4; ++k) {
+        v[k] = tmp + 3 * k * W, u[k] = v[k] + W, w[k] = u[k] + W;
+        box_row(px, py, W, q + 4 * k, v[k], u[k], w[k]);
+    }
+    const float *restrict v0 = v[0], *restrict v1 = v[1], *restrict v2 = v[2], *restrict v3 = v[3];
+    const float *restrict u0 = u[0], *restrict u1 = u[1], *restrict u2 = u[2], *restrict u3 = u[3];
+    const float *restrict w0 = w[0], *restrict w1 = w[1], *restrict w2 = w[2], *restrict w3 = w[3];
+    for (int j = 0; j < W; ++j) {
+        const float inside = (float)((v0[j] < v1[j] ? v0[j] : v1[j]) < 0.f);
+        const float notch = (float)(v2[j] <= -v3[j]), left = (float)(v0[j] >= v1[j]);
+        f[j] = pick(inside, pick(notch, -v3[j], v2[j]), pick(left, v1[j], v0[j]));
+        a[j] = pick(inside, pick(notch, -u3[j], u2[j]), pick(left, u1[j], u0[j]));
+        b[j] = pick(inside, pick(notch, -w3[j], w2[j]), pick(left, w1[j], w0[j]));
+    }
+}
+
+/* One renderer per shape and output set (TURNING: px, py written too), each a single
+ * branch-free row loop that vectorizes. */
+#define DEFINE_RENDER(NAME, PIXEL, TURNING)                                                   \
+    static void NAME(const float *X, int S, int dofs, const float *cos_sin, int H, int W,     \
+                     float x0, float y0, float res, const float *restrict q, float *phi,      \
+                     float *gx, float *gy, float *px_out, float *py_out) {                    \
+        for (int s = 0; s < S; ++s) {                                                         \
+            const float c = TURNING ? cos_sin[2 * s] : 1.f;                                   \
+            const float sn = TURNING ? cos_sin[2 * s + 1] : 0.f;                              \
+            const float cx = X[s * dofs], cy = X[s * dofs + 1];                               \
+            for (int i = 0; i < H; ++i) {                                                     \
+                const float dy = y0 + ((float)i + 0.5f) * res - cy;                           \
+                const long row = ((long)s * H + i) * W;                                       \
+                float *restrict f = phi + row, *restrict a = gx + row, *restrict b = gy + row; \
+                float *restrict u = TURNING ? px_out + row : NULL;                            \
+                float *restrict v = TURNING ? py_out + row : NULL;                            \
+                for (int j = 0; j < W; ++j) {                                                 \
+                    const float dx = x0 + ((float)j + 0.5f) * res - cx;                       \
+                    const float px = c * dx + sn * dy, py = c * dy - sn * dx;                 \
+                    PIXEL(px, py, q, f + j, a + j, b + j);                                    \
+                    if (TURNING) u[j] = px, v[j] = py;                                        \
+                }                                                                             \
+            }                                                                                 \
+        }                                                                                     \
+    }
+
+DEFINE_RENDER(render_circle, circle_pixel, 0)
+DEFINE_RENDER(render_box, box_pixel, 0)
+DEFINE_RENDER(render_box_turning, box_pixel, 1)
+
+/* The L-shape, row by row: body-frame coordinates first (into px_out, py_out when asked). */
+static int render_lshape(const float *X, int S, int dofs, const float *cos_sin, int H, int W,
+                         float x0, float y0, float res, const float *q, float *phi, float *gx,
+                         float *gy, float *px_out, float *py_out) {
+    float *tmp = malloc(sizeof(float) * 14 * (size_t)W);
+    if (!tmp) return -1;
+    float *restrict rx = tmp + 12 * W, *restrict ry = tmp + 13 * W;
+    for (int s = 0; s < S; ++s) {
+        const float c = cos_sin ? cos_sin[2 * s] : 1.f, sn = cos_sin ? cos_sin[2 * s + 1] : 0.f;
+        const float cx = X[s * dofs], cy = X[s * dofs + 1];
+        for (int i = 0; i < H; ++i) {
+            const float dy = y0 + ((float)i + 0.5f) * res - cy;
+            const long row = ((long)s * H + i) * W;
+            float *restrict u = px_out ? px_out + row : rx, *restrict v = py_out ? py_out + row : ry;
+            for (int j = 0; j < W; ++j) {
+                const float dx = x0 + ((float)j + 0.5f) * res - cx;
+                u[j] = c * dx + sn * dy, v[j] = c * dy - sn * dx;
+            }
+            lshape_row(u, v, W, q, phi + row, gx + row, gy + row, tmp);
+        }
+    }
+    free(tmp);
+    return 0;
+}
+
+typedef void (*render_fn)(const float *, int, int, const float *, int, int, float, float, float,
+                          const float *, float *, float *, float *, float *, float *);
+
+/* kind 0: circle, params = {radius}; 1: box, {hx, hy}; 2: L-shape, 4 boxes {cx, cy, hx, hy}
+ * (bottom strip, left strip, bounding box, notch: lshape_boxes). X (S, dofs): x, y[, yaw];
+ * cos_sin (S, 2) of the yaw for a turning body, else NULL (and px, py are not written). */
+int rp_render(const float *X, int S, int dofs, const float *cos_sin, int H, int W, float x0,
+              float y0, float res, int kind, const float *params, float *phi, float *gx,
+              float *gy, float *px_out, float *py_out) {
+    if (kind < 0 || kind > 2 || (dofs != 2 && dofs != 3)) return -1;
+    const int turning = cos_sin != NULL && px_out != NULL && py_out != NULL;
+    if (kind == 0 && turning) return -1; /* a disc does not turn */
+    if (kind == 2)
+        return render_lshape(X, S, dofs, turning ? cos_sin : NULL, H, W, x0, y0, res, params,
+                             phi, gx, gy, turning ? px_out : NULL, turning ? py_out : NULL);
+    const render_fn fn = kind == 0 ? render_circle : turning ? render_box_turning : render_box;
+    fn(X, S, dofs, cos_sin, H, W, x0, y0, res, params, phi, gx, gy, px_out, py_out);
     return 0;
 }

@@ -31,14 +31,14 @@ from pathlib import Path
 import torch
 from torch import Tensor
 
-__all__ = ["conv_relu_forward", "conv_relu_input_grad", "kernels"]
+__all__ = ["conv_relu_forward", "conv_relu_input_grad", "kernels", "render_planes"]
 
-SOURCE = Path(__file__).with_name("encoder_kernels.c")
+SOURCE = Path(__file__).with_name("kernels.c")
 MAX_CHANNELS = 8  # per layer, as compiled (MAXC in the C file)
 
 
 def _compile_flags() -> list[str]:
-    flags = ["-O3", "-shared", "-fPIC", "-std=gnu11"]
+    flags = ["-O3", "-shared", "-fPIC", "-std=gnu11", "-fno-math-errno"]
     try:
         with open("/proc/cpuinfo") as f:
             cpu = f.read()
@@ -64,14 +64,14 @@ def _build() -> Path:
     source = SOURCE.read_bytes()
     key = hashlib.sha256(source + " ".join([compiler, *flags]).encode()).hexdigest()[:16]
     folder = _cache_dir()
-    target = folder / f"encoder_kernels-{key}.so"
+    target = folder / f"kernels-{key}.so"
     if target.is_file():
         return target
     folder.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(suffix=".so", dir=folder)
     os.close(fd)
     try:
-        subprocess.run([compiler, *flags, "-o", tmp, str(SOURCE)], check=True,
+        subprocess.run([compiler, *flags, "-o", tmp, str(SOURCE), "-lm"], check=True,
                        capture_output=True, text=True)
         os.replace(tmp, target)  # whole or not at all; concurrent builds write the same bytes
     except subprocess.CalledProcessError as err:
@@ -98,6 +98,9 @@ def kernels() -> ctypes.CDLL | None:
     lib.rp_conv_forward.restype = i
     lib.rp_conv_backward.argtypes = [p, p, i, i, p, i, i, i, p, i, i, i, i, i, p]
     lib.rp_conv_backward.restype = i
+    f = ctypes.c_float
+    lib.rp_render.argtypes = [p, i, i, p, i, i, f, f, f, i, p, p, p, p, p, p]
+    lib.rp_render.restype = i
     return lib
 
 
@@ -162,3 +165,46 @@ def conv_relu_input_grad(grad: Tensor, relu_output: Tensor, live: Tensor, weight
                                   index.data_ptr(), L, Ho, Wo, w.data_ptr(), N, K, stride,
                                   size[0], size[1], out.data_ptr())
     return out if status == 0 else None
+
+
+def _shape_code(shape: object) -> tuple[int, list[float]] | None:
+    """The C kernel's code and parameters for a shape it renders, else None."""
+    from robotplan.sdf.shapes2d import Box, Circle, LShape, lshape_boxes
+
+    if isinstance(shape, Circle):
+        return 0, [shape.radius]
+    if isinstance(shape, Box):
+        return 1, [shape.size[0] / 2, shape.size[1] / 2]
+    if isinstance(shape, LShape):
+        params, _ = lshape_boxes(shape.size, shape.thickness, torch.float64)
+        return 2, params.T.flatten().tolist()  # per box: centre x, y, half extents x, y
+    return None
+
+
+def render_planes(shape: object, X: Tensor, cos_sin: Tensor | None, origin: tuple[float, float],
+                  resolution: float, size: tuple[int, int]
+                  ) -> tuple[Tensor, Tensor, Tensor, Tensor | None, Tensor | None] | None:
+    """φ, ∂φ/∂x, ∂φ/∂y (body frame) of a circle, box or L-shape at poses ``X (S, 2|3)`` on
+    the grid of ``size = (H, W)`` cells from ``origin`` (its lower-left corner), each
+    ``(S, H·W)``, and the body-frame coordinates px, py for a turning body (``cos_sin (S,
+    2)`` of its yaw; None: not turning). None where the kernels do not apply (another
+    shape, not float32, not compiled)."""
+    lib = kernels()
+    code = _shape_code(shape)
+    if lib is None or code is None or X.dtype != torch.float32 or X.device.type != "cpu":
+        return None
+    kind, params = code
+    X = X.contiguous()
+    S, dofs = X.shape
+    H, W = size
+    phi, gx, gy = (X.new_empty(S, H * W) for _ in range(3))
+    turning = cos_sin is not None
+    px, py = (X.new_empty(S, H * W), X.new_empty(S, H * W)) if turning else (None, None)
+    cs = cos_sin.to(torch.float32).contiguous() if turning else None
+    values = torch.tensor(params, dtype=torch.float32)
+    status = lib.rp_render(X.data_ptr(), S, dofs, cs.data_ptr() if turning else None, H, W,
+                           origin[0], origin[1], resolution, kind, values.data_ptr(),
+                           phi.data_ptr(), gx.data_ptr(), gy.data_ptr(),
+                           px.data_ptr() if turning else None,
+                           py.data_ptr() if turning else None)
+    return (phi, gx, gy, px, py) if status == 0 else None

@@ -1,12 +1,17 @@
-"""Our own encoder convolutions (encoder_kernels.c) against PyTorch's, and the fallback."""
+"""Our own C kernels (robotplan/kernels.c): encoder convolutions and grid rendering against
+PyTorch's, and the fallback where they do not apply."""
 
 import pytest
 import torch
 from torch import nn
 
+from robotplan import native
+from robotplan.functionals import dynamics as fd
+from robotplan.functionals.dynamics import render_on_grid
 from robotplan.learned import dynamics as dyn
-from robotplan.learned import native
 from robotplan.learned.dynamics import DynamicsSpec, PushDynamics
+from robotplan.scene.bodies import Body
+from robotplan.sdf import Box, Circle, LShape, Polygon, Workspace
 
 F32, F64 = torch.float32, torch.float64
 
@@ -108,3 +113,41 @@ def test_encoder_pass_equals_the_pytorch_path(monkeypatch):
     assert [a.tolist() for a in acts.live] == [a.tolist() for a in acts_ref.live]
     assert (f - f_ref).abs().max() < 1e-5 * f_ref.abs().max()
     assert (G - G_ref).abs().max() < 1e-5 * G_ref.abs().max() and G_ref.abs().max() > 0
+
+
+RENDER_SHAPES = [Box((0.28, 0.18)), LShape((0.3, 0.2), 0.08), LShape((0.12, 0.25), 0.05),
+                 Circle(0.02)]
+
+
+@needs_kernels
+@pytest.mark.parametrize("shape", RENDER_SHAPES, ids=lambda s: s.describe())
+@pytest.mark.parametrize("dofs", [2, 3])
+def test_grid_rendering_matches_the_shapes_closed_forms(shape, dofs, monkeypatch):
+    """render_on_grid through our kernel against the PyTorch closed forms (float64), at
+    random poses on a grid whose rows are not a multiple of the vector width."""
+    ws = Workspace((0.05, -0.02), (0.9, 0.7), 0.01)  # 70 × 90 cells
+    g = torch.Generator().manual_seed(6)
+    X = (torch.rand(7, 3, dtype=F64, generator=g) - 0.5) * torch.tensor([0.6, 0.5, 6.0],
+                                                                         dtype=F64)
+    X = X[:, :dofs]
+    body = Body("b", "object", shape, (0.0, 0.0, 0.0), 0.0, 0.06)
+    phi, tangents = render_on_grid(body, X.float(), ws)
+    phi_ref, ref = render_on_grid(body, X, ws)  # float64: the PyTorch path
+    assert (phi.double() - phi_ref).abs().max() < 1e-5
+    dense, dense_ref = tangents.dense().double(), ref.dense()
+    assert dense.shape == dense_ref.shape
+    # the gradient jumps where the nearest face changes: rounding may pick the other side
+    close = (dense - dense_ref).abs() < 1e-4
+    assert close.float().mean() > 0.999, close.float().mean()
+    monkeypatch.setattr(fd, "render_planes", lambda *a, **k: None)  # the fallback
+    phi32, t32 = render_on_grid(body, X.float(), ws)
+    assert (phi32 - phi).abs().max() < 1e-5
+    assert ((t32.dense() - tangents.dense()).abs() < 1e-4).float().mean() > 0.999
+
+
+def test_rendering_declines_other_shapes_and_dtypes():
+    X = torch.zeros(2, 3)
+    square = Polygon(((0.0, 0.0), (0.1, 0.0), (0.1, 0.1), (0.0, 0.1)))
+    assert native.render_planes(square, X, None, (0.0, 0.0), 0.01, (4, 4)) is None
+    assert native.render_planes(Box((0.1, 0.1)), X.double(), None, (0.0, 0.0), 0.01,
+                                (4, 4)) is None
