@@ -143,14 +143,16 @@ def render_on_grid(body: Body, X_WB: Tensor, workspace: Workspace, tangents: boo
     turns = X.shape[-1] == 3 and not isinstance(body.shape, Circle)
     if turns:
         c, s = torch.cos(X[:, 2:3]), torch.sin(X[:, 2:3])
-    if tangents:  # our own kernel (float32 circles, boxes, L-shapes): one pass, ~5x faster
-        native = render_planes(body.shape, X, torch.cat((c, s), 1) if turns else None,
-                               (x0, y0), r, (rows, cols))
-        if native is not None:
-            phi, gx, gy, px, py = native
-            if not turns:
-                return phi, GridTangents(gx, gy, X.shape[-1])
-            return phi, GridTangents(gx, gy, 3, px, py, c, s)
+    # our own kernel (float32 circles, boxes, L-shapes): one pass, 5–17x faster
+    native = render_planes(body.shape, X, torch.cat((c, s), 1) if turns and tangents else None,
+                           (x0, y0), r, (rows, cols))
+    if native is not None:
+        phi, gx, gy, px, py = native
+        if not tangents:
+            return phi, None
+        if not turns:
+            return phi, GridTangents(gx, gy, X.shape[-1])
+        return phi, GridTangents(gx, gy, 3, px, py, c, s)
     dx = x0 + (torch.arange(cols, dtype=X.dtype) + 0.5) * r - X[:, 0:1]  # (S, W)
     dy = y0 + (torch.arange(rows, dtype=X.dtype) + 0.5) * r - X[:, 1:2]  # (S, H)
     if turns:

@@ -56,13 +56,22 @@ def tile_points(points: Tensor, size: int = TILE_POINTS) -> tuple[Tensor, Tensor
 
 
 @dataclass(frozen=True)
-class HeadCache:
-    """What :meth:`TiledHead.input_grad` needs from :meth:`TiledHead.forward`."""
+class BucketCache:
+    """What :meth:`TiledHead.input_grad` needs from one group of tiles of the forward pass."""
 
-    units: Tensor  # (n_tiles, k) live first-layer units per tile (padded with ZERO)
-    hidden1: Tensor  # (n_tiles, B·m, k) first-layer ReLU outputs
-    weight2: Tensor  # (n_tiles, k, H2) the second layer's live columns (transposed)
-    hidden2: Tensor  # (n_tiles, B·m, H2) second-layer ReLU outputs
+    tiles: Tensor  # (n_b,) which tiles
+    units: Tensor  # (n_b, k) live first-layer units per tile (padded with the zero unit)
+    hidden1: Tensor  # (n_b, B·m, k) first-layer ReLU outputs
+    weight2: Tensor  # (n_b, k, H2) the second layer's live columns (transposed)
+    hidden2: Tensor  # (n_b, B·m, H2) second-layer ReLU outputs
+
+
+HeadCache = list[BucketCache]
+
+BUCKETS = 2
+"""Groups of tiles with similar counts of live first-layer units, one batched product each
+(each group padded to its own largest count, not the largest of all): 2 groups cut the
+padding from ~13 % to ~5 % of the forward product; more add small operations."""
 
 
 class TiledHead:
@@ -76,7 +85,7 @@ class TiledHead:
     """
 
     def __init__(self, model: PushDynamics, points: Tensor, tiles: int,
-                 matmul_dtype: torch.dtype | None = None) -> None:
+                 matmul_dtype: torch.dtype | None = None, buckets: int = BUCKETS) -> None:
         linears = [mod for mod in model.head if isinstance(mod, nn.Linear)]
         if len(linears) != 2:
             raise ValueError("TiledHead needs a head with two hidden layers (spec.hidden)")
@@ -85,7 +94,7 @@ class TiledHead:
         self.scale = model.spec.out_scale
         self.matmul_dtype = matmul_dtype or dtype
         H2, H1 = second.weight.shape
-        self.H1, self.tiles = H1, tiles
+        self.H1, self.tiles, self.buckets = H1, tiles, buckets
         self.size = len(points) // tiles
         # two extra units after the H1 real ones: always 1 (carries the bias), always 0
         with torch.no_grad():
@@ -113,36 +122,41 @@ class TiledHead:
         B, n, m = S.shape[0], self.tiles, self.size
         live = S.amax(0) + self.point_max > 0  # (n, H1): live somewhere in the tile
         live = torch.cat((live, live.new_ones(n, 1)), dim=1)  # + the bias unit
-        units = self._columns(live, self.zero)  # (n, k)
-        k = units.shape[1]
         S_ext = torch.cat((S, S.new_zeros(B, 2)), dim=1)
-        S_tile = S_ext.index_select(1, units.flatten()).view(B, n, k).transpose(0, 1).contiguous()
-        P_tile = torch.gather(self.point_term, 2, units[:, None, :].expand(n, m, k))
-        h1 = (S_tile[:, :, None, :] + P_tile[:, None]).clamp_min_(0.0).view(n, B * m, k)
-        w2 = self.weight2_t.index_select(0, units.flatten()).view(n, k, -1)
+        out = S.new_empty(n, B * m)
         dtype = self.matmul_dtype
-        h2 = torch.bmm(h1.to(dtype), w2.to(dtype)).to(S.dtype).clamp_min_(0.0)
-        out = (torch.matmul(h2, self.last[:-1]) + self.last_bias) * self.scale  # (n, B·m)
-        out = out.view(n, B, m).transpose(0, 1).reshape(B, n * m)
-        return out, HeadCache(units, h1, w2, h2)
+        cache: HeadCache = []
+        for tiles in torch.tensor_split(torch.argsort(live.sum(1)), min(self.buckets, n)):
+            units = self._columns(live[tiles], self.zero)  # (n_b, k)
+            nb, k = units.shape
+            S_tile = S_ext.index_select(1, units.flatten()).view(B, nb, k).transpose(0, 1)
+            S_tile = S_tile.contiguous()
+            P_tile = torch.gather(self.point_term[tiles], 2,
+                                  units[:, None, :].expand(nb, m, k))
+            h1 = (S_tile[:, :, None, :] + P_tile[:, None]).clamp_min_(0.0).view(nb, B * m, k)
+            w2 = self.weight2_t.index_select(0, units.flatten()).view(nb, k, -1)
+            h2 = torch.bmm(h1.to(dtype), w2.to(dtype)).to(S.dtype).clamp_min_(0.0)
+            out[tiles] = torch.matmul(h2, self.last[:-1])  # (n_b, B·m)
+            cache.append(BucketCache(tiles, units, h1, w2, h2))
+        out = (out + self.last_bias) * self.scale
+        return out.view(n, B, m).transpose(0, 1).reshape(B, n * m), cache
 
     def input_grad(self, cache: HeadCache, grad_out: Tensor) -> Tensor:
         """``∂(Σ grad_out · output) / ∂S``: ``grad_out (B, N')`` → ``(B, H1)``."""
         B, n, m = grad_out.shape[0], self.tiles, self.size
-        H2 = cache.hidden2.shape[2]
-        rows = cache.hidden2.shape[1]
-        g = (grad_out * self.scale).view(B, n, m).transpose(0, 1).reshape(n, rows, 1)
-        # only the second layer's units active somewhere in the tile pass gradient
-        live2 = cache.hidden2.sum(1) > 0  # (n, H2); ReLU outputs: a sum > 0 iff any is (2x faster)
-        units2 = self._columns(live2, H2)  # (n, k2), padded with H2 (weight 0 in last)
-        k2 = units2.shape[1]
-        inside = units2.clamp_max(H2 - 1)
-        h2 = torch.gather(cache.hidden2, 2, inside[:, None, :].expand(n, rows, k2))
-        g2 = relu_backward(g * self.last[units2][:, None, :], h2)  # (n, B·m, k2)
-        w2 = torch.gather(cache.weight2, 2, inside[:, None, :].expand(n, cache.units.shape[1], k2))
-        dtype = self.matmul_dtype
-        g1 = torch.bmm(g2.to(dtype), w2.transpose(1, 2).to(dtype)).to(grad_out.dtype)
-        g1 = relu_backward(g1, cache.hidden1).view(n, B, m, -1).sum(2)  # (n, B, k)
+        g_all = (grad_out * self.scale).view(B, n, m).transpose(0, 1).reshape(n, B * m, 1)
         grad = grad_out.new_zeros(B, self.H1 + 2)
-        grad.index_add_(1, cache.units.flatten(), g1.transpose(0, 1).reshape(B, -1))
+        dtype = self.matmul_dtype
+        for b in cache:
+            nb, rows, H2 = b.hidden2.shape
+            # only the second layer's units active somewhere in the tile pass gradient
+            live2 = b.hidden2.sum(1) > 0  # (n_b, H2); ReLU outputs: sum > 0 iff any is
+            units2 = self._columns(live2, H2)  # (n_b, k2), padded with H2 (weight 0 in last)
+            inside = units2.clamp_max(H2 - 1)
+            h2 = torch.gather(b.hidden2, 2, inside[:, None, :].expand(nb, rows, -1))
+            g2 = relu_backward(g_all[b.tiles] * self.last[units2][:, None, :], h2)
+            w2 = torch.gather(b.weight2, 2, inside[:, None, :].expand(nb, b.units.shape[1], -1))
+            g1 = torch.bmm(g2.to(dtype), w2.transpose(1, 2).to(dtype)).to(grad_out.dtype)
+            g1 = relu_backward(g1, b.hidden1).view(nb, B, m, -1).sum(2)  # (n_b, B, k)
+            grad.index_add_(1, b.units.flatten(), g1.transpose(0, 1).reshape(B, -1))
         return grad[:, :self.H1]

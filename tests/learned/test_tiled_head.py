@@ -35,7 +35,7 @@ def test_tiled_head_equals_the_dense_head(size):
     assert out.shape == (5, len(tiled_points))
     assert (out - expected).abs().max() < 1e-12
     # live units per tile: never more than anywhere in the batch, fewer with small tiles
-    assert cache.units.shape[1] <= 24 + 1
+    assert all(b.units.shape[1] <= 24 + 1 for b in cache)
     c = torch.randn(5, len(tiled_points), dtype=F64, generator=g) * real.flatten()
     S_ = S.clone().requires_grad_(True)
     (grad_expected,) = torch.autograd.grad(
