@@ -379,14 +379,14 @@ static void lshape_row(const float *restrict px, const float *restrict py, int W
 }
 
 /* One renderer per shape and output set (TURNING: px, py written too), each a single
- * branch-free row loop that vectorizes. */
+ * branch-free row loop that vectorizes; cos_sin NULL: yaw 0. */
 #define DEFINE_RENDER(NAME, PIXEL, TURNING)                                                   \
     static void NAME(const float *X, int S, int dofs, const float *cos_sin, int H, int W,     \
                      float x0, float y0, float res, const float *restrict q, float *phi,      \
                      float *gx, float *gy, float *px_out, float *py_out) {                    \
         for (int s = 0; s < S; ++s) {                                                         \
-            const float c = TURNING ? cos_sin[2 * s] : 1.f;                                   \
-            const float sn = TURNING ? cos_sin[2 * s + 1] : 0.f;                              \
+            const float c = cos_sin ? cos_sin[2 * s] : 1.f;                                   \
+            const float sn = cos_sin ? cos_sin[2 * s + 1] : 0.f;                              \
             const float cx = X[s * dofs], cy = X[s * dofs + 1];                               \
             for (int i = 0; i < H; ++i) {                                                     \
                 const float dy = y0 + ((float)i + 0.5f) * res - cy;                           \
@@ -438,17 +438,39 @@ typedef void (*render_fn)(const float *, int, int, const float *, int, int, floa
 
 /* kind 0: circle, params = {radius}; 1: box, {hx, hy}; 2: L-shape, 4 boxes {cx, cy, hx, hy}
  * (bottom strip, left strip, bounding box, notch: lshape_boxes). X (S, dofs): x, y[, yaw];
- * cos_sin (S, 2) of the yaw for a turning body, else NULL (and px, py are not written). */
+ * cos_sin (S, 2) of the yaw, or NULL for yaw 0; px_out, py_out: the body-frame coordinates,
+ * written where both are given. */
 int rp_render(const float *X, int S, int dofs, const float *cos_sin, int H, int W, float x0,
               float y0, float res, int kind, const float *params, float *phi, float *gx,
               float *gy, float *px_out, float *py_out) {
     if (kind < 0 || kind > 2 || (dofs != 2 && dofs != 3)) return -1;
-    const int turning = cos_sin != NULL && px_out != NULL && py_out != NULL;
-    if (kind == 0 && turning) return -1; /* a disc does not turn */
+    const int turning = px_out != NULL && py_out != NULL; /* body-frame coordinates asked */
     if (kind == 2)
-        return render_lshape(X, S, dofs, turning ? cos_sin : NULL, H, W, x0, y0, res, params,
-                             phi, gx, gy, turning ? px_out : NULL, turning ? py_out : NULL);
+        return render_lshape(X, S, dofs, cos_sin, H, W, x0, y0, res, params, phi, gx, gy,
+                             turning ? px_out : NULL, turning ? py_out : NULL);
     const render_fn fn = kind == 0 ? render_circle : turning ? render_box_turning : render_box;
     fn(X, S, dofs, cos_sin, H, W, x0, y0, res, params, phi, gx, gy, px_out, py_out);
+    return 0;
+}
+
+/* φ and its body-frame gradient at n body-frame points (px, py): Shape2D.sdf_and_grad_planes
+ * for the same shapes and parameters as rp_render. */
+int rp_shape_planes(int kind, const float *params, long n, const float *px, const float *py,
+                    float *phi, float *gx, float *gy) {
+    if (kind < 0 || kind > 2) return -1;
+    if (kind == 0) {
+        for (long j = 0; j < n; ++j) circle_pixel(px[j], py[j], params, phi + j, gx + j, gy + j);
+        return 0;
+    }
+    if (kind == 1) {
+        for (long j = 0; j < n; ++j) box_pixel(px[j], py[j], params, phi + j, gx + j, gy + j);
+        return 0;
+    }
+    enum { CHUNK = 256 };
+    float tmp[12 * CHUNK];
+    for (long j = 0; j < n; j += CHUNK) {
+        const int m = n - j < CHUNK ? (int)(n - j) : CHUNK;
+        lshape_row(px + j, py + j, m, params, phi + j, gx + j, gy + j, tmp);
+    }
     return 0;
 }

@@ -31,7 +31,8 @@ from pathlib import Path
 import torch
 from torch import Tensor
 
-__all__ = ["conv_relu_forward", "conv_relu_input_grad", "kernels", "render_planes"]
+__all__ = ["conv_relu_forward", "conv_relu_input_grad", "kernels", "render_planes",
+           "shape_planes"]
 
 SOURCE = Path(__file__).with_name("kernels.c")
 MAX_CHANNELS = 8  # per layer, as compiled (MAXC in the C file)
@@ -101,11 +102,15 @@ def kernels() -> ctypes.CDLL | None:
     f = ctypes.c_float
     lib.rp_render.argtypes = [p, i, i, p, i, i, f, f, f, i, p, p, p, p, p, p]
     lib.rp_render.restype = i
+    lib.rp_shape_planes.argtypes = [i, p, ctypes.c_long, p, p, p, p, p]
+    lib.rp_shape_planes.restype = i
     return lib
 
 
 def _usable(*tensors: Tensor) -> bool:
-    return all(t.dtype == torch.float32 and t.device.type == "cpu" for t in tensors)
+    """float32 CPU tensors that autograd does not track (the kernels record no graph)."""
+    return all(t.dtype == torch.float32 and t.device.type == "cpu" and not t.requires_grad
+               for t in tensors)
 
 
 def _index(channels: Tensor) -> Tensor:
@@ -182,13 +187,14 @@ def _shape_code(shape: object) -> tuple[int, list[float]] | None:
 
 
 def render_planes(shape: object, X: Tensor, cos_sin: Tensor | None, origin: tuple[float, float],
-                  resolution: float, size: tuple[int, int]
+                  resolution: float, size: tuple[int, int], coordinates: bool = True
                   ) -> tuple[Tensor, Tensor, Tensor, Tensor | None, Tensor | None] | None:
     """φ, ∂φ/∂x, ∂φ/∂y (body frame) of a circle, box or L-shape at poses ``X (S, 2|3)`` on
     the grid of ``size = (H, W)`` cells from ``origin`` (its lower-left corner), each
-    ``(S, H·W)``, and the body-frame coordinates px, py for a turning body (``cos_sin (S,
-    2)`` of its yaw; None: not turning). None where the kernels do not apply (another
-    shape, not float32, not compiled)."""
+    ``(S, H·W)``; ``cos_sin (S, 2)``: the cosine and sine of a turning body's yaw (None:
+    yaw 0); with ``coordinates`` and a turning body also the body-frame coordinates px, py
+    (else None). None where the kernels do not apply (another shape, not float32, not
+    compiled)."""
     lib = kernels()
     code = _shape_code(shape)
     if lib is None or code is None or X.dtype != torch.float32 or X.device.type != "cpu":
@@ -199,12 +205,30 @@ def render_planes(shape: object, X: Tensor, cos_sin: Tensor | None, origin: tupl
     H, W = size
     phi, gx, gy = (X.new_empty(S, H * W) for _ in range(3))
     turning = cos_sin is not None
-    px, py = (X.new_empty(S, H * W), X.new_empty(S, H * W)) if turning else (None, None)
+    wanted = turning and coordinates
+    px, py = (X.new_empty(S, H * W), X.new_empty(S, H * W)) if wanted else (None, None)
     cs = cos_sin.to(torch.float32).contiguous() if turning else None
     values = torch.tensor(params, dtype=torch.float32)
     status = lib.rp_render(X.data_ptr(), S, dofs, cs.data_ptr() if turning else None, H, W,
                            origin[0], origin[1], resolution, kind, values.data_ptr(),
                            phi.data_ptr(), gx.data_ptr(), gy.data_ptr(),
-                           px.data_ptr() if turning else None,
-                           py.data_ptr() if turning else None)
+                           px.data_ptr() if wanted else None,
+                           py.data_ptr() if wanted else None)
     return (phi, gx, gy, px, py) if status == 0 else None
+
+
+def shape_planes(shape: object, px: Tensor, py: Tensor) -> tuple[Tensor, Tensor, Tensor] | None:
+    """``Shape2D.sdf_and_grad_planes`` of a circle, box or L-shape at body-frame coordinate
+    planes ``px, py (...)`` (float32): φ, ∂φ/∂x, ∂φ/∂y, each ``(...)`` and contiguous; None
+    where the kernels do not apply."""
+    lib = kernels()
+    code = _shape_code(shape) if lib is not None else None
+    if code is None or not _usable(px, py) or px.shape != py.shape:
+        return None
+    kind, params = code
+    px, py = px.contiguous(), py.contiguous()
+    phi, gx, gy = (torch.empty_like(px) for _ in range(3))
+    values = torch.tensor(params, dtype=torch.float32)
+    status = lib.rp_shape_planes(kind, values.data_ptr(), px.numel(), px.data_ptr(),
+                                 py.data_ptr(), phi.data_ptr(), gx.data_ptr(), gy.data_ptr())
+    return (phi, gx, gy) if status == 0 else None

@@ -134,6 +134,8 @@ def test_grid_rendering_matches_the_shapes_closed_forms(shape, dofs, monkeypatch
     phi, tangents = render_on_grid(body, X.float(), ws)
     phi_ref, ref = render_on_grid(body, X, ws)  # float64: the PyTorch path
     assert (phi.double() - phi_ref).abs().max() < 1e-5
+    values_only, none = render_on_grid(body, X.float(), ws, tangents=False)  # still turned
+    assert none is None and (values_only - phi).abs().max() < 1e-6
     dense, dense_ref = tangents.dense().double(), ref.dense()
     assert dense.shape == dense_ref.shape
     # the gradient jumps where the nearest face changes: rounding may pick the other side
@@ -151,3 +153,21 @@ def test_rendering_declines_other_shapes_and_dtypes():
     assert native.render_planes(square, X, None, (0.0, 0.0), 0.01, (4, 4)) is None
     assert native.render_planes(Box((0.1, 0.1)), X.double(), None, (0.0, 0.0), 0.01,
                                 (4, 4)) is None
+
+
+@needs_kernels
+@pytest.mark.parametrize("shape", RENDER_SHAPES, ids=lambda s: s.describe())
+def test_shape_planes_at_points_match_the_closed_forms(shape):
+    """sdf_and_grad_planes in float32 (our kernel) against float64 (PyTorch), at scattered
+    points in and around the shape, more of them than one chunk of the L-shape's rows."""
+    g = torch.Generator().manual_seed(7)
+    px, py = (torch.rand(2, 3, 700, dtype=F64, generator=g) - 0.5) * 0.5
+    phi, gx, gy = shape.sdf_and_grad_planes(px.float(), py.float())
+    assert phi.dtype == F32 and phi.shape == px.shape
+    phi_ref, gx_ref, gy_ref = shape.sdf_and_grad_planes(px, py)
+    assert (phi.double() - phi_ref).abs().max() < 1e-6
+    for a, b in ((gx, gx_ref), (gy, gy_ref)):
+        assert ((a.double() - b).abs() < 1e-4).float().mean() > 0.999
+    # autograd-tracked inputs stay on the PyTorch path (the kernels record no graph)
+    px_ = px.float().requires_grad_(True)
+    assert native.shape_planes(shape, px_, py.float()) is None

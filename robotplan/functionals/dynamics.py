@@ -144,8 +144,8 @@ def render_on_grid(body: Body, X_WB: Tensor, workspace: Workspace, tangents: boo
     if turns:
         c, s = torch.cos(X[:, 2:3]), torch.sin(X[:, 2:3])
     # our own kernel (float32 circles, boxes, L-shapes): one pass, 5–17x faster
-    native = render_planes(body.shape, X, torch.cat((c, s), 1) if turns and tangents else None,
-                           (x0, y0), r, (rows, cols))
+    native = render_planes(body.shape, X, torch.cat((c, s), 1) if turns else None,
+                           (x0, y0), r, (rows, cols), coordinates=tangents)
     if native is not None:
         phi, gx, gy, px, py = native
         if not tangents:

@@ -38,6 +38,14 @@ POSITIVE = {"positive": True}
 _EPS = 1e-30  # under the square root: the value moves by at most sqrt(_EPS) = 1e-15 m
 
 
+def shape_planes(shape: Shape2D, px: Tensor, py: Tensor) -> tuple[Tensor, Tensor, Tensor] | None:
+    """``sdf_and_grad_planes`` through our C kernel (:func:`robotplan.native.shape_planes`:
+    float32 circles, boxes and L-shapes, no autograd graph), else None."""
+    from robotplan import native  # it names these shapes: imported at first use
+
+    return native.shape_planes(shape, px, py)
+
+
 def safe_hypot(x: Tensor, y: Tensor) -> Tensor:
     """√(x² + y²) whose gradient is 0 (not NaN) at the origin; value exact to 1e-15."""
     return (x * x + y * y + _EPS).sqrt() - _EPS**0.5
@@ -212,7 +220,8 @@ class Box(Shape2D):
         return phi, torch.stack((gx, gy), dim=-1)
 
     def sdf_and_grad_planes(self, px: Tensor, py: Tensor) -> tuple[Tensor, Tensor, Tensor]:
-        return _box_sdf_and_grad(px, py, 0.0, 0.0, self.size[0] / 2, self.size[1] / 2)
+        return (shape_planes(self, px, py)
+                or _box_sdf_and_grad(px, py, 0.0, 0.0, self.size[0] / 2, self.size[1] / 2))
 
     def outline(self, n_arc: int = 720) -> np.ndarray:
         w, h = self.size[0] / 2, self.size[1] / 2
@@ -238,6 +247,9 @@ class Circle(Shape2D):
         return norm - self.radius, p_B / norm.clamp_min(1e-12)[..., None]
 
     def sdf_and_grad_planes(self, px: Tensor, py: Tensor) -> tuple[Tensor, Tensor, Tensor]:
+        native = shape_planes(self, px, py)
+        if native is not None:
+            return native
         norm = safe_hypot(px, py)
         inv = norm.clamp_min(1e-12).reciprocal()
         return norm - self.radius, px * inv, py * inv
@@ -297,6 +309,9 @@ class LShape(_PolygonalShape):
         """Closed form from the boxes of :func:`lshape_sdf`, all four in one pass: outside,
         the nearer strip; inside, the bounding box or the notch (its negated SDF),
         whichever is larger."""
+        native = shape_planes(self, px, py)
+        if native is not None:
+            return native
         params, sign = lshape_boxes(self.size, self.thickness, px.dtype)
         ones = [1] * px.dim()
         phi, gx, gy = _box_sdf_and_grad(px, py, *params.view(4, 4, *ones))  # (4 boxes, ...)
