@@ -22,6 +22,7 @@ from robotplan.functionals.dynamics import (
 )
 from robotplan.learned.dynamics import load_model
 from robotplan.learned.push_data import simulate_scene
+from robotplan.native import kernels
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, Workspace
 
@@ -126,6 +127,7 @@ def bench_functional(model_dir: str | Path = DEFAULT_MODEL, configurations: int 
     quad = phase_quadrature_for(obj, X1, ws)
     fast = LearnedDynamics(model, obj, pusher, quad)
     result: dict = {"model": str(model_dir), "threads": torch.get_num_threads(),
+                    "native_kernels": kernels() is not None,  # robotplan/kernels.c in use
                     "head_matmul_dtype": str(fast.matmul_dtype).removeprefix("torch."),
                     "steps": X1.shape[0] - 1, "quadrature_points": len(quad.points),
                     "quadrature": _describe_quadrature()}

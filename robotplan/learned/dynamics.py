@@ -260,10 +260,10 @@ class PushDynamics(nn.Module):
 
         Records each layer's live channels (non-zero somewhere in the batch): reverse mode
         skips the others exactly, as they pass no gradient back (in the shipped F_flow 1 of
-        3, 2 of 5 and 1 of 5 are dead on real pushes). Dropping them from the next layer's
-        forward convolution too was slower (the gather costs what the smaller convolution
-        saves: 28.9 against 28.6 ms per H_F phase). ``linear=False`` stops before the
-        encoder's linear layer: the last convolution's live channels, flattened
+        3, 2 of 5 and 1 of 5 are dead on real pushes). Float32 on the CPU runs our own
+        kernels (:mod:`robotplan.native`), whose next layer also skips them at no cost;
+        through PyTorch that needed a gather costing what it saved. ``linear=False`` stops
+        before the encoder's linear layer: the last convolution's live channels, flattened
         ``(M, C'·h·w)`` in the (C', h, w) order of the linear layer's inputs.
         """
         enc = self.encoder
