@@ -1,19 +1,21 @@
-/* Direct convolutions for the SDF encoder's few-channel layers (float32, NCHW, one thread).
+/* C kernels of robotplan (float32, one thread), built and loaded by robotplan/native.py
+ * (the system's C compiler, ctypes); see its docstring for why and for the timings.
  *
- * Built and loaded by robotplan/learned/native.py (gcc, ctypes); see its docstring for why.
- * Two entry points, both over a batch of M images:
- *
+ * SDF encoder convolutions, over a batch of M images (NCHW):
  *   rp_conv_forward   y = ReLU(conv(x, w, stride) + b) over the input channels listed in
  *                     `in_ch` (the others are zero: dead channels of the previous layer),
  *                     and the sum of each output channel (which channels are live);
  *   rp_conv_backward  gx = conv_transposeᵀ(g masked by the ReLU outputs y > 0), between the
  *                     listed live output channels and the wanted input channels.
- *
  * Vectorized along image rows, 8 floats per vector (GCC vector extensions: AVX2 + FMA where
  * the compiler is told so, SSE otherwise); each output pixel block keeps every output
  * channel's accumulator in registers, so an input vector loaded once feeds all of them.
  * Stride 2 reads column-deinterleaved copies of the input rows (stride 1 along the row), and
  * its transposed form computes the even and odd output columns together and interleaves them.
+ *
+ * Closed-form SDFs of circles, boxes and L-shapes with their gradients (robotplan/sdf):
+ *   rp_render         on the grid X_h at S poses, with the body-frame coordinates;
+ *   rp_shape_planes   at given body-frame points.
  */
 #include <stdlib.h>
 #include <math.h>

@@ -171,3 +171,32 @@ def test_shape_planes_at_points_match_the_closed_forms(shape):
     # autograd-tracked inputs stay on the PyTorch path (the kernels record no graph)
     px_ = px.float().requires_grad_(True)
     assert native.shape_planes(shape, px_, py.float()) is None
+
+
+@needs_kernels
+@pytest.mark.parametrize("shape", [Box((0.2, 0.12)), LShape((0.24, 0.18), 0.07)],
+                         ids=["box", "lshape"])
+def test_h_f_in_float32_equals_the_pytorch_path(shape, monkeypatch):
+    """A float32 H_F phase (joint encoder with a dead channel, full grid) through the
+    kernels against the same phase with every kernel declined."""
+    spec = DynamicsSpec(encoder="joint", channels=(2, 3, 3), sdf_features=16,
+                        point_features=8, hidden=(24, 24))
+    torch.manual_seed(7)
+    model = PushDynamics(spec).eval()
+    with torch.no_grad():
+        model.encoder.conv[0].bias[1] = -1e3  # dead everywhere
+    obj = Body("obj", "object", shape, (0.0, 0.0, 0.0), 0.0, 0.06)
+    pusher = Body("pusher", "pusher", Circle(0.03), (0.0, 0.0, 0.0), 0.0, 0.06)
+    T = 4
+    X1 = torch.zeros(T + 1, 3)
+    X1[:, 0], X1[:, 2] = torch.linspace(0.0, 0.04, T + 1), torch.linspace(0.1, 0.25, T + 1)
+    X2 = torch.stack((torch.linspace(-0.16, -0.11, T + 1), torch.full((T + 1,), 0.013)), 1)
+    H = fd.LearnedDynamics(model, obj, pusher, fd.Quadrature.grid(Workspace()))
+    h, j1, j2 = H.evaluate(X1, X2)
+    for module, name in ((dyn, "conv_relu_forward"), (dyn, "conv_relu_input_grad"),
+                         (fd, "render_planes"), (native, "shape_planes")):
+        monkeypatch.setattr(module, name, lambda *a, **k: None)
+    h_ref, j1_ref, j2_ref = H.evaluate(X1, X2)
+    assert (h - h_ref).abs().max() < 1e-4 * h_ref.abs().max() and h_ref.abs().min() > 0
+    for j, ref in ((j1, j1_ref), (j2, j2_ref)):
+        assert (j - ref).abs().max() < 1e-3 * ref.abs().max() and ref.abs().max() > 0
