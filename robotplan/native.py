@@ -179,18 +179,22 @@ def conv_relu_input_grad(grad: Tensor, relu_output: Tensor, live: Tensor, weight
     return out if status == 0 else None
 
 
-def _shape_code(shape: object) -> tuple[int, list[float]] | None:
-    """The C kernel's code and parameters for a shape it renders, else None."""
+@functools.lru_cache(maxsize=256)
+def _shape_code(shape: object) -> tuple[int, Tensor] | None:
+    """The C kernel's code and float32 parameters for a shape it renders, else None (per
+    shape once: shapes are frozen dataclasses)."""
     from robotplan.sdf.shapes2d import Box, Circle, LShape, lshape_boxes
 
     if isinstance(shape, Circle):
-        return 0, [shape.radius]
-    if isinstance(shape, Box):
-        return 1, [shape.size[0] / 2, shape.size[1] / 2]
-    if isinstance(shape, LShape):
-        params, _ = lshape_boxes(shape.size, shape.thickness, torch.float64)
-        return 2, params.T.flatten().tolist()  # per box: centre x, y, half extents x, y
-    return None
+        kind, params = 0, [shape.radius]
+    elif isinstance(shape, Box):
+        kind, params = 1, [shape.size[0] / 2, shape.size[1] / 2]
+    elif isinstance(shape, LShape):
+        boxes, _ = lshape_boxes(shape.size, shape.thickness, torch.float64)
+        kind, params = 2, boxes.T.flatten().tolist()  # per box: centre x, y, half extents
+    else:
+        return None
+    return kind, torch.tensor(params, dtype=torch.float32)
 
 
 def render_planes(shape: object, X: Tensor, cos_sin: Tensor | None, origin: tuple[float, float],
@@ -203,10 +207,10 @@ def render_planes(shape: object, X: Tensor, cos_sin: Tensor | None, origin: tupl
     (else None). None where the kernels do not apply (another shape, not float32, not
     compiled)."""
     lib = kernels()
-    code = _shape_code(shape)
-    if lib is None or code is None or X.dtype != torch.float32 or X.device.type != "cpu":
+    code = _shape_code(shape) if lib is not None else None
+    if code is None or not _usable(X):
         return None
-    kind, params = code
+    kind, values = code
     X = X.contiguous()
     S, dofs = X.shape
     H, W = size
@@ -215,7 +219,6 @@ def render_planes(shape: object, X: Tensor, cos_sin: Tensor | None, origin: tupl
     wanted = turning and coordinates
     px, py = (X.new_empty(S, H * W), X.new_empty(S, H * W)) if wanted else (None, None)
     cs = cos_sin.to(torch.float32).contiguous() if turning else None
-    values = torch.tensor(params, dtype=torch.float32)
     status = lib.rp_render(X.data_ptr(), S, dofs, cs.data_ptr() if turning else None, H, W,
                            origin[0], origin[1], resolution, kind, values.data_ptr(),
                            phi.data_ptr(), gx.data_ptr(), gy.data_ptr(),
@@ -232,10 +235,9 @@ def shape_planes(shape: object, px: Tensor, py: Tensor) -> tuple[Tensor, Tensor,
     code = _shape_code(shape) if lib is not None else None
     if code is None or not _usable(px, py) or px.shape != py.shape:
         return None
-    kind, params = code
+    kind, values = code
     px, py = px.contiguous(), py.contiguous()
     phi, gx, gy = (torch.empty_like(px) for _ in range(3))
-    values = torch.tensor(params, dtype=torch.float32)
     status = lib.rp_shape_planes(kind, values.data_ptr(), px.numel(), px.data_ptr(),
                                  py.data_ptr(), phi.data_ptr(), gx.data_ptr(), gy.data_ptr())
     return (phi, gx, gy) if status == 0 else None

@@ -156,8 +156,7 @@ def _box_sdf_and_grad(px: Tensor, py: Tensor, cx: Tensor | float, cy: Tensor | f
 
     The box parameters may be tensors ``(K, 1, …)`` that broadcast with the points: K boxes
     in one pass, results ``(K, …)`` (the same few kernels for any K)."""
-    centred = isinstance(cx, float) and cx == 0.0 and isinstance(cy, float) and cy == 0.0
-    dx, dy = (px, py) if centred else (px - cx, py - cy)
+    dx, dy = px - cx, py - cy
     qx, qy = dx.abs() - hx, dy.abs() - hy
     ox, oy = qx.clamp_min(0.0), qy.clamp_min(0.0)
     # not differentiated: no need for safe_hypot; √(ox² + oy²) is 2x faster than hypot here
