@@ -7,9 +7,15 @@ import numpy as np
 import pytest
 import torch
 
-from robotplan.arm_program import _kinematics
-from robotplan.arms import ArmSeparation, CheckPointHeights, TipCoupling, TipHeight, track_tip_path
-from robotplan.robot import available_models, load_robot_model
+from robotplan.functionals.kinematics import (
+    ArmSeparation,
+    CheckPointHeights,
+    TipCoupling,
+    TipHeight,
+    arm_kinematics,
+    track_tip_path,
+)
+from robotplan.scene.robots import available_models, load_robot_model
 from robotplan.scene.schema import RobotSpec
 
 
@@ -19,12 +25,12 @@ def _spec(name: str, base) -> RobotSpec:
 
 @pytest.fixture(scope="module")
 def left():
-    return _kinematics(_spec("left", (-0.8, 0.0, 0.0, 0.0)))
+    return arm_kinematics(_spec("left", (-0.8, 0.0, 0.0, 0.0)))
 
 
 @pytest.fixture(scope="module")
 def right():
-    return _kinematics(_spec("right", (0.8, 0.0, 0.0, np.pi)))
+    return arm_kinematics(_spec("right", (0.8, 0.0, 0.0, np.pi)))
 
 
 def _random_q(kin, rng, n: int) -> np.ndarray:
@@ -89,7 +95,7 @@ def test_reach_in_robot_yaml_is_true(name):
     model = load_robot_model(name)
     lo, hi = model.reach
     assert 0.0 <= lo < hi < 2.0
-    kin = _kinematics(_spec(name, (0.0, 0.0, 0.0, 0.0)))
+    kin = arm_kinematics(_spec(name, (0.0, 0.0, 0.0, 0.0)))
     for r, reachable in ((lo + 0.02, True), (hi - 0.02, True), (hi + 0.10, False)):
         target = np.array([[r * np.cos(0.4), r * np.sin(0.4), 0.03]])
         q = track_tip_path(kin, target, kin.q0, flange_min=0.07, link_min=0.12)[0]

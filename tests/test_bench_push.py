@@ -6,17 +6,17 @@ import math
 import numpy as np
 import pytest
 
-from robotplan.bench_push import (
+from robotplan.bench.push import (
     GOAL_DISTANCE,
     candidate_timings,
     draw_scene,
     summarize,
     time_profile,
 )
-from robotplan.coverage import coverage
-from robotplan.planner import order_candidates
+from robotplan.functionals.coverage import coverage
+from robotplan.program.skeleton import load_skeleton_space
 from robotplan.scene import parse_scene
-from robotplan.skeleton import load_skeleton_space
+from robotplan.search.planner import order_candidates
 from tests.test_cli import run
 
 
@@ -107,8 +107,8 @@ def test_bench_push_refuses_bad_options(tmp_path):
 def test_unseen_shape_scenes_cover_eight_families_three_concave():
     """``--shapes ood``: valid scenes, every family twice in 16, concave T, cross and U, in
     the data's size range, with a goal region that holds them in any orientation."""
-    from robotplan.bench_push import OOD_FAMILIES, family_of
-    from robotplan.polygons import is_convex
+    from robotplan.bench.push import OOD_FAMILIES, family_of
+    from robotplan.geometry.polygons import is_convex
 
     docs = [draw_scene(i, 5, "ood") for i in range(16)]
     assert docs[3] == draw_scene(3, 5, "ood") and docs[3] != draw_scene(3, 6, "ood")

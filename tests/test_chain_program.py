@@ -7,11 +7,11 @@ import pytest
 import torch
 
 from robotplan import load_scene
-from robotplan.chain_program import ChainPushProgram, objects_touch, touching_distance
-from robotplan.execute import execute_push
+from robotplan.execution.execute import execute_push
 from robotplan.functionals.sticking import QuasiStaticObjectPush
-from robotplan.program import ProgramSettings
-from robotplan.skeleton import chain_candidates, load_skeleton_space, parse_skeleton
+from robotplan.program.chain_program import ChainPushProgram, objects_touch, touching_distance
+from robotplan.program.settings import ProgramSettings
+from robotplan.program.skeleton import chain_candidates, load_skeleton_space, parse_skeleton
 from tests.conftest import TASKS
 
 THREE_PUSHES = "push@0,push@0>blue,push@0>blue"

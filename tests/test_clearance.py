@@ -1,4 +1,4 @@
-"""Clearance of a planned object motion from the obstacles (robotplan.clearance)."""
+"""Clearance of a planned object motion from the obstacles (robotplan.functionals.clearance)."""
 
 import math
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from robotplan import load_scene
-from robotplan.clearance import densify, obstacle_clearance
+from robotplan.functionals.clearance import densify, obstacle_clearance
 from tests.conftest import ROOT
 
 SCENE = ROOT / "tasks" / "obstacle_push.yaml"  # box 0.12 × 0.12; wall 0.06 × 0.30 at x = 0.05

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import shapely
 
-from robotplan.coverage import coverage
+from robotplan.functionals.coverage import coverage
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape, Polygon
 

@@ -5,7 +5,7 @@ import json
 import numpy as np
 
 from robotplan import load_scene
-from robotplan.diagnose import check_steps, summarize, table
+from robotplan.training.diagnose import check_steps, summarize, table
 from tests.conftest import DATA, ROOT
 from tests.test_cli import run
 

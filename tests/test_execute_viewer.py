@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from robotplan import load_scene
-from robotplan.execute import REACH_SPEED, execute_push, reach_substeps
+from robotplan.execution.execute import REACH_SPEED, execute_push, reach_substeps
 from robotplan.scene import parse_scene
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape, Polygon
-from robotplan.viewer import write_playback
+from robotplan.viz.viewer import write_playback
 from tests.conftest import DATA, TASKS
 
 
@@ -50,19 +50,18 @@ def test_arm_execution_tracks_the_plan_and_pushes_with_its_tip(tmp_path):
     """The left iiwa follows an IK'd push path under position control: its tip stays on
     Drake's forward kinematics of the planned angles, the box moves, the idle right arm
     holds still; the playback draws both arms."""
-    from robotplan.arm_program import _kinematics
-    from robotplan.arms import track_tip_path
-    from robotplan.execute import execute_arms
+    from robotplan.execution.execute import execute_arms
+    from robotplan.functionals.kinematics import arm_kinematics, track_tip_path
 
     scene = load_scene(TASKS / "two_arm_left_only.yaml")
     left, right = (next(r for r in scene.robots if r.name == n) for n in ("left", "right"))
-    kin = _kinematics(left)
+    kin = arm_kinematics(left)
     above = np.array([[-0.45, -0.37, 0.12]])
     down = np.array([[-0.45, -0.37, 0.03]])
     push = np.stack([np.full(12, -0.45), np.linspace(-0.37, -0.10, 12), np.full(12, 0.03)], 1)
     Q = track_tip_path(kin, np.vstack([above, down, push[1:]]), kin.q0, 0.07, 0.12)
     Q = np.vstack([kin.q0, Q])
-    q_right = np.tile(_kinematics(right).q0, (len(Q), 1))
+    q_right = np.tile(arm_kinematics(right).q0, (len(Q), 1))
     substeps = [60, 60] + [20] * (len(Q) - 3)
     ex = execute_arms(scene, "box", {"left": Q, "right": q_right}, substeps)
     planned = np.array([kin.tip(q) for q in Q])
@@ -109,9 +108,9 @@ def test_every_object_is_simulated_and_forbidden_touches_are_reported():
 
 
 def test_guess_routes_the_object_around_the_obstacle():
-    from robotplan.guess import object_route
-    from robotplan.program import PushProgram
-    from robotplan.skeleton import parse_skeleton, space_for
+    from robotplan.program.guess import object_route
+    from robotplan.program.push_program import PushProgram
+    from robotplan.program.skeleton import parse_skeleton, space_for
 
     scene = load_scene(TASKS / "obstacle_push.yaml")
     prog = PushProgram(scene, parse_skeleton("push@0,push@0", "pusher", "box"), None,
@@ -137,7 +136,7 @@ def test_footprints_are_simulated_as_their_outlines(shape, rng):
     probe spheres around and inside its concavities matches the SDF to 2 mm."""
     import torch
 
-    from robotplan.sim import PushWorld
+    from robotplan.execution.sim import PushWorld
 
     pose = (0.1, -0.05, 0.7)
     body = Body("o", "object", shape, pose, 0.0, 0.06)

@@ -7,9 +7,10 @@ import pytest
 import torch
 
 from robotplan import load_scene
-from robotplan.guess import contact_offset, contact_point_guess
-from robotplan.program import ProgramSettings, PushProgram
-from robotplan.skeleton import load_skeleton_space, parse_skeleton
+from robotplan.program.guess import contact_offset, contact_point_guess
+from robotplan.program.push_program import PushProgram
+from robotplan.program.settings import ProgramSettings
+from robotplan.program.skeleton import load_skeleton_space, parse_skeleton
 from tests.conftest import DATA, TASKS
 
 

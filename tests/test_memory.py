@@ -1,4 +1,4 @@
-"""robotplan.memory: the allocator setting that keeps freed tensor memory for reuse."""
+"""robotplan.base.memory: the allocator setting that keeps freed tensor memory for reuse."""
 
 import os
 import platform
@@ -7,14 +7,14 @@ import sys
 
 import pytest
 
-from robotplan.memory import keep_freed_memory
+from robotplan.base.memory import keep_freed_memory
 
 
 @pytest.mark.skipif(platform.system() != "Linux" or platform.libc_ver()[0] != "glibc",
                     reason="mallopt is glibc's")
 def test_keep_freed_memory_applies_once_and_can_be_switched_off():
     assert keep_freed_memory() and keep_freed_memory()  # idempotent
-    code = "from robotplan.memory import keep_freed_memory as k; print(k())"
+    code = "from robotplan.base.memory import keep_freed_memory as k; print(k())"
     env = dict(os.environ, ROBOTPLAN_MALLOC="0")
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          check=True)
@@ -26,7 +26,7 @@ def test_keep_freed_memory_applies_once_and_can_be_switched_off():
 def test_a_freed_large_tensor_is_reused_without_page_faults():
     code = """
 import resource, torch
-from robotplan.memory import keep_freed_memory
+from robotplan.base.memory import keep_freed_memory
 keep_freed_memory()
 sizes = [5_000_000, 9_000_000, 7_000_000, 40_000_000 // 4]  # floats: 20-40 MB blocks
 for n in sizes:

@@ -5,11 +5,11 @@ import pytest
 import torch
 from torch import nn
 
-from robotplan import native
+from robotplan.base import native
 from robotplan.functionals import dynamics as fd
 from robotplan.functionals.dynamics import render_on_grid
-from robotplan.learned import dynamics as dyn
-from robotplan.learned.dynamics import DynamicsSpec, PushDynamics
+from robotplan.models import dynamics as dyn
+from robotplan.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape, Polygon, Workspace
 
@@ -150,8 +150,8 @@ def test_grid_rendering_matches_the_shapes_closed_forms(shape, dofs, monkeypatch
 def test_rendering_declines_other_shapes_and_dtypes():
     X = torch.zeros(2, 3)
     square = Polygon(((0.0, 0.0), (0.1, 0.0), (0.1, 0.1), (0.0, 0.1)))
-    assert native.render_planes(square, X, None, (0.0, 0.0), 0.01, (4, 4)) is None
-    assert native.render_planes(Box((0.1, 0.1)), X.double(), None, (0.0, 0.0), 0.01,
+    assert native.render_planes(square.kernel_shape, X, None, (0.0, 0.0), 0.01, (4, 4)) is None
+    assert native.render_planes(Box((0.1, 0.1)).kernel_shape, X.double(), None, (0.0, 0.0), 0.01,
                                 (4, 4)) is None
 
 
@@ -170,7 +170,7 @@ def test_shape_planes_at_points_match_the_closed_forms(shape):
         assert ((a.double() - b).abs() < 1e-4).float().mean() > 0.999
     # autograd-tracked inputs stay on the PyTorch path (the kernels record no graph)
     px_ = px.float().requires_grad_(True)
-    assert native.shape_planes(shape, px_, py.float()) is None
+    assert native.shape_planes(shape.kernel_shape, px_, py.float()) is None
 
 
 @needs_kernels

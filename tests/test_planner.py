@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from robotplan import load_scene
-from robotplan.execute import execute_push
-from robotplan.planner import FEASIBLE, GOOD_RMS_MM, search_push
-from robotplan.program import ProgramSettings
-from robotplan.skeleton import parse_skeleton
+from robotplan.execution.execute import execute_push
+from robotplan.program.settings import ProgramSettings
+from robotplan.program.skeleton import parse_skeleton
+from robotplan.search.planner import FEASIBLE, GOOD_RMS_MM, search_push
 from tests.conftest import DATA, ROOT
 
 MODEL = ROOT / "learned" / "push_flow"
@@ -36,8 +36,8 @@ def test_search_solves_box_push_and_the_plan_works_in_pybullet():
 def test_ranking_prefers_plans_the_learned_dynamics_believe():
     """Feasible plans rank by their H_F residual (ties below the noise floor), then cost; a
     feasible plan the model calls impossible is not solved."""
-    from robotplan.planner import PLAUSIBLE_RMS_MM, SearchResult, _rank
-    from robotplan.program import Solution
+    from robotplan.program.solution import Solution
+    from robotplan.search.planner import PLAUSIBLE_RMS_MM, SearchResult, plan_rank
 
     sk = parse_skeleton("push@0", "pusher", "box")
 
@@ -46,15 +46,15 @@ def test_ranking_prefers_plans_the_learned_dynamics_believe():
                         np.zeros((21, 2)), dynamics_mm2=np.full(20, rms_mm**2))
 
     believed, doubted, broken = plan(1e-4, 3.0, 9.0), plan(1e-4, 8.0, 1.0), plan(0.5, 1.0, 0.1)
-    assert sorted([broken, doubted, believed], key=_rank) == [believed, doubted, broken]
-    assert _rank(plan(1e-4, 2.0, 5.0)) < _rank(plan(1e-4, 4.0, 6.0))  # both at the floor
+    assert sorted([broken, doubted, believed], key=plan_rank) == [believed, doubted, broken]
+    assert plan_rank(plan(1e-4, 2.0, 5.0)) < plan_rank(plan(1e-4, 4.0, 6.0))  # both at the floor
     assert SearchResult(doubted).solved
     assert not SearchResult(plan(1e-4, PLAUSIBLE_RMS_MM + 1, 1.0)).solved
 
 
 def test_the_search_stops_on_a_good_plan_or_after_its_patience_with_a_solved_one():
-    from robotplan.planner import PATIENCE_S, is_solved, stops_search
-    from robotplan.program import Solution
+    from robotplan.program.solution import Solution
+    from robotplan.search.planner import PATIENCE_S, is_solved, stops_search
 
     sk = parse_skeleton("push@0", "pusher", "box")
 
@@ -79,8 +79,8 @@ def test_the_search_stops_on_a_good_plan_or_after_its_patience_with_a_solved_one
 def test_plans_around_obstacles_must_keep_the_margin():
     """A feasible plan that skims an obstacle is neither good enough nor solved, and ranks
     behind one that keeps OBSTACLE_MARGIN, whatever their costs."""
-    from robotplan.planner import OBSTACLE_MARGIN, SearchResult, _rank, good_enough
-    from robotplan.program import Solution
+    from robotplan.program.solution import Solution
+    from robotplan.search.planner import OBSTACLE_MARGIN, SearchResult, good_enough, plan_rank
 
     sk = parse_skeleton("push@0", "pusher", "box")
 
@@ -91,13 +91,13 @@ def test_plans_around_obstacles_must_keep_the_margin():
     skims, clear, free = plan(0.01, 1.0), plan(OBSTACLE_MARGIN + 0.01, 5.0), plan(np.inf, 7.0)
     assert not good_enough(skims) and not SearchResult(skims).solved
     assert good_enough(clear) and SearchResult(clear).solved and good_enough(free)
-    assert min([skims, clear], key=_rank) is clear
-    assert _rank(plan(0.015, 1.0)) < _rank(plan(0.005, 1.0))  # the shortfall itself ranks
+    assert min([skims, clear], key=plan_rank) is clear
+    assert plan_rank(plan(0.015, 1.0)) < plan_rank(plan(0.005, 1.0))  # the shortfall itself ranks
 
 
 def test_search_measures_the_clearance_of_its_plans():
-    from robotplan.planner import plan_clearance
-    from robotplan.program import Solution
+    from robotplan.program.solution import Solution
+    from robotplan.search.planner import plan_clearance
 
     scene = load_scene(ROOT / "tasks" / "obstacle_push.yaml")
     sk = parse_skeleton("push@0", "pusher", "box")

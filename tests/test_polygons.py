@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 import shapely
 
-from robotplan.polygons import intersection_area, is_simple, signed_area, triangulate
+from robotplan.geometry.polygons import intersection_area, is_simple, signed_area, triangulate
 
 
 def random_star_polygon(rng, n=9, center=(0.0, 0.0)):
@@ -48,7 +48,7 @@ def test_concave_polygon_is_simple():
 
 
 def test_convex_parts_cover_the_polygon_with_few_convex_pieces(rng):
-    from robotplan.polygons import convex_parts, is_convex
+    from robotplan.geometry.polygons import convex_parts, is_convex
 
     for _ in range(30):
         poly = random_star_polygon(rng)

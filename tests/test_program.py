@@ -9,9 +9,10 @@ import torch
 from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoDiff
 
 from robotplan import load_scene
-from robotplan.learned.dynamics import DynamicsSpec, PushDynamics
-from robotplan.program import ProgramSettings, PushProgram
-from robotplan.skeleton import load_skeleton_space, parse_skeleton
+from robotplan.models.dynamics import DynamicsSpec, PushDynamics
+from robotplan.program.push_program import PushProgram
+from robotplan.program.settings import ProgramSettings
+from robotplan.program.skeleton import load_skeleton_space, parse_skeleton
 from tests.conftest import DATA, TASKS
 
 TINY = {"channels": (2, 2, 2), "sdf_features": 8, "point_features": 8, "hidden": (16, 16)}
@@ -123,7 +124,8 @@ def test_constraint_gradients_match_finite_differences(weight):
 def test_solve_skeleton_stops_where_the_kinematics_cannot_push():
     """box_push's goal is 0.36 m away; at 1 cm per push step one push covers 0.1 m, so the
     kinematic stage fails and the learned program is never started."""
-    from robotplan.program import FEASIBLE, solve_skeleton
+    from robotplan.program.solution import FEASIBLE
+    from robotplan.program.solve import solve_skeleton
 
     torch.manual_seed(0)
     scene = load_scene(TASKS / "box_push.yaml")
@@ -136,7 +138,7 @@ def test_solve_skeleton_stops_where_the_kinematics_cannot_push():
 
 
 def test_learned_program_never_ends_worse_than_its_warm_start():
-    from robotplan.program import _rank
+    from robotplan.program.solution import rank
 
     kin = build(kinematic=True, scene_file=DATA / "box_push_near.yaml")
     warm = kin.solve()
@@ -147,7 +149,7 @@ def test_learned_program_never_ends_worse_than_its_warm_start():
     sol = learned.solve()
     start = learned.prog.GetInitialGuess(learned.prog.decision_variables())  # set by solve
     assert np.isfinite(start).all()
-    assert _rank(sol.violations, sol.cost) <= _rank(*learned.evaluate(start))
+    assert rank(sol.violations, sol.cost) <= rank(*learned.evaluate(start))
     assert sol.q_obj.shape == (learned.N + 1, 3) and sol.contact.shape == (10, 2)
 
 
@@ -159,8 +161,8 @@ def test_arm_touch_program_ends_in_contact_and_hands_its_touch_point_on():
     SNOPT's path depends on the CPU's arithmetic: with the touch from init 0 it solved on
     an AMD EPYC and stopped at violation 4.0 on an Intel Xeon, where init 1 solves (the
     skeleton search tries both): the first of the two that solves is checked."""
-    from robotplan.arm_program import ArmPushProgram
-    from robotplan.skeleton import space_for
+    from robotplan.program.arm_program import ArmPushProgram
+    from robotplan.program.skeleton import space_for
 
     scene = load_scene(TASKS / "two_arm_touch.yaml")
     space = space_for(scene)

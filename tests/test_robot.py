@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import yaml
 
-from robotplan.robot import ROBOTS_DIR, available_models, load_robot_model
 from robotplan.scene.reader import read
+from robotplan.scene.robots import ROBOTS_DIR, available_models, load_robot_model
 
 MODELS = available_models()
 
@@ -40,7 +40,7 @@ def test_tip_forward_kinematics_moves_with_the_base(name):
 def test_drake_and_pybullet_tip_kinematics_agree(name):
     """Drake's MultibodyPlant and pybullet load the same URDF: the tip centre agrees to
     1e-6 m on random configurations and bases, and Drake's Jacobian matches differences."""
-    from robotplan.robot import DrakeArm
+    from robotplan.scene.robots import DrakeArm
 
     model = load_robot_model(name)
     rng = np.random.default_rng(0)

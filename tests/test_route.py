@@ -1,13 +1,13 @@
-"""Routes around obstacles as straight face pushes (robotplan.route)."""
+"""Routes around obstacles as straight face pushes (robotplan.search.route)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from robotplan import load_scene
-from robotplan.program import PushProgram
-from robotplan.route import _clear, centred_pushes, face_routes, routed_candidates
-from robotplan.skeleton import space_for
+from robotplan.program.push_program import PushProgram
+from robotplan.program.skeleton import space_for
+from robotplan.search.route import _clear, centred_pushes, face_routes, routed_candidates
 from tests.conftest import TASKS
 
 GOAL = np.array([0.38, 0.0])
@@ -75,8 +75,8 @@ def test_long_segments_are_split_into_several_pushes():
 def test_pybullet_turns_a_box_pushed_off_its_centre_line():
     """Why routes push straight through the centroid: in pybullet a centred face push moves
     the box straight, one 2 mm off the centre line turns it by > 0.1 rad within 0.3 m."""
+    from robotplan.execution.sim import PushWorld
     from robotplan.sdf import Box
-    from robotplan.sim import PushWorld
 
     def yaw_after_push(offset: float) -> float:
         with PushWorld() as world:

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from robotplan.skeleton import (
+from robotplan.program.skeleton import (
     Phase,
     actor_candidates,
     load_skeleton_space,
@@ -58,8 +58,8 @@ def test_reach_pruning_keeps_the_arms_that_can_reach(task, expected, frame):
     box whose straight pushes reach the goal; the handover scene keeps left-then-right
     only (the box starts beyond the right arm's reach, the goal beyond the left's)."""
     from robotplan import load_scene
-    from robotplan.arm_program import reach_check
-    from robotplan.solve import _candidate_tiers
+    from robotplan.api import _candidate_tiers
+    from robotplan.program.arm_program import reach_check
 
     scene = load_scene(TASKS / f"{task}.yaml")
     kept, space = next(_candidate_tiers(scene, "box", ["left", "right"], None, 2, quiet=True))
@@ -74,7 +74,7 @@ def test_reach_pruning_keeps_the_arms_that_can_reach(task, expected, frame):
 
 def test_touch_pruning_ends_with_the_touching_arm():
     from robotplan import load_scene
-    from robotplan.solve import _candidate_tiers
+    from robotplan.api import _candidate_tiers
 
     scene = load_scene(TASKS / "two_arm_touch.yaml")
     kept, space = next(_candidate_tiers(scene, "box", ["left", "right"], None, 2, quiet=True))
@@ -84,7 +84,7 @@ def test_touch_pruning_ends_with_the_touching_arm():
 
 
 def test_face_push_lengths_split_the_travel():
-    from robotplan.guess import face_push_lengths
+    from robotplan.program.guess import face_push_lengths
 
     dirs = np.array([[1.0, 0.0], [0.0, 1.0]])
     a, gap = face_push_lengths(dirs, np.array([0.3, 0.2]))

@@ -1,9 +1,9 @@
-"""robotplan.solve's search logic around the programs (the programs themselves: test_planner
+"""robotplan.api's search logic around the programs (the programs themselves: test_planner
 and the slow end-to-end tests)."""
 
-import robotplan.solve as solve_module
-from robotplan.planner import SearchResult
+import robotplan.api as solve_module
 from robotplan.scene import load_scene
+from robotplan.search.planner import SearchResult
 from tests.conftest import TASKS
 
 
@@ -47,8 +47,8 @@ def test_a_given_skeleton_gets_no_fallback(monkeypatch, tmp_path):
 def test_no_further_tier_once_the_budget_is_spent_with_a_plan_in_hand():
     import numpy as np
 
-    from robotplan.program import Solution
-    from robotplan.skeleton import parse_skeleton
+    from robotplan.program.skeleton import parse_skeleton
+    from robotplan.program.solution import Solution
 
     scene = load_scene(TASKS / "box_push.yaml")
     sk = parse_skeleton("push@0", scene.pushers[0].name, scene.objects[0].name)

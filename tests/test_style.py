@@ -19,7 +19,7 @@ def test_ruff_clean():
 
 
 def test_package_imports_without_pybullet_banner():
-    res = subprocess.run([sys.executable, "-c", "import robotplan.robot as r; "
+    res = subprocess.run([sys.executable, "-c", "import robotplan.scene.robots as r; "
                           "r.load_robot_model('iiwa').tip_position((0,) * 7, (0, 0, 0, 0))"],
                          cwd=ROOT, capture_output=True, text=True)
     assert res.returncode == 0 and res.stdout == "" and res.stderr == ""

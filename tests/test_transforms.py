@@ -2,7 +2,7 @@ import numpy as np
 import torch
 from scipy.spatial.transform import Rotation
 
-from robotplan.transforms import (
+from robotplan.geometry.transforms import (
     planar_to_body,
     planar_to_world,
     quaternion_to_matrix,
@@ -55,7 +55,7 @@ def test_wrap_angle():
 
     import numpy as np
 
-    from robotplan.transforms import wrap_angle
+    from robotplan.geometry.transforms import wrap_angle
 
     a = np.array([0.0, 3.0, -3.0, 3.5, -3.5, 7.0, 2 * math.pi])
     w = wrap_angle(a)

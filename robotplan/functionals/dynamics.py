@@ -22,14 +22,14 @@ through the whole network, autograd) in far less time:
   linear layer and this SDF part are folded into one (5120 × 300) map (half the products
   and half the weights to read; bfloat16 would make its backward product 5x faster, 2.2 →
   0.4 ms, but costs gradient precision the solver needs);
-* **only live hidden units, tile by tile** (:class:`~robotplan.learned.tiled_head.TiledHead`):
+* **only live hidden units, tile by tile** (:class:`~robotplan.models.tiled_head.TiledHead`):
   the first layer's point part is affine in the query point, so each unit is active in a
   half-plane per step; the quadrature points are split into compact tiles of ≤ 32 and
   each tile's products use only the units that can be active in it (~110 of 300 forward,
   against ~200 live anywhere in the phase) and, backward, only the second layer's units
   active in it (~60 of 300). Exact, and 2.5x fewer multiply-adds in the head (42 → 31 ms
   per phase on an AVX2-only EPYC);
-* **convolutions of our own** (``robotplan/kernels.c``, :mod:`robotplan.native`, float32
+* **convolutions of our own** (``robotplan/kernels.c``, :mod:`robotplan.base.native`, float32
   on the CPU): each block of pixels keeps every output channel in registers; bias, ReLU
   and the live-channel sums are fused into the forward pass, the ReLU mask into the
   backward one, and a layer skips the previous layer's dead channels. The three layers
@@ -45,7 +45,7 @@ through the whole network, autograd) in far less time:
   that multiply bfloat16 natively (float32 accumulation; AVX512-BF16 or AMX halve their
   cost): per step 0.5 % on H_t and 2.4 % on its gradient at worst over 24 realistic
   pushes, well below the quadrature's error. Elsewhere (AVX2 only) they stay in float32,
-  since emulated bfloat16 is ~8x slower (:func:`~robotplan.learned.dynamics.head_matmul_dtype`);
+  since emulated bfloat16 is ~8x slower (:func:`~robotplan.models.dynamics.head_matmul_dtype`);
   a float64 model (the tests) computes in float64 throughout;
 * **one-pass rendering**: circles, boxes and L-shapes are rendered on the grid by the same
   C kernels (φ, ∇φ and the body-frame coordinates in one vectorized pass over the
@@ -55,7 +55,7 @@ through the whole network, autograd) in far less time:
 * **exact sparse Jacobians**: per step, ∂H_t/∂q1_{t−1}, ∂q1_t, ∂q2_{t−1}, ∂q2_t from one
   backward pass through the head (each step's inputs are separate leaves);
 * **no page faults**: the ~20 MB of short-lived tensors per call stay in the heap
-  (:func:`~robotplan.memory.keep_freed_memory`); with glibc's defaults they were fresh
+  (:func:`~robotplan.base.memory.keep_freed_memory`); with glibc's defaults they were fresh
   ``mmap`` pages every call (~5,700 faults, 56 → 39 ms at 532 points).
 
 The quadrature error against the full-grid integral and the timings are measured by
@@ -69,11 +69,11 @@ from dataclasses import dataclass
 import torch
 from torch import Tensor
 
+from robotplan.base.memory import keep_freed_memory
+from robotplan.base.native import render_planes
 from robotplan.functionals.base import Quadrature, sdf_pose_gradients
-from robotplan.learned.dynamics import PushDynamics, head_matmul_dtype
-from robotplan.learned.tiled_head import TiledHead, tile_points
-from robotplan.memory import keep_freed_memory
-from robotplan.native import render_planes
+from robotplan.models.dynamics import PushDynamics, head_matmul_dtype
+from robotplan.models.tiled_head import TiledHead, tile_points
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Circle, Workspace
 
@@ -152,7 +152,7 @@ def render_on_grid(body: Body, X_WB: Tensor, workspace: Workspace, tangents: boo
     if turns:
         c, s = torch.cos(X[:, 2:3]), torch.sin(X[:, 2:3])
     # our own kernel (float32 circles, boxes, L-shapes): one pass, 5–17x faster
-    native = render_planes(body.shape, X, torch.cat((c, s), 1) if turns else None,
+    native = render_planes(body.shape.kernel_shape, X, torch.cat((c, s), 1) if turns else None,
                            (x0, y0), r, (rows, cols), coordinates=tangents)
     if native is not None:
         phi, gx, gy, px, py = native

@@ -14,8 +14,8 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from robotplan.geometry.transforms import planar_to_body
 from robotplan.sdf import Circle, Shape2D
-from robotplan.transforms import planar_to_body
 
 if TYPE_CHECKING:
     from robotplan.scene.schema import RegionGoal, Scene
@@ -78,7 +78,7 @@ def scene_bodies(scene: Scene) -> dict[str, Body]:
         bodies[p.name] = Body(p.name, "pusher", Circle(p.radius), (*p.position, 0.0),
                               0.0, 2 * p.radius)
     for r in scene.robots:
-        from robotplan.robot import load_robot_model
+        from robotplan.scene.robots import load_robot_model
 
         model = load_robot_model(r.model)
         tip = model.tip_position(r.q0 if r.q0 is not None else model.home, r.base)

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from robotplan.polygons import intersection_area
+from robotplan.geometry.polygons import intersection_area
 from robotplan.scene.reader import SchemaError, read
 from robotplan.scene.schema import RegionGoal, Scene, TouchGoal
 
@@ -160,7 +160,7 @@ def _check_goal(scene: Scene, object_names: list[str]) -> None:
 
 
 def _check_robots(scene: Scene) -> None:
-    from robotplan.robot import available_models, load_robot_model
+    from robotplan.scene.robots import available_models, load_robot_model
 
     for i, r in enumerate(scene.robots):
         if r.model not in available_models():

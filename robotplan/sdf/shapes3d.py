@@ -15,7 +15,8 @@ import torch
 import trimesh
 from torch import Tensor
 
-from robotplan.sdf.shapes2d import Shape2D, safe_norm
+from robotplan.sdf.closed_form import safe_norm
+from robotplan.sdf.shapes2d import Shape2D
 
 __all__ = ["Box3D", "Capsule", "Cylinder", "Extrusion", "Mesh", "Shape3D", "Sphere"]
 

@@ -10,7 +10,7 @@ from robotplan.functionals.dynamics import (
     phase_quadrature,
     render_on_grid,
 )
-from robotplan.learned.dynamics import DynamicsSpec, PushDynamics
+from robotplan.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape, Workspace
 from tests.functionals.conftest import F64
@@ -150,7 +150,7 @@ def test_render_on_grid_matches_the_pointwise_rendering(shape):
 
 
 def test_bfloat16_head_products_only_where_the_cpu_multiplies_them(monkeypatch):
-    from robotplan.learned import dynamics as learned_dynamics
+    from robotplan.models import dynamics as learned_dynamics
 
     avx2 = "processor\t: 0\nflags\t\t: fpu sse2 avx avx2 fma\n"
     assert not learned_dynamics.cpu_multiplies_bfloat16(avx2)

@@ -2,7 +2,7 @@ from pathlib import Path
 
 import pytest
 
-from robotplan.learned.push_data import generate
+from robotplan.training.push_data import generate
 
 
 @pytest.fixture(scope="session")

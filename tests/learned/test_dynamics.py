@@ -1,7 +1,7 @@
 import pytest
 import torch
 
-from robotplan.learned.dynamics import DynamicsSpec, PushDynamics, load_model, save_model
+from robotplan.models.dynamics import DynamicsSpec, PushDynamics, load_model, save_model
 from tests.learned.conftest import TINY_SPEC
 
 

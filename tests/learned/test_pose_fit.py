@@ -5,11 +5,11 @@ import torch
 
 from robotplan.functionals.base import Quadrature
 from robotplan.functionals.dynamics import LearnedDynamics
-from robotplan.learned.dynamics import load_model
-from robotplan.learned.pose_fit import _local_quadrature, evaluate_pose_fit, fit_step
-from robotplan.learned.samples import PushSamples
+from robotplan.models.dynamics import load_model
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape
+from robotplan.training.pose_fit import _local_quadrature, evaluate_pose_fit, fit_step
+from robotplan.training.samples import PushSamples
 from tests.conftest import DATA, ROOT
 
 FLOW = ROOT / "learned" / "push_flow"

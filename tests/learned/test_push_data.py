@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import torch
 
-from robotplan.learned.push_data import generate, load_shards, simulate_scene
-from robotplan.learned.samples import PushSamples, object_sdf
 from robotplan.sdf import Workspace
+from robotplan.training.push_data import generate, load_shards, simulate_scene
+from robotplan.training.samples import PushSamples, object_sdf
 
 
 def test_scene_is_deterministic_for_seed_and_index():

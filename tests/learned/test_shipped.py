@@ -4,8 +4,8 @@ import json
 
 import pytest
 
-from robotplan.learned.dynamics import load_model
-from robotplan.learned.evaluation import evaluate_push
+from robotplan.models.dynamics import load_model
+from robotplan.training.evaluation import evaluate_push
 from tests.conftest import DATA, ROOT
 
 LEARNED = ROOT / "learned"

@@ -1,8 +1,8 @@
 import pytest
 import torch
 
-from robotplan.learned.dynamics import DynamicsSpec, PushDynamics
-from robotplan.learned.tiled_head import TiledHead, tile_points
+from robotplan.models.dynamics import DynamicsSpec, PushDynamics
+from robotplan.models.tiled_head import TiledHead, tile_points
 from tests.learned.conftest import TINY_SPEC
 
 F64 = torch.float64

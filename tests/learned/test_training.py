@@ -4,10 +4,10 @@ import json
 
 import torch
 
-from robotplan.learned.dynamics import load_model
-from robotplan.learned.evaluation import evaluate_push
-from robotplan.learned.model_card import record_heldout, write_model_card
-from robotplan.learned.training import TrainConfig, train
+from robotplan.models.dynamics import load_model
+from robotplan.training.evaluation import evaluate_push
+from robotplan.training.model_card import record_heldout, write_model_card
+from robotplan.training.train import TrainConfig, train
 from tests.learned.conftest import TINY_SPEC
 
 

@@ -6,7 +6,7 @@ import shapely
 import torch
 
 from robotplan.sdf import Box, Circle, LShape, Polygon, Workspace
-from robotplan.sdf.shapes2d import polygon_sdf
+from robotplan.sdf.closed_form import polygon_sdf
 
 CONCAVE = ((0.0, 0.0), (0.3, 0.0), (0.3, 0.1), (0.1, 0.1), (0.15, 0.25), (0.0, 0.2))
 T_SHAPE = ((-0.15, 0.05), (0.15, 0.05), (0.15, 0.1), (-0.15, 0.1))  # used below as a bar
@@ -116,7 +116,7 @@ def test_workspace_grid_is_cell_centred():
 
 
 def test_batched_lshape_parameters_and_box_as_lshape(rng):
-    from robotplan.sdf.shapes2d import lshape_sdf
+    from robotplan.sdf.closed_form import lshape_sdf
 
     pts = torch.from_numpy(rng.uniform(-0.2, 0.2, (300, 2)))
     shapes = [LShape((0.24, 0.18), 0.07), LShape((0.2, 0.3), 0.1)]

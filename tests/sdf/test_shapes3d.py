@@ -92,7 +92,7 @@ def test_se3_transform_of_an_sdf_against_a_transformed_mesh(rng):
     """T(q)[φ](x) = φ(R(q)ᵀ(x − r(q))) for a spatial pose (translation + unit quaternion)."""
     from scipy.spatial.transform import Rotation
 
-    from robotplan.transforms import spatial_to_body
+    from robotplan.geometry.transforms import spatial_to_body
 
     size = (0.2, 0.12, 0.06)
     quat_xyzw = Rotation.from_euler("xyz", [0.3, -0.5, 1.1]).as_quat()

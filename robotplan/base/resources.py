@@ -1,0 +1,41 @@
+"""Where the data folders are: robot descriptions, skeleton tables, learned models, tasks.
+
+A regular install carries them inside the package (``robotplan/_data/``, copied by
+``setup.py``); a source checkout or an editable install reads them beside the package.
+``ROBOTPLAN_DATA`` names another folder that holds them.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+__all__ = ["data_root", "learned_dir", "robots_dir", "skeletons_dir", "tasks_dir"]
+
+_PACKAGE = Path(__file__).resolve().parents[1]
+
+
+def data_root() -> Path:
+    """The folder that holds ``robots/``, ``skeletons/``, ``learned/`` and ``tasks/``."""
+    given = os.environ.get("ROBOTPLAN_DATA")
+    if given:
+        return Path(given)
+    installed = _PACKAGE / "_data"
+    return installed if installed.is_dir() else _PACKAGE.parent
+
+
+def robots_dir() -> Path:
+    return data_root() / "robots"
+
+
+def skeletons_dir() -> Path:
+    return data_root() / "skeletons"
+
+
+def learned_dir(model: str = "push_flow") -> Path:
+    """A shipped model's folder (spec, weights, metrics, model card)."""
+    return data_root() / "learned" / model
+
+
+def tasks_dir() -> Path:
+    return data_root() / "tasks"

@@ -1,0 +1,39 @@
+"""What every command shares: exit statuses, printing, argument checks."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+__all__ = ["EXIT_BAD_INPUT", "device_name", "not_a_model", "print_result"]
+
+
+EXIT_BAD_INPUT = 2
+
+
+def print_result(result: dict, as_json: bool) -> None:
+    """One JSON object (``--json``), or aligned ``key: value`` lines for a person."""
+    if as_json:
+        print(json.dumps(result))
+        return
+    width = max(map(len, result), default=0)
+    for k, v in result.items():
+        print(f"{k:>{width}}: {v}")
+
+
+def not_a_model(folder: str) -> bool:
+    """True (after the one-line error) when ``--model`` is not a model folder."""
+    if (Path(folder) / "spec.json").is_file():
+        return False
+    print(f"error: {folder}: --model: not a model folder (no spec.json)", file=sys.stderr)
+    return True
+
+
+def device_name(name: str) -> str:
+    """``--device``: ``auto`` is the GPU when torch sees one, else the CPU."""
+    import torch
+
+    if name == "auto":
+        return "cuda" if torch.cuda.is_available() else "cpu"
+    return name

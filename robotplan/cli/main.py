@@ -1,0 +1,183 @@
+"""The ``robotplan`` command line: ``check``, ``render``, ``bench``, ``data``, ``train``, ``eval``.
+
+Exit status: 0 success, 1 failure of the work itself, 2 bad input (one line on stderr naming
+the file and the field, no traceback).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from robotplan.base.memory import keep_freed_memory
+from robotplan.base.resources import learned_dir, tasks_dir
+from robotplan.cli.common import EXIT_BAD_INPUT
+from robotplan.cli.model_commands import (
+    cmd_bench,
+    cmd_bench_functional,
+    cmd_bench_push,
+    cmd_data_push,
+    cmd_eval_push,
+    cmd_train_push,
+)
+from robotplan.cli.scene_commands import cmd_check, cmd_diagnose, cmd_render, cmd_solve, cmd_view
+from robotplan.scene import SceneError
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="robotplan", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True)
+
+    c = sub.add_parser("check", help="validate scene files; one 'ok' line per good file")
+    c.add_argument("files", nargs="+", metavar="FILE")
+    c.set_defaults(run=cmd_check)
+
+    r = sub.add_parser("render", help="render the SDFs of scenes on X_h to PNG")
+    r.add_argument("files", nargs="+", metavar="FILE")
+    r.add_argument("--out", required=True, metavar="DIR", help="folder for <scene>_sdf.png")
+    r.add_argument("--overwrite", action="store_true", help="replace existing pictures")
+    r.set_defaults(run=cmd_render)
+
+    b = sub.add_parser("bench", help="benchmarks (speed targets)")
+    bsub = b.add_subparsers(dest="what", required=True)
+    bs = bsub.add_parser("sdf", help="render every body of a scene at T steps on X_h")
+    default_scene = tasks_dir() / "box_push.yaml"
+    bs.add_argument("--scene", default=str(default_scene), metavar="FILE")
+    bs.add_argument("--steps", type=int, default=40)
+    bs.add_argument("--repeats", type=int, default=20)
+    bs.add_argument("--threads", type=int, default=1)
+    bs.add_argument("--dtype", choices=["float32", "float64"], default="float32")
+    bs.add_argument("--json", action="store_true", help="print one JSON object")
+    bs.set_defaults(run=cmd_bench)
+    bf = bsub.add_parser("functional", help="H_F and analytic functionals: speed, accuracy")
+    bf.add_argument("--model", default=str(learned_dir("push_flow")), metavar="DIR")
+    bf.add_argument("--threads", type=int, default=1)
+    bf.add_argument("--configurations", type=int, default=24,
+                    help="realistic pushes for the accuracy check")
+    bf.add_argument("--repeats", type=int, default=20)
+    bf.add_argument("--no-naive", action="store_true", help="skip the slow naive timing")
+    bf.add_argument("--json", action="store_true")
+    bf.set_defaults(run=cmd_bench_functional)
+    bp = bsub.add_parser("push", help="plan + execute random push scenes (paper Fig. 3)")
+    bp.add_argument("--scenes", type=int, default=20, help="scenes per shape type")
+    bp.add_argument("--seed", type=int, default=0)
+    bp.add_argument("--out", required=True, metavar="DIR",
+                    help="scenes, per-scene results, CSV, box plot (continues a partial run)")
+    bp.add_argument("--model", default=str(learned_dir("push_flow")), metavar="DIR")
+    bp.add_argument("--shapes", default="box,lshape",
+                    help="comma-separated: box, lshape, ood (unseen footprints: triangle, "
+                    "pentagon, hexagon, circle, T, cross, U, trapezoid)")
+    bp.add_argument("--workers", type=int, default=2)
+    bp.add_argument("--exhaustive", action="store_true", help="solve every skeleton")
+    bp.add_argument("--time-budget", type=float, default=None, metavar="S",
+                    help="per scene: start no program after S seconds (best so far wins)")
+    bp.add_argument("--overwrite", action="store_true")
+    bp.add_argument("--json", action="store_true")
+    bp.set_defaults(run=cmd_bench_push)
+
+    default_model = str(learned_dir("push_flow"))
+    so = sub.add_parser("solve", help="plan a scene, execute it in pybullet, write the result")
+    so.add_argument("scene", metavar="SCENE")
+    so.add_argument("--out", required=True, metavar="DIR")
+    so.add_argument("--model", default=default_model, metavar="DIR")
+    so.add_argument("--solver", choices=["snopt", "ipopt"], default="snopt")
+    so.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    so.add_argument("--skeleton", default=None, help='one skeleton, e.g. "push@2,push@0"')
+    so.add_argument("--max-pushes", type=int, default=2)
+    so.add_argument("--overwrite", action="store_true")
+    so.add_argument("--exhaustive", action="store_true",
+                    help="solve every candidate skeleton (default: stop at the first good one)")
+    so.add_argument("--time-budget", type=float, default=None, metavar="S",
+                    help="start no program after S seconds; the best so far wins")
+    so.set_defaults(run=cmd_solve)
+
+    dg = sub.add_parser("diagnose", help="a plan's push steps against one-step pybullet and "
+                        "the learned model (where plan and physics part)")
+    dg.add_argument("dir", metavar="DIR", help="a folder written by robotplan solve")
+    dg.add_argument("scene", metavar="SCENE", help="the scene it was solved for")
+    dg.add_argument("--model", default=default_model, metavar="DIR")
+    dg.add_argument("--json", action="store_true")
+    dg.set_defaults(run=cmd_diagnose)
+
+    vw = sub.add_parser("view", help="serve DIR/playback.html locally")
+    vw.add_argument("dir", metavar="DIR")
+    vw.add_argument("--port", type=int, default=0, help="0: any free port")
+    vw.set_defaults(run=cmd_view)
+
+    d = sub.add_parser("data", help="generate training data")
+    dsub = d.add_subparsers(dest="what", required=True)
+    dp = dsub.add_parser("push", help="push data from pybullet (boxes and L-shapes)")
+    dp.add_argument("--scenes", type=int, required=True)
+    dp.add_argument("--seed", type=int, required=True)
+    dp.add_argument("--out", required=True, metavar="DIR")
+    dp.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    dp.add_argument("--shard-size", type=int, default=50)
+    dp.set_defaults(run=cmd_data_push)
+
+    t = sub.add_parser("train", help="train learned functionals")
+    tsub = t.add_subparsers(dest="what", required=True)
+    tp = tsub.add_parser("push", help="train F_flow or F on push data")
+    tp.add_argument("--data", required=True, metavar="DIR")
+    tp.add_argument("--model", choices=["flow", "direct"], default="flow")
+    tp.add_argument("--encoder", choices=["shared", "joint"], default="shared",
+                    help="shared: the paper's (one encoder per SDF, shared weights); "
+                         "joint: one encoder over the three SDFs stacked as channels")
+    tp.add_argument("--out", required=True, metavar="DIR", help="e.g. learned/push_flow")
+    tp.add_argument("--steps", type=int, default=60_000, help="total optimiser steps")
+    tp.add_argument("--batch", type=int, default=32)
+    tp.add_argument("--lr", type=float, default=5e-4)
+    tp.add_argument("--points", type=int, default=256, help="query points per sample")
+    tp.add_argument("--scenes", type=int, default=None, help="use only the first N scenes")
+    tp.add_argument("--seed", type=int, default=0)
+    tp.add_argument("--device", default="auto", help="cpu, cuda or auto")
+    tp.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    tp.add_argument("--minutes", type=float, default=None, help="stop after this wall time")
+    tp.add_argument("--val-every", type=int, default=2000)
+    tp.add_argument("--init-weights", default=None, metavar="FILE",
+                    help="start from these weights (e.g. a previous run's weights.pt)")
+    tp.add_argument("--contact-share", type=float, default=None,
+                    help="balanced batches with this share of contact samples")
+    tp.add_argument("--near-share", type=float, default=0.25,
+                    help="share of the query points drawn within 10 cm of the object (the "
+                         "rest uniform on the table); more resolves the object's turning")
+    tp.add_argument("--resume", action="store_true", help="continue from checkpoint.pt")
+    tp.add_argument("--overwrite", action="store_true", help="start over in a used folder")
+    tp.set_defaults(run=cmd_train_push)
+
+    e = sub.add_parser("eval", help="evaluate learned functionals")
+    esub = e.add_subparsers(dest="what", required=True)
+    ep = esub.add_parser("push", help="one-step RMSE (eq. 20) on held-out push data")
+    ep.add_argument("--model", required=True, metavar="DIR")
+    ep.add_argument("--data", required=True, metavar="DIR")
+    ep.add_argument("--scenes", type=int, default=None)
+    ep.add_argument("--per-scene", type=int, default=10,
+                    help="at most this many random samples of each scene (0: all)")
+    ep.add_argument("--seed", type=int, default=0)
+    ep.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    ep.add_argument("--device", default="auto", help="cpu, cuda or auto")
+    ep.add_argument("--pose-fit", type=int, default=0, metavar="N",
+                    help="also fit the pose that minimises H_t on N contact samples and "
+                         "report translation and turn errors (~1 s a sample)")
+    ep.add_argument("--json", action="store_true")
+    ep.add_argument("--record", action="store_true",
+                    help="store the result in the model's metrics.json and model card")
+    ep.set_defaults(run=cmd_eval_push)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    keep_freed_memory()
+    try:
+        return args.run(args)
+    except SceneError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

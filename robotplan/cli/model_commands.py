@@ -1,0 +1,169 @@
+"""Commands on data, models and benchmarks: ``data``, ``train``, ``eval``, ``bench``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from robotplan.cli.common import EXIT_BAD_INPUT, device_name, not_a_model, print_result
+from robotplan.scene import load_scene
+
+__all__ = ["cmd_bench", "cmd_bench_functional", "cmd_bench_push", "cmd_data_push", "cmd_eval_push",
+           "cmd_train_push"]
+
+
+def cmd_data_push(args: argparse.Namespace) -> int:
+    from robotplan.training.push_data import generate
+
+    t0 = time.time()
+    try:
+        summary = generate(Path(args.out), args.scenes, args.seed, workers=args.workers,
+                           shard_size=args.shard_size)
+    except ValueError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    seconds = time.time() - t0
+    summary["seconds"] = round(seconds, 1)
+    if summary["new_samples"]:
+        summary["samples_per_second"] = round(summary["new_samples"] / seconds, 1)
+    print(json.dumps(summary))
+    return 0
+
+
+def cmd_train_push(args: argparse.Namespace) -> int:
+    import torch
+
+    from robotplan.training.model_card import write_model_card
+    from robotplan.training.train import TrainConfig, train
+
+    out = Path(args.out)
+    if not Path(args.data).is_dir():
+        print(f"error: {args.data}: --data: no such folder", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    ckpt = out / "checkpoint.pt"
+    if args.resume and not ckpt.is_file():
+        print(f"error: {ckpt}: --resume: no checkpoint to resume from", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if not args.resume and out.exists() and any(out.iterdir()) and not args.overwrite:
+        print(f"error: {out}: --out: the folder is not empty; --resume it or pass --overwrite",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    device = device_name(args.device)
+    torch.set_num_threads(args.threads)
+    cfg = TrainConfig(data=args.data, out=args.out, kind=args.model, steps=args.steps,
+                      batch=args.batch, lr=args.lr, points=args.points, seed=args.seed,
+                      scenes=args.scenes, device=device, minutes=args.minutes,
+                      val_every=args.val_every, contact_share=args.contact_share,
+                      near_share=args.near_share, spec={"encoder": args.encoder},
+                      init_weights=args.init_weights,
+                      command=" ".join(["robotplan", *sys.argv[1:]]))
+    if args.resume:  # the run's settings come from its checkpoint; only the budget may change
+        saved = json.loads(torch.load(ckpt, weights_only=True)["config"])
+        cfg = TrainConfig(**{**saved, "steps": args.steps or saved["steps"],
+                             "minutes": args.minutes, "device": device,
+                             "out": args.out, "data": args.data,
+                             "contact_share": args.contact_share
+                             if args.contact_share is not None
+                             else saved.get("contact_share")})
+    last = train(cfg, resume=args.resume)
+    write_model_card(out)
+    print(json.dumps(last))
+    return 0
+
+
+def cmd_eval_push(args: argparse.Namespace) -> int:
+    import torch
+
+    from robotplan.training.evaluation import evaluate_push
+
+    torch.set_num_threads(args.threads)
+    device = device_name(args.device)
+    for path, what in ((args.model, "--model"), (args.data, "--data")):
+        if not Path(path).is_dir():
+            print(f"error: {path}: {what}: no such folder", file=sys.stderr)
+            return EXIT_BAD_INPUT
+    result = evaluate_push(args.model, args.data, scenes=args.scenes,
+                           per_scene=args.per_scene or None, seed=args.seed, device=device)
+    if args.pose_fit > 0:
+        from robotplan.training.pose_fit import evaluate_pose_fit
+
+        result["pose_fit"] = evaluate_pose_fit(args.model, args.data, samples=args.pose_fit,
+                                               seed=args.seed, scenes=args.scenes)
+    if args.record:
+        from robotplan.training.model_card import record_heldout
+
+        record_heldout(Path(args.model), result)
+    print_result(result, args.json)
+    return 0
+
+
+def cmd_bench_push(args: argparse.Namespace) -> int:
+    from robotplan.bench.push import run_bench_push
+
+    if not_a_model(args.model):
+        return EXIT_BAD_INPUT
+    if args.scenes < 1:
+        print("error: --scenes: must be at least 1", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    bad = set(args.shapes.split(",")) - {"box", "lshape", "ood"}
+    if bad:
+        print(f"error: --shapes: unknown shape type {sorted(bad)[0]!r} (box, lshape, ood)",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    out = Path(args.out)
+    summary_path = out / "summary.json"
+    if summary_path.exists() and not args.overwrite:
+        print(f"error: {out}: --out: holds a finished benchmark; pass --overwrite to redo it",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.overwrite and out.exists():
+        for name in ("summary.json", "rows.jsonl", "results.csv", "coverage.png"):
+            (out / name).unlink(missing_ok=True)
+    summary = run_bench_push(args.scenes, args.seed, out, Path(args.model), args.workers,
+                             tuple(args.shapes.split(",")), args.exhaustive, args.time_budget)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        for kind, q in summary["coverage"].items():
+            t = summary["plan_seconds"][kind]
+            print(f"{kind:>7}: coverage median {q['median']:.3f} (quartiles {q['q1']:.3f}–"
+                  f"{q['q3']:.3f}, min {q['min']:.3f}, n={q['n']}); plan time median "
+                  f"{t['median']:.1f} s (quartiles {t['q1']:.1f}–{t['q3']:.1f})")
+        prof = summary["time_profile"]
+        if prof["candidate_seconds"]:
+            top = ", ".join(f"{k} {100 * v:.0f} %" for k, v in list(prof["share"].items())[:6])
+            print(f"time: {prof['programs']} programs, {prof['candidate_seconds']:.0f} s in "
+                  f"their callbacks and solver: {top}")
+        print(f"wrote {out / 'results.csv'}, {out / 'coverage.png'}, {summary_path}")
+    return 0
+
+
+def cmd_bench_functional(args: argparse.Namespace) -> int:
+    import torch
+
+    from robotplan.bench.functional import bench_functional
+
+    torch.set_num_threads(args.threads)
+    if not_a_model(args.model):
+        return EXIT_BAD_INPUT
+    result = bench_functional(args.model, configurations=args.configurations,
+                              repeats=args.repeats,
+                              naive=not args.no_naive)
+    print_result(result, args.json)
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    import torch
+
+    from robotplan.bench.sdf import bench_sdf
+
+    torch.set_num_threads(args.threads)
+    scene = load_scene(args.scene)
+    dtype = {"float32": torch.float32, "float64": torch.float64}[args.dtype]
+    result = bench_sdf(scene, steps=args.steps, repeats=args.repeats, dtype=dtype)
+    print_result(result, args.json)
+    return 0

@@ -1,0 +1,118 @@
+"""Commands on scenes and plans: ``check``, ``render``, ``solve``, ``diagnose``, ``view``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from robotplan.cli.common import EXIT_BAD_INPUT, not_a_model, print_result
+from robotplan.scene import SceneError, load_scene
+
+__all__ = ["cmd_check", "cmd_diagnose", "cmd_render", "cmd_solve", "cmd_view"]
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    status = 0
+    for f in args.files:
+        try:
+            scene = load_scene(f)
+        except SceneError as err:
+            print(f"error: {err}", file=sys.stderr)
+            status = EXIT_BAD_INPUT
+            continue
+        print(f"ok {f}: {scene.summary()}")
+    return status
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    from robotplan.viz.render import render_scene_sdf
+
+    scenes = [load_scene(f) for f in args.files]  # refuse bad input before writing anything
+    out = Path(args.out)
+    targets = [out / f"{Path(f).stem}_sdf.png" for f in args.files]
+    if not args.overwrite:
+        existing = [str(t) for t in targets if t.exists()]
+        if existing:
+            print(f"error: {existing[0]}: exists; pass --overwrite to replace it",
+                  file=sys.stderr)
+            return EXIT_BAD_INPUT
+    for scene, target in zip(scenes, targets, strict=False):
+        render_scene_sdf(scene, target)
+        print(f"wrote {target}")
+    return 0
+
+
+def cmd_solve(args: argparse.Namespace) -> int:
+    from robotplan.api import UnsupportedScene, solve_scene
+
+    scene = load_scene(args.scene)
+    out = Path(args.out)
+    if out.exists() and any(out.iterdir()) and not args.overwrite:
+        print(f"error: {out}: --out: the folder is not empty; pass --overwrite to replace "
+              "its result", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if not_a_model(args.model):
+        return EXIT_BAD_INPUT
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        doc = solve_scene(scene, out, Path(args.model), solver=args.solver,
+                          workers=args.workers, skeleton=args.skeleton,
+                          max_pushes=args.max_pushes, exhaustive=args.exhaustive,
+                          time_budget=args.time_budget)
+    except UnsupportedScene as err:
+        print(f"error: {args.scene}: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except ValueError as err:  # a bad --skeleton
+        print(f"error: --skeleton: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    ex = doc.get("execution") or {}
+    print(f"{doc['status']}: violation {doc['violation']:.3g}, coverage in pybullet "
+          f"{ex.get('coverage')}, plan {doc['plan_seconds']} s; wrote {out / 'result.json'}"
+          + (f" and {out / 'playback.html'}" if "playback" in doc else ""))
+    return 0 if doc["status"] == "solved" else 1
+
+
+def cmd_diagnose(args: argparse.Namespace) -> int:
+    from robotplan.training.diagnose import check_steps, summarize, table, to_json
+
+    path = Path(args.dir) / "result.json"
+    if not path.is_file():
+        print(f"error: {path}: no result.json (run robotplan solve first)", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if not_a_model(args.model):
+        return EXIT_BAD_INPUT
+    scene = load_scene(args.scene)
+    try:
+        checks = check_steps(scene, json.loads(path.read_text()), args.model)
+    except (ValueError, KeyError, StopIteration) as err:
+        print(f"error: {path}: {err!s} (is {args.scene} the scene it was solved for?)",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.json:
+        print(to_json(checks))
+        return 0
+    print(table(checks))
+    print_result(summarize(checks), False)
+    return 0
+
+
+def cmd_view(args: argparse.Namespace) -> int:
+    import functools
+    import http.server
+
+    folder = Path(args.dir)
+    page = folder / "playback.html"
+    if not page.is_file():
+        print(f"error: {page}: no playback here (run robotplan solve first)", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(folder))
+    with http.server.ThreadingHTTPServer(("127.0.0.1", args.port), handler) as httpd:
+        print(f"playback at http://127.0.0.1:{httpd.server_address[1]}/playback.html "
+              "(Ctrl-C to stop)", flush=True)
+        try:
+            httpd.serve_forever()
+        except KeyboardInterrupt:
+            pass
+    return 0

@@ -1,1 +1,0 @@
-"""Learned functionals: pushing dynamics F_flow / F (paper §5.1) — data, model, training."""

@@ -1,0 +1,193 @@
+"""Skeleton search (paper §4, app. I.2): solve one program per candidate skeleton in parallel
+processes, keep the one with the least constraint violation, then the least learned-dynamics
+residual H_F, then the least cost. A plan is *solved* when it meets the constraints and its
+H_F residual stays below the no-motion baseline (``PLAUSIBLE_RMS_MM``), and, around
+obstacles, its objects keep ``OBSTACLE_MARGIN`` from them (open-loop pushing drifts).
+
+Candidates are tried most promising first (init points behind the object as seen from the
+goal) and the search stops at the first one that is *good enough*: feasible, with the
+learned-dynamics residual of a typical real push (``GOOD_RMS_MM``), or, after
+``PATIENCE_S`` seconds, as soon as it holds a solved plan. ``exhaustive=True`` solves every
+candidate, as the paper does."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from multiprocessing import get_context
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from robotplan.functionals.clearance import OBSTACLE_MARGIN, obstacle_clearance
+from robotplan.program.settings import ProgramSettings
+from robotplan.program.skeleton import Skeleton, SkeletonSpace, space_for
+from robotplan.program.solution import FEASIBLE, Solution
+from robotplan.program.solve import solve_skeleton
+from robotplan.scene import Scene
+
+__all__ = ["PATIENCE_S", "SearchResult", "is_solved", "merge_results", "search_push",
+           "stops_search"]
+
+GOOD_RMS_MM = 5.0  # H_F residual (RMS over steps) good enough to stop: F_flow errs ~4.2 mm
+# a plan whose H_F residual exceeds the no-motion baseline (10.8 mm) is one the learned
+# dynamics call impossible: it breaks the dynamics, however well it meets the constraints
+PLAUSIBLE_RMS_MM = 10.0
+PATIENCE_S = 30.0
+"""Seconds after which a search that holds a solved plan stops at the next program it
+collects. Without it, a search whose solved plans all miss GOOD_RMS_MM (most L-shapes: F_flow
+errs more on them) ran to its time budget. On the 40 scenes of ``robotplan bench push
+--seed 0 --time-budget 100`` (session 17, A/B in one session): L-shape plan time median
+101.7 → 52.3 s, boxes 18.8 → 18.2 s, all 40 81.7 → 39.1 s; coverage medians box 1.000 →
+1.000, L 0.932 → 0.949. Three scenes changed their plan through it (L_007 0.245 → 1.0,
+L_014 0.468 → 0.431, box_008 0.209 → 0.0), one more by timing (L_005 0.523 → 0.803)."""
+
+_worker: dict = {}
+
+
+@dataclass
+class SearchResult:
+    best: Solution | None
+    candidates: list[Solution] = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def solved(self) -> bool:
+        return self.best is not None and is_solved(self.best)
+
+
+def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings,
+                 space: SkeletonSpace) -> None:
+    from robotplan.models.dynamics import load_model
+
+    torch.set_num_threads(1)  # one thread per process (DESIGN §4)
+    _worker.update(scene=scene, model=load_model(model_dir), settings=settings,
+                   space=space)
+
+
+def _solve(skeleton: Skeleton) -> Solution:
+    w = _worker
+    sol = solve_skeleton(w["scene"], skeleton, w["model"], w["space"], w["settings"])
+    sol.clearance = plan_clearance(w["scene"], sol)
+    return sol
+
+
+def plan_clearance(scene: Scene, sol: Solution) -> float:
+    """How close the plan's moved objects come to the obstacles (m; inf without any)."""
+    obj = sol.skeleton.phases[0].object
+    moved = {obj: sol.q_obj, **sol.q_others}
+    return min((obstacle_clearance(scene, name, np.asarray(q)) for name, q in moved.items()
+                if len(q)), default=math.inf)
+
+
+def _clearance_short(s: Solution) -> float:
+    """How much the plan misses OBSTACLE_MARGIN by (m; 0 when it keeps it)."""
+    return max(0.0, OBSTACLE_MARGIN - s.clearance)
+
+
+def plan_rank(s: Solution) -> tuple[float, float, float, float]:
+    """The least constraint violation, then the least shortfall of the obstacle margin, then
+    the least H_F residual (ties below the noise floor GOOD_RMS_MM), then the least cost."""
+    rms = s.dynamics_rms_mm if s.dynamics_mm2.size else float("inf")
+    return (max(s.violation, FEASIBLE), _clearance_short(s), max(rms, GOOD_RMS_MM), s.cost)
+
+
+def is_solved(s: Solution) -> bool:
+    """Meets the constraints, is plausible under the learned dynamics and keeps the
+    obstacle margin (what :attr:`SearchResult.solved` asks of the best plan)."""
+    return (s.violation <= FEASIBLE and s.dynamics_rms_mm <= PLAUSIBLE_RMS_MM
+            and _clearance_short(s) == 0.0)
+
+
+def good_enough(s: Solution) -> bool:
+    """Solved, with the learned-dynamics residual of a typical real push."""
+    return is_solved(s) and s.dynamics_rms_mm <= GOOD_RMS_MM
+
+
+def stops_search(sol: Solution, holds_solved: bool, elapsed: float,
+                 time_budget: float | None, patience: float, exhaustive: bool) -> bool:
+    """Whether the search stops on collecting ``sol``, ``elapsed`` seconds in: past the time
+    budget always; otherwise (unless ``exhaustive``) on a good-enough plan, or past
+    ``patience`` seconds with a solved plan in hand (``holds_solved``, ``sol`` included)."""
+    if time_budget is not None and elapsed > time_budget:
+        return True
+    return not exhaustive and (good_enough(sol) or (holds_solved and elapsed > patience))
+
+
+def order_candidates(scene: Scene, skeletons: list[Skeleton],
+                     space: SkeletonSpace | None = None) -> list[Skeleton]:
+    """Most promising first: pushes from init points behind the object (seen from the goal),
+    then fewer pushes. Stable for ties."""
+    space = space or space_for(scene)
+    region = scene.goal_region
+    if region is None:
+        return list(skeletons)
+
+    def score(sk: Skeleton) -> tuple[float, int]:
+        obj = scene.bodies[sk.phases[0].object]
+        away = np.array(obj.pose[:2]) - np.array(region.pose[:2])
+        away = away / max(float(np.linalg.norm(away)), 1e-9)
+        dirs = [space.init_angle(p.init, obj.pose[:2], region.pose[:2], obj.pose[2])
+                for p in sk.phases
+                if p.mode == "push"]
+        align = np.mean([away @ np.array([math.cos(a), math.sin(a)]) for a in dirs])
+        return (-round(float(align), 6), sk.pushes)
+
+    return sorted(skeletons, key=score)
+
+
+def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
+                settings: ProgramSettings | None = None, workers: int = 2,
+                progress: bool = True, exhaustive: bool = False,
+                time_budget: float | None = None,
+                space: SkeletonSpace | None = None,
+                patience: float = PATIENCE_S) -> SearchResult:
+    """Solve the skeletons (a process per core), most promising first, and pick the best;
+    unless ``exhaustive``, stop at the first good-enough plan or, after ``patience``
+    seconds, at the first program collected while a solved plan is in hand; start no
+    program after ``time_budget`` seconds (the best so far wins)."""
+    from tqdm import tqdm
+
+    settings = settings or ProgramSettings()
+    t0 = time.time()
+    space = space or space_for(scene)
+    args = (scene, str(model_dir), settings, space)
+    queue = order_candidates(scene, skeletons, space)
+    solutions: list[Solution] = []
+    holds_solved = False
+    bar = tqdm(total=len(queue), unit="program", desc="skeletons", disable=not progress)
+
+    def collect(sol: Solution) -> bool:
+        nonlocal holds_solved
+        solutions.append(sol)
+        bar.update()
+        bar.set_postfix(best_violation=f"{min(s.violation for s in solutions):.3g}")
+        holds_solved = holds_solved or is_solved(sol)
+        return stops_search(sol, holds_solved, time.time() - t0, time_budget, patience,
+                            exhaustive)
+
+    if workers <= 1:
+        _init_worker(*args)
+        for sk in queue:
+            if collect(_solve(sk)):
+                break
+    else:
+        with get_context("fork").Pool(workers, _init_worker, args) as pool:
+            for sol in pool.imap_unordered(_solve, queue):
+                if collect(sol):
+                    pool.terminate()
+                    break
+    bar.close()
+    order = {sk: i for i, sk in enumerate(queue)}
+    solutions.sort(key=lambda s: order[s.skeleton])
+    best = min(solutions, key=plan_rank) if solutions else None
+    return SearchResult(best, solutions, time.time() - t0)
+
+
+def merge_results(a: SearchResult, b: SearchResult) -> SearchResult:
+    """One result from two searches run one after the other."""
+    every = a.candidates + b.candidates
+    best = min(every, key=plan_rank) if every else None
+    return SearchResult(best, every, a.seconds + b.seconds)

@@ -1,0 +1,213 @@
+"""Routes of an object around obstacles as straight face pushes (paper C.3, Fig. 10).
+
+With obstacles between an object and its goal, the skeleton search needs more than which
+face to push: the order of the pushes and how far each goes. A route fixes both. It is a
+path of the object's centre made of straight segments along the axes of the object's start
+frame (for a box: along its face normals), each one push from the face behind it, that
+keeps the whole footprint ``clearance`` away from every obstacle. :func:`face_routes`
+enumerates the rectilinear routes of up to three segments (an L around a corner, or a
+detour to either side of each obstacle), shortest first; :func:`routed_candidates` turns
+them into skeletons whose push phases carry the route's waypoints (``Phase.via``) as the
+initial guess, with phases long enough for the longest push.
+
+Straight pushes suit open-loop execution: a sphere pushing a face through the centroid
+moves a box straight in pybullet, while a push 2 mm off the centre turns it by 0.13 rad in
+0.3 m and 0.5 rad in 0.6 m (tests/test_route.py), an error no later push of the open-loop
+plan sees. Routed programs therefore use :data:`ROUTE_SETTINGS`, and a route only takes
+directions in which the pusher can meet a face on the centroid's line
+(:func:`centred_pushes`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+import torch
+
+from robotplan.functionals.clearance import densify, obstacle_clearance
+from robotplan.functionals.sticking import centroid
+from robotplan.program.settings import ProgramSettings
+from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
+from robotplan.scene import Scene
+from robotplan.sdf import Shape2D
+
+__all__ = ["ROUTE_SETTINGS", "Route", "centred_pushes", "face_routes", "route_settings",
+           "routed_candidates"]
+
+# Straight, centred pushes: a friction cone of ±1.1° (μ 0.02) keeps the object moving along
+# the face normal, and a lever cost of 100 per cm² keeps the line of force within a fraction
+# of a millimetre of the centroid. obstacle_push, route north–east–south (3 × 25 steps),
+# kinematic plan executed in pybullet: coverage 0.0 with the defaults (μ 0.08, lever 0.01;
+# the first push turned the box 0.1 rad), 0.85 with μ 0.02 and lever 1, 1.0 with μ 0.02 and
+# lever 100 (final yaw −0.04 rad, no wall contact). Hard limits instead (the object within
+# 1 mm of the segment's line and 0.005 rad of its yaw in every step, the pusher on the
+# centroid's line) made SNOPT stop infeasible on a variant (a 0.14 × 0.10 box) and still
+# turned the box by 0.06 rad in pybullet in the first push of obstacle_push. Not the
+# default elsewhere: in the plain search (init points around the object, seed 0 benchmark)
+# the first three scenes went 0.98 / 1.0 / 0.74 -> 1.0 / 0.0 / 0.0, and the arms' failing
+# variants 0.59 / 0.68 / 0.28 -> 0.65 / 0.41 / 0.21.
+ROUTE_SETTINGS = {"push_friction": 0.02, "lever_weight": 100.0}
+ROUTE_CLEARANCE = 0.04  # m between the routed footprint and every obstacle
+MAX_STEPS_PER_PHASE = 30  # longer segments are split into several pushes
+
+
+@dataclass(frozen=True)
+class Route:
+    """Waypoints ``(K + 1, 2)`` of the object's centre (table frame) and, per segment, the
+    direction index ``(K,)`` into the object frame's axes +x, +y, −x, −y."""
+
+    waypoints: np.ndarray
+    directions: tuple[int, ...]
+
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(np.diff(self.waypoints, axis=0), axis=1).sum())
+
+    @property
+    def segments(self) -> np.ndarray:
+        """Segment lengths ``(K,)`` in m."""
+        return np.linalg.norm(np.diff(self.waypoints, axis=0), axis=1)
+
+
+def _frame(yaw: float) -> np.ndarray:
+    """Columns: the object's start axes in the table frame ``(2, 2)``."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s], [s, c]])
+
+
+def _legs(moves: list[tuple[int, float]]) -> list[tuple[int, float]]:
+    """Drop zero moves and merge consecutive moves along the same axis."""
+    out: list[tuple[int, float]] = []
+    for axis, d in moves:
+        if abs(d) < 1e-3:
+            continue
+        if out and out[-1][0] == axis:
+            out[-1] = (axis, out[-1][1] + d)
+        else:
+            out.append((axis, d))
+    return [(a, d) for a, d in out if abs(d) >= 1e-3]  # merged moves may cancel
+
+
+def _clear(scene: Scene, obj: str, points: np.ndarray, yaw: float, clearance: float,
+           step: float = 0.005) -> bool:
+    """Whether the object at yaw ``yaw`` moving along the polyline ``points (W, 2)`` keeps
+    ``clearance`` from every obstacle and stays on the workspace."""
+    ws = scene.workspace
+    lo = np.asarray(ws.center) - np.asarray(ws.size) / 2
+    hi = np.asarray(ws.center) + np.asarray(ws.size) / 2
+    c, s = math.cos(yaw), math.sin(yaw)
+    local = scene.bodies[obj].shape.outline(n_arc=64) @ np.array([[c, s], [-s, c]])
+    poses = densify(np.column_stack((points, np.full(len(points), yaw))), step)
+    every = poses[:, None, :2] + local[None]  # (C, V, 2)
+    if (every < lo).any() or (every > hi).any():
+        return False
+    return obstacle_clearance(scene, obj, poses, step=math.inf) >= clearance  # dense already
+
+
+def centred_pushes(shape: Shape2D, radius: float, tilt_deg: float = 5.0) -> set[int]:
+    """The axis directions (0: +x, 1: +y, 2: −x, 3: −y of the shape frame) in which a
+    sphere of ``radius`` coming along the line through the centroid touches a face, not a
+    corner: its contact normal within ``tilt_deg`` of the line. An L-shape pushed towards
+    −y from above meets the corner of its upright bar, not a face."""
+    c = centroid(shape.outline())
+    far = shape.bound_radius + float(np.linalg.norm(c)) + radius
+    s = torch.linspace(far, 0.0, int(far / 0.0005) + 1, dtype=torch.float64)
+    out = set()
+    for k in range(4):
+        d = np.eye(2)[k % 2] * (1 - 2 * (k // 2))
+        centres = torch.as_tensor(c)[None] - s[:, None] * torch.as_tensor(d)[None]
+        phi, grad = shape.sdf_and_grad(centres)
+        touching = torch.nonzero(phi <= radius)
+        if not len(touching):
+            continue
+        g = grad[int(touching[0])]
+        if float(-(g @ torch.as_tensor(d)) / g.norm()) >= math.cos(math.radians(tilt_deg)):
+            out.add(k)
+    return out
+
+
+def face_routes(scene: Scene, obj: str, goal_xy: np.ndarray,
+                clearance: float = ROUTE_CLEARANCE, limit: int = 3,
+                pushable: set[int] | None = None) -> list[Route]:
+    """Rectilinear routes of ``obj``'s centre from its start to ``goal_xy`` along its start
+    axes, of at most three segments, keeping its footprint (at its start yaw) ``clearance``
+    from every obstacle: the two L-shaped routes (either axis first) and, for each axis,
+    detours that pass each obstacle on either side; only directions in ``pushable`` (all by
+    default). The ``limit`` shortest, fewest segments first among equal lengths."""
+    body = scene.bodies[obj]
+    start = np.array(body.pose[:2], dtype=float)
+    yaw = float(body.pose[2])
+    R = _frame(yaw)
+    d = R.T @ (np.asarray(goal_xy, dtype=float) - start)  # travel in the object's axes
+    local = body.shape.outline(n_arc=64)
+    plans: list[list[tuple[int, float]]] = [[(0, d[0]), (1, d[1])], [(1, d[1]), (0, d[0])]]
+    for spec in scene.obstacles:
+        rim = (scene.bodies[spec.name].outline_world() - start) @ R  # in the object's axes
+        for axis in (0, 1):
+            other = 1 - axis
+            for side in (rim[:, axis].max() - local[:, axis].min() + clearance,
+                         rim[:, axis].min() - local[:, axis].max() - clearance):
+                plans.append([(axis, side), (other, d[other]), (axis, d[axis] - side)])
+    routes: dict[tuple, Route] = {}
+    for plan in plans:
+        legs = _legs(plan)
+        if not legs:
+            continue
+        dirs = tuple(a + (2 if x < 0 else 0) for a, x in legs)
+        if pushable is not None and not set(dirs) <= pushable:
+            continue
+        rel = np.cumsum([np.eye(2)[a] * x for a, x in legs], axis=0)
+        waypoints = np.vstack((start, start + rel @ R.T))
+        if not _clear(scene, obj, waypoints, yaw, 0.9 * clearance):  # detours at exactly it
+            continue
+        key = tuple(np.round(waypoints, 4).ravel())
+        routes.setdefault(key, Route(waypoints, dirs))
+    ordered = sorted(routes.values(), key=lambda r: (round(r.length, 3), len(r.directions)))
+    return ordered[:limit]
+
+
+def _split(route: Route, longest: float) -> Route:
+    """Split segments longer than ``longest`` (m) into equal pushes."""
+    points, dirs = [route.waypoints[0]], []
+    for a, b, k in zip(route.waypoints[:-1], route.waypoints[1:], route.directions,
+                       strict=True):
+        n = max(1, math.ceil(float(np.linalg.norm(b - a)) / longest - 1e-9))
+        points += [a + (b - a) * i / n for i in range(1, n + 1)]
+        dirs += [k] * n
+    return Route(np.array(points), tuple(dirs))
+
+
+def routed_candidates(scene: Scene, actor: str, obj: str, space: SkeletonSpace,
+                      goal_xy: np.ndarray, speed: float, max_pushes: int = 4,
+                      ) -> tuple[SkeletonSpace, list[Skeleton]]:
+    """Skeletons that push ``obj`` along :func:`face_routes` (reach + push per segment,
+    the push from the face behind the segment, ``via`` the segment's end), and the space
+    they need: init points in the object's frame, enough steps per phase for the longest
+    push at ``speed`` m per step (two steps for contact), at most MAX_STEPS_PER_PHASE."""
+    pushable = centred_pushes(scene.bodies[obj].shape, scene.bodies[actor].shape.radius)
+    routes = face_routes(scene, obj, goal_xy, pushable=pushable)
+    longest = (MAX_STEPS_PER_PHASE - 2) * speed
+    routes = [r for r in (_split(r, longest) for r in routes) if len(r.directions) <= max_pushes]
+    if not routes:
+        return space, []
+    steps = max(space.steps_per_phase,
+                max(math.ceil(float(r.segments.max()) / speed) + 2 for r in routes))
+    routed = replace(space, steps_per_phase=steps, init_frame="object",
+                     init_directions_deg=(0.0, 90.0, 180.0, 270.0))
+    skeletons = []
+    for r in routes:
+        phases: list[Phase] = []
+        for k, direction in enumerate(r.directions):
+            init = (direction + 2) % 4  # the pusher starts behind the face it pushes
+            phases.append(Phase("reach", actor, obj, init))
+            phases.append(Phase("push", actor, obj, init,
+                                via=(float(r.waypoints[k + 1][0]), float(r.waypoints[k + 1][1]))))
+        skeletons.append(Skeleton(tuple(phases)))
+    return routed, skeletons
+
+
+def route_settings(settings: ProgramSettings) -> ProgramSettings:
+    """``settings`` with :data:`ROUTE_SETTINGS` (straight, centred pushes)."""
+    return replace(settings, **ROUTE_SETTINGS)

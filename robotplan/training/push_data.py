@@ -1,0 +1,271 @@
+"""Push data from pybullet (paper §7.2, appendix I): random pushes of boxes and L-shapes.
+
+Each scene draws an object (a box, or an L-shape in its bounding box), a pusher radius and a
+start on a circle around the object, then drives the pusher along random straight segments
+whose headings are biased towards the object's centre, until the object starts to leave the
+table or ``max_states`` states are kept. Every ``keep_every``-th simulation step the state is
+kept; two consecutive kept states form one sample (t−1, t).
+
+Storage is compact (shape parameters + poses, no grids): shards ``shard_NNNNN.npz`` of
+``shard_size`` scenes, each written atomically, plus ``meta.json`` with the settings. Scene
+``i`` is drawn from ``numpy.random.default_rng([seed, i])``, so the data is the same for a
+seed whatever the number of workers, and a re-run on a partial folder only makes the
+missing shards.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import asdict, dataclass
+from multiprocessing import get_context
+from pathlib import Path
+
+import numpy as np
+
+from robotplan.execution.sim import PHYSICS, PushWorld
+from robotplan.sdf import Box, LShape, Shape2D
+from robotplan.sdf.footprint import footprint_centroid
+
+__all__ = ["PushDataSpec", "SceneRecord", "generate", "load_shards", "simulate_scene"]
+
+BOX, LSHAPE = 0, 1
+FORMAT = 1
+
+
+@dataclass(frozen=True)
+class PushDataSpec:
+    """The ranges scenes are drawn from (metres, seconds, m/s)."""
+
+    box_side: tuple[float, float] = (0.08, 0.30)
+    lshape_side: tuple[float, float] = (0.12, 0.30)
+    lshape_thickness: tuple[float, float] = (0.05, 0.10)  # and at most 0.6 × shorter side
+    lshape_share: float = 0.5
+    height: float = 0.06
+    pusher_radius: tuple[float, float] = (0.02, 0.05)
+    start_gap: tuple[float, float] = (0.01, 0.15)  # pusher surface to object bound circle
+    object_region: float = 0.55  # object start position uniform in ± this
+    speed: tuple[float, float] = (0.10, 0.35)
+    segment_seconds: tuple[float, float] = (0.2, 0.8)
+    heading_noise: float = 0.5  # rad, std of the heading around the object direction
+    max_states: int = 100
+    table_margin: float = 0.0  # the scene ends when the footprint crosses the edge
+
+
+@dataclass
+class SceneRecord:
+    """One simulated scene: shape parameters and ``K`` kept states."""
+
+    shape_type: int
+    size: tuple[float, float]
+    thickness: float
+    pusher_radius: float
+    object_pose: np.ndarray  # (K, 3) x, y, yaw of the shape frame
+    pusher_xy: np.ndarray  # (K, 2)
+    contact: np.ndarray  # (K,) bool: pusher touched the object during the step into k
+
+    @property
+    def shape(self) -> Shape2D:
+        if self.shape_type == BOX:
+            return Box(self.size)
+        return LShape(self.size, self.thickness)
+
+
+def draw_shape(rng: np.random.Generator, spec: PushDataSpec, kind: str | None = None
+               ) -> Shape2D:
+    """A box or an L-shape from the data ranges (``kind`` None: L with ``lshape_share``)."""
+    if kind is None:
+        kind = "lshape" if rng.random() < spec.lshape_share else "box"
+    if kind == "lshape":
+        w, h = rng.uniform(*spec.lshape_side, size=2)
+        t_max = min(spec.lshape_thickness[1], 0.6 * min(w, h))
+        t = rng.uniform(spec.lshape_thickness[0], t_max)
+        return LShape((float(w), float(h)), float(t))
+    w, h = rng.uniform(*spec.box_side, size=2)
+    return Box((float(w), float(h)))
+
+
+def _on_table(outline: np.ndarray, margin: float) -> bool:
+    return bool(np.abs(outline).max() <= PHYSICS.table_size / 2 - margin)
+
+
+def _world_outline(shape: Shape2D, pose: np.ndarray) -> np.ndarray:
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    return shape.outline() @ np.array([[c, s], [-s, c]]) + pose[:2]
+
+
+def simulate_scene(index: int, seed: int, spec: PushDataSpec = PushDataSpec(),
+                   world: PushWorld | None = None) -> SceneRecord:
+    """Draw scene ``index`` of ``seed`` and simulate it (deterministic)."""
+    rng = np.random.default_rng([seed, index])
+    shape = draw_shape(rng, spec)
+    radius = float(rng.uniform(*spec.pusher_radius))
+    while True:
+        pose = np.array([*rng.uniform(-spec.object_region, spec.object_region, 2),
+                         rng.uniform(-math.pi, math.pi)])
+        if _on_table(_world_outline(shape, pose), 0.02):
+            break
+    centre = pose[:2] + _rotate(footprint_centroid(shape), pose[2])
+    for _ in range(100):
+        ang = rng.uniform(0, 2 * math.pi)
+        dist = shape.bound_radius + radius + rng.uniform(*spec.start_gap)
+        start = centre + dist * np.array([math.cos(ang), math.sin(ang)])
+        if np.abs(start).max() < PHYSICS.table_size / 2 - radius:
+            break
+    own = world is None
+    world = world or PushWorld()
+    try:
+        world.reset(shape, spec.height, tuple(pose), radius, tuple(start))
+        return _rollout(world, shape, radius, rng, spec)
+    finally:
+        if own:
+            world.close()
+
+
+def _rotate(v: np.ndarray, yaw: float) -> np.ndarray:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+def _rollout(world: PushWorld, shape: Shape2D, radius: float, rng: np.random.Generator,
+             spec: PushDataSpec) -> SceneRecord:
+    dt, keep = world.physics.timestep, world.physics.keep_every
+    centroid = footprint_centroid(shape)
+    pose, _ = world.object_pose()
+    target = world.pusher_position()
+    poses, pushers, contacts = [pose], [target.copy()], [False]
+    steps_left, heading, speed = 0, 0.0, 0.0
+    touched = False
+    step = 0
+    while len(poses) < spec.max_states:
+        if steps_left == 0:  # a new straight segment, heading biased to the object centre
+            obj_pose, _ = world.object_pose()
+            to_obj = obj_pose[:2] + _rotate(centroid, obj_pose[2]) - target
+            heading = math.atan2(to_obj[1], to_obj[0]) + rng.normal(0.0, spec.heading_noise)
+            speed = rng.uniform(*spec.speed)
+            steps_left = max(1, round(rng.uniform(*spec.segment_seconds) / dt))
+        target = target + speed * dt * np.array([math.cos(heading), math.sin(heading)])
+        steps_left -= 1
+        touched |= world.step(tuple(target))
+        step += 1
+        if step % keep:
+            continue
+        pose, tilt = world.object_pose()
+        pusher = world.pusher_position()
+        if (not _on_table(_world_outline(shape, pose), spec.table_margin) or tilt > 0.05
+                or np.abs(pusher).max() > PHYSICS.table_size / 2):
+            break
+        poses.append(pose)
+        pushers.append(pusher)
+        contacts.append(touched)
+        touched = False
+    size = shape.size
+    thickness = shape.thickness if isinstance(shape, LShape) else size[1]
+    return SceneRecord(LSHAPE if isinstance(shape, LShape) else BOX, size, thickness, radius,
+                       np.array(poses), np.array(pushers), np.array(contacts, dtype=bool))
+
+
+def _shard_path(out: Path, k: int) -> Path:
+    return out / f"shard_{k:05d}.npz"
+
+
+def _make_shard(args: tuple[Path, int, int, int, int, PushDataSpec]) -> tuple[int, int]:
+    out, k, first, last, seed, spec = args
+    path = _shard_path(out, k)
+    if path.exists():
+        return k, 0
+    import torch
+
+    torch.set_num_threads(1)
+    world = PushWorld()
+    try:
+        records = [simulate_scene(i, seed, spec, world) for i in range(first, last)]
+    finally:
+        world.close()
+    offsets = np.cumsum([0] + [len(r.object_pose) for r in records])
+    arrays = dict(
+        scene_index=np.arange(first, last),
+        shape_type=np.array([r.shape_type for r in records], dtype=np.int8),
+        size=np.array([r.size for r in records], dtype=np.float32),
+        thickness=np.array([r.thickness for r in records], dtype=np.float32),
+        pusher_radius=np.array([r.pusher_radius for r in records], dtype=np.float32),
+        offsets=offsets.astype(np.int64),
+        object_pose=np.concatenate([r.object_pose for r in records]).astype(np.float32),
+        pusher_xy=np.concatenate([r.pusher_xy for r in records]).astype(np.float32),
+        contact=np.concatenate([r.contact for r in records]),
+    )
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.npz")
+    np.savez_compressed(tmp, **arrays)
+    os.replace(tmp, path)
+    return k, int(offsets[-1] - len(records))
+
+
+def generate(out: Path, scenes: int, seed: int, workers: int = 2, shard_size: int = 50,
+             spec: PushDataSpec = PushDataSpec(), progress: bool = True) -> dict:
+    """Make (or finish) the data set in ``out``. Returns a summary."""
+    from tqdm import tqdm
+
+    out.mkdir(parents=True, exist_ok=True)
+    meta = {"format": FORMAT, "seed": seed, "shard_size": shard_size,
+            "physics": PHYSICS.as_dict(), "spec": asdict(spec)}
+    meta_path = out / "meta.json"
+    if meta_path.exists():
+        old = json.loads(meta_path.read_text())
+        for key in meta:
+            if _jsonable(old.get(key)) != _jsonable(meta[key]):
+                raise ValueError(f"{meta_path}: {key}: the folder holds data made with other "
+                                 f"settings ({old.get(key)!r}); use another --out")
+    meta["scenes"] = max(scenes, json.loads(meta_path.read_text()).get("scenes", 0)
+                         if meta_path.exists() else 0)
+    tmp = meta_path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(meta, indent=1))
+    os.replace(tmp, meta_path)
+    jobs = [(out, k, first, min(first + shard_size, scenes), seed, spec)
+            for k, first in enumerate(range(0, scenes, shard_size))]
+    todo = [j for j in jobs if not _shard_path(out, j[1]).exists()]
+    samples = 0
+    with tqdm(total=len(jobs) * shard_size, initial=(len(jobs) - len(todo)) * shard_size,
+              unit="scene", disable=not progress, desc="push data") as bar:
+        if workers <= 1:
+            for j in todo:
+                samples += _make_shard(j)[1]
+                bar.update(j[3] - j[2])
+        else:
+            with get_context("fork").Pool(workers) as pool:
+                for (_, n), j in zip(pool.imap(_make_shard, todo), todo, strict=True):
+                    samples += n
+                    bar.update(j[3] - j[2])
+    return {"scenes": scenes, "shards": len(jobs), "made_shards": len(todo),
+            "new_samples": samples}
+
+
+def _jsonable(x: object) -> object:
+    return json.loads(json.dumps(x))
+
+
+def load_shards(folder: Path, scenes: int | None = None) -> dict[str, np.ndarray]:
+    """All shards of ``folder`` concatenated (first ``scenes`` scenes if given).
+
+    Returns arrays per scene (``shape_type, size, thickness, pusher_radius, scene_index``,
+    ``offsets (S+1,)``) and per state (``object_pose, pusher_xy, contact``).
+    """
+    paths = sorted(Path(folder).glob("shard_*.npz"))
+    if not paths:
+        raise FileNotFoundError(f"{folder}: no push data shards (shard_*.npz) here")
+    parts = [dict(np.load(p)) for p in paths]
+    out: dict[str, np.ndarray] = {}
+    for key in ("scene_index", "shape_type", "size", "thickness", "pusher_radius"):
+        out[key] = np.concatenate([p[key] for p in parts])
+    for key in ("object_pose", "pusher_xy", "contact"):
+        out[key] = np.concatenate([p[key] for p in parts])
+    lengths = np.concatenate([np.diff(p["offsets"]) for p in parts])
+    out["offsets"] = np.concatenate([[0], np.cumsum(lengths)])
+    if scenes is not None and scenes < len(out["scene_index"]):
+        end = out["offsets"][scenes]
+        for key in ("scene_index", "shape_type", "size", "thickness", "pusher_radius"):
+            out[key] = out[key][:scenes]
+        for key in ("object_pose", "pusher_xy", "contact"):
+            out[key] = out[key][:end]
+        out["offsets"] = out["offsets"][: scenes + 1]
+    return out
