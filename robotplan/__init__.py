@@ -6,7 +6,11 @@ transform of its SDF, and a plan is one trajectory optimisation whose constraint
 analytic and learned functionals of those SDFs.
 """
 
-from robotplan.scene import Body, Scene, SceneError, load_scene
+from robotplan.base.arith import pin_arithmetic
+
+pin_arithmetic()  # before any module of ours imports torch
+
+from robotplan.scene import Body, Scene, SceneError, load_scene  # noqa: E402
 
 __all__ = ["Body", "Scene", "SceneError", "load_scene"]
 __version__ = "0.1.0"

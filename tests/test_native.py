@@ -1,5 +1,9 @@
-"""Our own C kernels (robotplan/kernels.c): encoder convolutions and grid rendering against
-PyTorch's, and the fallback where they do not apply."""
+"""Our own C kernels (robotplan/base/kernels.c): encoder convolutions and grid rendering against
+PyTorch's, the fallback where they do not apply, and the pinned arithmetic (base/arith)."""
+
+import os
+import subprocess
+import sys
 
 import pytest
 import torch
@@ -7,6 +11,7 @@ from torch import nn
 
 from robotplan.base import native
 from robotplan.functionals import dynamics as fd
+from robotplan.functionals import grid_render
 from robotplan.functionals.dynamics import render_on_grid
 from robotplan.models import dynamics as dyn
 from robotplan.models.dynamics import DynamicsSpec, PushDynamics
@@ -80,12 +85,21 @@ def test_kernels_decline_what_they_do_not_handle():
         assert native.conv_relu_forward(x.float(), w, torch.zeros(len(w)), 1) is None
 
 
-def test_a_missing_compiler_is_one_clear_error(monkeypatch, tmp_path):
-    monkeypatch.setenv("CC", str(tmp_path / "no-such-cc"))
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
-    with pytest.raises(OSError):
-        native._build()
-    assert not list((tmp_path / "cache").rglob("*.so"))  # nothing half-written
+def test_kernels_are_built_at_install_time_and_can_be_switched_off(monkeypatch):
+    """The library comes from setup.py (fixed flags), never from a build at run time; with
+    ROBOTPLAN_NATIVE=0 or without the library every caller takes its PyTorch path."""
+    assert native.library_path() is not None, "setup.py built no kernels library"
+    native.kernels.cache_clear()
+    try:
+        monkeypatch.setenv("ROBOTPLAN_NATIVE", "0")
+        assert native.kernels() is None
+        native.kernels.cache_clear()
+        monkeypatch.delenv("ROBOTPLAN_NATIVE")
+        monkeypatch.setattr(native, "library_path", lambda: None)
+        with pytest.warns(RuntimeWarning, match="not built at install time"):
+            assert native.kernels() is None
+    finally:
+        native.kernels.cache_clear()
 
 
 @needs_kernels
@@ -141,7 +155,7 @@ def test_grid_rendering_matches_the_shapes_closed_forms(shape, dofs, monkeypatch
     # the gradient jumps where the nearest face changes: rounding may pick the other side
     close = (dense - dense_ref).abs() < 1e-4
     assert close.float().mean() > 0.999, close.float().mean()
-    monkeypatch.setattr(fd, "render_planes", lambda *a, **k: None)  # the fallback
+    monkeypatch.setattr(grid_render, "render_planes", lambda *a, **k: None)  # the fallback
     phi32, t32 = render_on_grid(body, X.float(), ws)
     assert (phi32 - phi).abs().max() < 1e-5
     assert ((t32.dense() - tangents.dense()).abs() < 1e-4).float().mean() > 0.999
@@ -194,9 +208,29 @@ def test_h_f_in_float32_equals_the_pytorch_path(shape, monkeypatch):
     H = fd.LearnedDynamics(model, obj, pusher, fd.Quadrature.grid(Workspace()))
     h, j1, j2 = H.evaluate(X1, X2)
     for module, name in ((dyn, "conv_relu_forward"), (dyn, "conv_relu_input_grad"),
-                         (fd, "render_planes"), (native, "shape_planes")):
+                         (grid_render, "render_planes"), (native, "shape_planes")):
         monkeypatch.setattr(module, name, lambda *a, **k: None)
     h_ref, j1_ref, j2_ref = H.evaluate(X1, X2)
     assert (h - h_ref).abs().max() < 1e-4 * h_ref.abs().max() and h_ref.abs().min() > 0
     for j, ref in ((j1, j1_ref), (j2, j2_ref)):
         assert (j - ref).abs().max() < 1e-3 * ref.abs().max() and ref.abs().max() > 0
+
+
+def _capability(**env: str) -> str:
+    """torch's kernel family in a fresh interpreter that imports robotplan first."""
+    clean = {k: v for k, v in os.environ.items()
+             if k not in ("ATEN_CPU_CAPABILITY", "MKL_CBWR", "ONEDNN_MAX_CPU_ISA",
+                          "ROBOTPLAN_CPU_FEATURES")}
+    res = subprocess.run([sys.executable, "-c", "import robotplan, torch, os; "
+                          "print(torch.backends.cpu.get_cpu_capability(), os.environ['MKL_CBWR'] "
+                          "if 'MKL_CBWR' in os.environ else '-')"],
+                         env={**clean, **env}, capture_output=True, text=True, check=True)
+    return res.stdout.strip()
+
+
+def test_importing_robotplan_pins_the_libraries_to_one_kernel_family():
+    """The same arithmetic on every CPU: AVX2 kernels in PyTorch, MKL and oneDNN unless the
+    user opts in to the CPU's own (ROBOTPLAN_CPU_FEATURES=native)."""
+    assert _capability() == "AVX2 AVX2"
+    assert _capability(ATEN_CPU_CAPABILITY="default") == "DEFAULT AVX2"  # the user's own
+    assert _capability(ROBOTPLAN_CPU_FEATURES="native").endswith(" -")

@@ -1,4 +1,4 @@
-/* C kernels of robotplan (float32, one thread), built and loaded by robotplan/native.py
+/* C kernels of robotplan (float32, one thread), built by setup.py, loaded by robotplan/base/native.py
  * (the system's C compiler, ctypes); see its docstring for why and for the timings.
  *
  * SDF encoder convolutions, over a batch of M images (NCHW):

@@ -15,11 +15,11 @@ in PyTorch:
   15–60 tensor operations (a box on the grid at 10 poses 1.6 → 0.3 ms, an L-shape
   14 → 0.8 ms).
 
-``kernels.c`` is compiled once per machine with the system's C compiler (``$CC``, ``cc`` or
-``gcc``; ``-O3``, AVX2 and FMA where the CPU has them) into ``$XDG_CACHE_HOME/robotplan``
-(default ``~/.cache/robotplan``), keyed by a hash of the source and the flags. Where that
-fails (no compiler, a read-only cache) or with ``ROBOTPLAN_NATIVE=0``, :func:`kernels` is
-None and every caller uses its PyTorch path: the same values up to float32 rounding.
+``kernels.c`` is compiled at install time by ``setup.py`` with fixed flags (``-O3``, AVX2,
+FMA), the same on every machine: the kernels' arithmetic does not follow the CPU they were
+built on. Where no library was built (no compiler at install time), the CPU lacks AVX2 or
+FMA, or with ``ROBOTPLAN_NATIVE=0``, :func:`kernels` is None and every caller uses its
+PyTorch path: the same values up to float32 rounding.
 The kernels never see float64 tensors (the tests' models) or tensors autograd tracks.
 """
 
@@ -27,11 +27,8 @@ from __future__ import annotations
 
 import ctypes
 import functools
-import hashlib
+import importlib.machinery
 import os
-import shutil
-import subprocess
-import tempfile
 import warnings
 from pathlib import Path
 
@@ -41,53 +38,28 @@ from torch import Tensor
 __all__ = ["BOX", "CIRCLE", "LSHAPE", "KernelShape", "conv_relu_forward", "conv_relu_input_grad",
            "kernels", "render_planes", "shape_planes"]
 
-SOURCE = Path(__file__).with_name("kernels.c")
 MAX_CHANNELS = 8  # per layer, as compiled (MAXC in the C file)
+REQUIRED_CPU_FLAGS = ("avx2", "fma")  # what setup.py compiles the kernels for
 
 
-def _compile_flags() -> list[str]:
-    flags = ["-O3", "-shared", "-fPIC", "-std=gnu11", "-fno-math-errno"]
+def library_path() -> Path | None:
+    """The kernels built at install time (``setup.py``), or None where none was built."""
+    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+        path = Path(__file__).with_name(f"_kernels{suffix}")
+        if path.is_file():
+            return path
+    return None
+
+
+def _cpu_runs_them() -> bool:
+    """Whether this CPU has the instructions the kernels were compiled with (every x86-64
+    CPU these machines have; elsewhere the kernels would stop the process)."""
     try:
         with open("/proc/cpuinfo") as f:
-            cpu = f.read()
+            words = set(f.read().split())
     except OSError:
-        cpu = ""
-    words = set(cpu.split())
-    if {"avx2", "fma"} <= words:
-        flags += ["-mavx2", "-mfma"]
-    return flags
-
-
-def _cache_dir() -> Path:
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "robotplan"
-
-
-def _build() -> Path:
-    """Compile the kernels (once; later calls find the library by its hash)."""
-    compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-    if not compiler:
-        raise OSError("no C compiler (cc, gcc or $CC) found")
-    flags = _compile_flags()
-    source = SOURCE.read_bytes()
-    key = hashlib.sha256(source + " ".join([compiler, *flags]).encode()).hexdigest()[:16]
-    folder = _cache_dir()
-    target = folder / f"kernels-{key}.so"
-    if target.is_file():
-        return target
-    folder.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=".so", dir=folder)
-    os.close(fd)
-    try:
-        subprocess.run([compiler, *flags, "-o", tmp, str(SOURCE), "-lm"], check=True,
-                       capture_output=True, text=True)
-        os.replace(tmp, target)  # whole or not at all; concurrent builds write the same bytes
-    except subprocess.CalledProcessError as err:
-        raise OSError(f"{compiler} failed on {SOURCE.name}: {err.stderr.strip()[:500]}") from err
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return target
+        return False
+    return set(REQUIRED_CPU_FLAGS) <= words
 
 
 @functools.cache
@@ -95,12 +67,15 @@ def kernels() -> ctypes.CDLL | None:
     """The compiled kernels, or None where they cannot be used (see the module notes)."""
     if os.environ.get("ROBOTPLAN_NATIVE", "1") == "0":
         return None
-    try:
-        lib = ctypes.CDLL(str(_build()))
-    except OSError as err:
-        warnings.warn(f"robotplan: encoder kernels unavailable ({err}); using PyTorch's "
-                      "convolutions (slower)", RuntimeWarning, stacklevel=2)
+    path = library_path()
+    if path is None or not _cpu_runs_them():
+        why = ("not built at install time (no C compiler?)" if path is None
+               else f"this CPU lacks {' or '.join(REQUIRED_CPU_FLAGS)}")
+        warnings.warn(f"robotplan: C kernels unavailable ({why}); using PyTorch's "
+                      "operations (slower, same values up to float32 rounding)",
+                      RuntimeWarning, stacklevel=2)
         return None
+    lib = ctypes.CDLL(str(path))
     p, i = ctypes.c_void_p, ctypes.c_int
     lib.rp_conv_forward.argtypes = [p, i, i, i, i, p, i, p, p, i, i, i, p, p]
     lib.rp_conv_forward.restype = i

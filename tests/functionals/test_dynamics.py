@@ -149,14 +149,19 @@ def test_render_on_grid_matches_the_pointwise_rendering(shape):
     assert none is None and (values - expected).abs().max() < 1e-12
 
 
-def test_bfloat16_head_products_only_where_the_cpu_multiplies_them(monkeypatch):
+def test_bfloat16_head_products_only_where_opted_in_and_the_cpu_multiplies_them(monkeypatch):
+    from robotplan.base import arith
     from robotplan.models import dynamics as learned_dynamics
 
     avx2 = "processor\t: 0\nflags\t\t: fpu sse2 avx avx2 fma\n"
-    assert not learned_dynamics.cpu_multiplies_bfloat16(avx2)
-    assert learned_dynamics.cpu_multiplies_bfloat16(avx2.replace("fma", "fma avx512_bf16"))
-    assert learned_dynamics.cpu_multiplies_bfloat16(avx2.replace("fma", "amx_bf16 amx_tile"))
-    assert not learned_dynamics.cpu_multiplies_bfloat16("")
+    bf16 = avx2.replace("fma", "fma avx512_bf16")
+    monkeypatch.delenv("ROBOTPLAN_HEAD_BFLOAT16", raising=False)
+    assert not arith.bfloat16_head(bf16)  # the default: float32 on every CPU
+    monkeypatch.setenv("ROBOTPLAN_HEAD_BFLOAT16", "1")
+    assert not arith.bfloat16_head(avx2)
+    assert arith.bfloat16_head(bf16)
+    assert arith.bfloat16_head(avx2.replace("fma", "amx_bf16 amx_tile"))
+    assert not arith.bfloat16_head("")
 
     torch.manual_seed(7)
     model32 = PushDynamics(DynamicsSpec(**SPEC)).float()
@@ -164,7 +169,7 @@ def test_bfloat16_head_products_only_where_the_cpu_multiplies_them(monkeypatch):
     pusher = Body("p", "pusher", Circle(0.03), (0.0, 0.0, 0.0), 0.0, 0.06)
     quad = Quadrature(torch.zeros(4, 2), torch.ones(4))
     for native, expected in ((False, torch.float32), (True, torch.bfloat16)):
-        monkeypatch.setattr(learned_dynamics, "cpu_multiplies_bfloat16", lambda n=native: n)
+        monkeypatch.setattr(learned_dynamics, "bfloat16_head", lambda n=native: n)
         assert LearnedDynamics(model32, obj, pusher, quad).matmul_dtype == expected
         assert LearnedDynamics(model32.double(), obj, pusher,
                                quad).matmul_dtype == torch.float64

@@ -1,0 +1,244 @@
+"""The functionals of a push program as rows: H_F, H_coll, H_PoC, H_g, the quasi-static
+push and the costs (paper eq. 2; :class:`PushRows`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from robotplan.functionals import Collision, ContactPoint, GoalRegion
+from robotplan.functionals.collision import FixedCollision, SweptClearance, face_contact_overlap
+from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
+from robotplan.functionals.sticking import (
+    CornerClearance,
+    PushingDirection,
+    PushLever,
+    QuasiStaticPush,
+    StickingContact,
+    centroid,
+    convex_corners,
+    limit_surface_radius,
+)
+from robotplan.models.dynamics import PushDynamics
+from robotplan.program.bridge import bridge, stepwise
+from robotplan.program.rows import ProgramRows
+from robotplan.sdf.footprint import support_corners
+
+__all__ = ["PushRows"]
+
+
+class PushRows(ProgramRows):
+    """The rows of one pushed object (``obj``, poses ``Q1``) and one actor (``pusher``,
+    positions ``Q2``), contact points ``P`` in push steps."""
+
+    def _add_dynamics(self, model: PushDynamics, obj, Q_obj: np.ndarray, actor,
+                      Q_actor: np.ndarray, path: np.ndarray, name: str) -> LearnedDynamics:
+        """H_F of ``obj`` (poses ``Q_obj (N+1, 3)``) pushed by ``actor`` (``Q_actor (N+1, 2)``
+        positions of a disc, or ``(N+1, 3)`` poses of an object) in every step, integrated
+        around ``path (N+1, ≥2)``, the object's guessed centres."""
+        s = self.settings
+        quad = phase_quadrature(torch.as_tensor(path[:, :2], dtype=torch.float32),
+                                obj.shape.bound_radius, self.scene.workspace,
+                                coarse=s.quad_coarse)
+        dynamics = LearnedDynamics(model, obj, actor, quad)
+        N, d = self.N, Q_actor.shape[1]
+        area = float(self.scene.workspace.size[0] * self.scene.workspace.size[1])
+        scale = 1e6 / area  # H (m²) → mean squared residual in mm²
+
+        def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
+            X1 = torch.from_numpy(x[:3 * (N + 1)].reshape(N + 1, 3))
+            X2 = torch.from_numpy(x[3 * (N + 1):].reshape(N + 1, d))
+            H, J1, J2 = dynamics.evaluate(X1, X2, jacobian=jac)
+            values = H.double().numpy() * scale
+            if not jac:
+                return values, None
+            J = np.zeros((N, (3 + d) * (N + 1)))
+            rows = np.arange(N)
+            J1n, J2n = J1.double().numpy() * scale, J2.double().numpy() * scale
+            for which in (0, 1):
+                states = rows + which
+                for k in range(3):
+                    J[rows, 3 * states + k] = J1n[:, which, k]
+                for k in range(d):
+                    J[rows, 3 * (N + 1) + d * states + k] = J2n[:, which, k]
+            return values, J
+
+        variables = np.concatenate((Q_obj.ravel(), Q_actor.ravel()))
+        if s.dynamics_weight > 0:
+            def total(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
+                values, J = fn(x, jac)
+                w = s.dynamics_weight
+                return (np.array([w * values.sum()]),
+                        None if J is None else w * J.sum(axis=0, keepdims=True))
+
+            self._add_cost(total, variables, name)
+            return dynamics
+        bound = (s.dynamics_rmse * 1e3) ** 2
+        self.prog.AddConstraint(bridge(fn, self.timings, name), np.zeros(N), np.full(N, bound),
+                                variables, name)
+        return dynamics
+
+    def _hold_object_while_reaching(self) -> None:
+        """A reach phase moves the pusher without touching (H_coll keeps it off), so the
+        object stays where it is: q_obj,t = q_obj,t−1 in reach steps. Without this, the
+        cost on H_F alone let the optimiser drift the object a few mm per step."""
+        T = self.T
+        for k, ph in enumerate(self.skeleton.phases):
+            if ph.mode != "reach":
+                continue
+            for t in range(k * T + 1, (k + 1) * T + 1):
+                self._hold(self.Q1, t)
+
+    def _add_collision(self) -> None:
+        """H_coll in every step: at most a pressed-in face contact in push steps, and
+        ``reach_clearance`` of free space in the other steps (the pusher follows straight
+        lines between the planned points; brushing the object on the way turned it)."""
+        s = self.settings
+        H = Collision(self.obj, self.pusher, a=s.a_coll)
+        touch = max(s.coll_area, face_contact_overlap(self.pusher, s.a_coll, s.coll_depth))
+        clear = face_contact_overlap(self.pusher, s.a_coll, -s.reach_clearance)
+        ub = np.full(self.N, clear)
+        ub[self.push_steps - 1] = touch
+        if self.scene.goal.type == "touch":
+            ub[-1] = touch  # the touch goal's last state is a contact, not a reach
+        self._add_rows(H, [self.Q1[1:], self.Q2[1:]], 1, 1e4, 0.0, ub * 1e4,
+                       "H_coll")  # in cm²
+        pushing = set(self.push_steps.tolist())
+        free = np.array([t for t in range(1, self.N + 1) if t not in pushing], dtype=int)
+        if self.planar_pusher and s.swept_samples > 0 and len(free):
+            # the object holds still in these steps (hold_while_reaching): its pose at t
+            k = s.swept_samples
+            self._add_rows(SweptClearance(self.obj, self.pusher, k),
+                           [self.Q1[free], self.Q2[free - 1], self.Q2[free]], k, 100,
+                           -100 * s.swept_tolerance, np.inf, "swept")  # cm
+        for spec in self.scene.obstacles:
+            wall = self.scene.bodies[spec.name]
+            self._add_rows(FixedCollision(self.obj, wall, s.a_coll), [self.Q1[1:]], 1, 1e4,
+                           0.0, s.obstacle_overlap * 1e4, f"H_coll_{spec.name}")
+            self._add_rows(FixedCollision(self.pusher, wall, s.a_coll), [self.Q2[1:]], 1, 1e4,
+                           0.0, clear * 1e4, f"H_coll_{spec.name}_pusher")
+
+    def _add_contact(self) -> None:
+        if len(self.push_steps):
+            H = ContactPoint(self.obj, self.pusher)
+            steps = self.push_steps
+            self._add_rows(H, [self.Q1[steps], self.Q2[steps], self.P], 2, 100, 0.0, 0.0,
+                           "H_PoC")  # cm
+
+    def _add_lever_cost(self) -> None:
+        """``lever_weight`` · Σ (lever arm in cm)² over push steps (see PushLever)."""
+        w = self.settings.lever_weight
+        if w <= 0 or not len(self.push_steps):
+            return
+        H = PushLever(centroid(self.obj.shape.outline()))
+        steps = self.push_steps
+        fn, variables = stepwise(H, [self.Q1[steps], self.Q2[steps], self.P], 100.0)
+
+        def total(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
+            r, J = fn(x, jac)
+            return np.array([w * r @ r]), None if J is None else (2 * w * r @ J)[None]
+
+        self._add_cost(total, variables, "lever")
+
+    def _add_corner_clearance(self) -> None:
+        """|p_B − corner| ≥ corner_clearance in every push step (see CornerClearance)."""
+        if self.settings.corner_clearance <= 0 or not len(self.push_steps):
+            return
+        outline = self.obj.shape.outline()
+        corners = convex_corners(outline)
+        if not len(corners):
+            return
+        edges = np.linalg.norm(np.roll(outline, -1, axis=0) - outline, axis=1)
+        shorter_face = np.minimum(edges, np.roll(edges, 1))[corners]  # the faces at a corner
+        bound = np.minimum(self.settings.corner_clearance, shorter_face / 3)
+        self._add_rows(CornerClearance(outline[corners]), [self.Q1[self.push_steps], self.P],
+                       len(corners), 100, 100 * bound[None], np.inf, "corner")  # cm
+
+    def _add_quasi_static(self, turn: bool) -> None:
+        """QuasiStaticPush rows in every push step: the friction cone, and with ``turn`` the
+        limit surface's turning rate (the kinematic stage, and the learned stage with
+        ``turn_in_learned``; otherwise the learned stage keeps the cone only and H_F alone
+        decides how the object turns)."""
+        c_B = centroid(self.obj.shape.outline())
+        radius = limit_surface_radius(support_corners(self.obj.shape), c_B)
+        H = QuasiStaticPush(c_B, radius, self.settings.push_friction, turn=turn)
+        k = self.push_steps
+        self._add_quasi_static_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P])
+
+    def _add_quasi_static_rows(self, H: QuasiStaticPush, blocks: list[np.ndarray],
+                               suffix: str = "") -> None:
+        """``H``'s rows on ``blocks``: [turn (= 0)], cone edge, cone edge (≥ 0), in cm."""
+        m = 3 if H.turn else 2
+        lb, ub = np.zeros((1, m)), np.full((1, m), np.inf)
+        if H.turn:
+            ub[0, 0] = 0.0
+        self._add_rows(H, blocks, m, 100, lb, ub,
+                       ("quasi_static" if H.turn else "friction_cone") + suffix)
+
+    def _add_kinematic_pushing(self) -> None:
+        """The kinematic stand-in for H_F: in push steps the contact point sticks to the
+        object and the pusher moves into it; the object's travel is a small cost."""
+        steps = list(self.push_steps)
+        pairs = [(i - 1, i) for i in range(1, len(steps)) if steps[i] == steps[i - 1] + 1
+                 and (steps[i] - 1) % self.T != 0]
+        if pairs:
+            a, b = np.array(pairs).T
+            ta, tb = self.push_steps[a], self.push_steps[b]
+            self._add_rows(StickingContact(), [self.Q1[ta], self.P[a], self.Q1[tb], self.P[b]],
+                           2, 100, 0.0, 0.0, "sticking")
+        if steps:
+            self._add_rows(PushingDirection(), [self.Q2[self.push_steps - 1],
+                                                self.Q2[self.push_steps], self.P],
+                           1, 100, 0.0, np.inf, "pushing")
+        if steps and self.settings.push_friction > 0:
+            self._add_quasi_static(turn=True)
+        self._add_motion_cost(self.Q1)
+
+    def _add_goal(self) -> None:
+        if self.scene.goal.type == "touch":
+            # the touching tip is the last phase's actor; it ends on the object (H_PoC)
+            self.P_touch = self.prog.NewContinuousVariables(1, 2, "p_touch")
+            H = ContactPoint(self.obj, self.scene.bodies[self.scene.goal.actor])
+            self._add_rows(H, [self.Q1[-1:], self.Q2[-1:], self.P_touch], 2, 100, 0.0, 0.0,
+                           "H_touch")  # cm
+            return
+        if self.region is None:
+            return
+        origin = torch.zeros(1, 2, dtype=torch.float64)
+        body = self.goal_body
+        extent = np.ptp(body.shape.outline(), axis=0).max() / 2
+        room = -float(self.region.shape.sdf(origin)[0]) - extent
+        inset = min(self.settings.goal_inset, max(0.0, room / 3))
+        H = GoalRegion(body, self.region, a=self.settings.a_goal, inset=inset)
+        scale = 1.0 / body.area
+
+        def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
+            X = torch.from_numpy(x.reshape(1, 3))
+            if not jac:
+                return H(X)[:, 0].numpy() * scale, None
+            r, (J,) = H.jacobians(X)
+            return r[:, 0].numpy() * scale, J[:, 0].numpy() * scale
+
+        self.prog.AddConstraint(bridge(fn, self.timings, "H_g"), np.zeros(1),
+                                np.array([self.settings.goal_tol]),
+                                self.goal_Q[self.N], "H_g")
+
+    def _add_costs(self) -> None:
+        def accel_cost(Q: np.ndarray, weight: float, prefix: bool) -> None:
+            n = Q.shape[0]
+            if n < 2:
+                return
+            rows = []
+            for t in range(0 if prefix else 1, n - 1):  # a_t = q_{t+1} − 2 q_t + q_{t−1}
+                r = np.zeros(n)
+                r[t + 1] += 1
+                r[t] -= 2
+                r[max(t - 1, 0)] += 1  # q_{−1} = q_0
+                rows.append(r)
+            D = np.kron(np.array(rows), np.eye(2))
+            self.prog.AddQuadraticCost(2 * weight * D.T @ D, np.zeros(2 * n), Q.ravel(),
+                                       is_convex=True)
+
+        accel_cost(self.Q2, self.settings.accel_weight, prefix=True)
+        if len(self.P):
+            accel_cost(self.P, self.settings.contact_accel_weight, prefix=False)
