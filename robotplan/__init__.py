@@ -12,5 +12,18 @@ pin_arithmetic()  # before any module of ours imports torch
 
 from robotplan.scene import Body, Scene, SceneError, load_scene  # noqa: E402
 
-__all__ = ["Body", "Scene", "SceneError", "load_scene"]
+__all__ = ["Body", "Execution", "Plan", "Scene", "SceneError", "execute", "load_scene", "plan",
+           "solve", "write_playback"]
+
+_FACADE = {"Execution", "Plan", "execute", "plan", "solve", "write_playback"}
+
+
+def __getattr__(name: str) -> object:
+    """The facade (:mod:`robotplan.api`), imported on first use: ``import robotplan`` alone
+    stays light (no Drake, pybullet or models) for scene checks."""
+    if name in _FACADE:
+        from robotplan import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'robotplan' has no attribute {name!r}")
 __version__ = "0.1.0"

@@ -58,11 +58,11 @@ def test_reach_pruning_keeps_the_arms_that_can_reach(task, expected, frame):
     box whose straight pushes reach the goal; the handover scene keeps left-then-right
     only (the box starts beyond the right arm's reach, the goal beyond the left's)."""
     from robotplan import load_scene
-    from robotplan.api import _candidate_tiers
     from robotplan.program.arm_program import reach_check
+    from robotplan.search.scene_search import candidate_tiers
 
     scene = load_scene(TASKS / f"{task}.yaml")
-    kept, space = next(_candidate_tiers(scene, "box", ["left", "right"], None, 2, quiet=True))
+    kept, space = next(candidate_tiers(scene, "box", ["left", "right"], None, 2, quiet=True))
     assert kept, "pruning removed every skeleton"
     assert space.init_frame == frame
     assert {tuple(p.actor for p in sk.phases if p.mode == "push") for sk in kept} <= expected
@@ -74,10 +74,10 @@ def test_reach_pruning_keeps_the_arms_that_can_reach(task, expected, frame):
 
 def test_touch_pruning_ends_with_the_touching_arm():
     from robotplan import load_scene
-    from robotplan.api import _candidate_tiers
+    from robotplan.search.scene_search import candidate_tiers
 
     scene = load_scene(TASKS / "two_arm_touch.yaml")
-    kept, space = next(_candidate_tiers(scene, "box", ["left", "right"], None, 2, quiet=True))
+    kept, space = next(candidate_tiers(scene, "box", ["left", "right"], None, 2, quiet=True))
     every = actor_candidates(space, ["left", "right"], "box", touch_actor="right")
     assert kept and len(kept) < len(every) / 4
     assert all(sk.phases[-1].actor == "right" and sk.phases[-1].mode == "reach" for sk in kept)

@@ -1,7 +1,8 @@
-"""robotplan.api's search logic around the programs (the programs themselves: test_planner
-and the slow end-to-end tests)."""
+"""robotplan.search.scene_search: the search logic around the programs (the programs
+themselves: test_planner and the slow end-to-end tests)."""
 
-import robotplan.api as solve_module
+import robotplan.search.scene_search as search_module
+from robotplan.api import solve
 from robotplan.scene import load_scene
 from robotplan.search.planner import SearchResult
 from tests.conftest import TASKS
@@ -14,13 +15,13 @@ def test_arm_search_tries_init_points_seen_from_the_goal_when_face_pushes_fail(
     calls = []
 
     def no_plan(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-                time_budget, space):
+                time_budget, space, guesses=None):
         calls.append((list(skeletons), space))
         return SearchResult(None, [], 1.0)
 
-    monkeypatch.setattr(solve_module, "search_push", no_plan)
+    monkeypatch.setattr(search_module, "search_push", no_plan)
     scene = load_scene(TASKS / "variants" / "left_only_lshape.yaml")
-    doc = solve_module.solve_scene(scene, tmp_path, TASKS.parent / "learned" / "push_flow",
+    doc = solve(scene, tmp_path, TASKS.parent / "learned" / "push_flow",
                                    progress=False, quiet=True)
     assert doc["status"] == "no_solution"
     assert [space.init_frame for _, space in calls] == ["object", "goal"]
@@ -33,13 +34,13 @@ def test_arm_search_tries_init_points_seen_from_the_goal_when_face_pushes_fail(
 def test_a_given_skeleton_gets_no_fallback(monkeypatch, tmp_path):
     calls = []
 
-    def no_plan(*args):
+    def no_plan(*args, **kwargs):
         calls.append(args)
         return SearchResult(None, [], 1.0)
 
-    monkeypatch.setattr(solve_module, "search_push", no_plan)
+    monkeypatch.setattr(search_module, "search_push", no_plan)
     scene = load_scene(TASKS / "variants" / "left_only_lshape.yaml")
-    solve_module.solve_scene(scene, tmp_path, TASKS.parent / "learned" / "push_flow",
+    solve(scene, tmp_path, TASKS.parent / "learned" / "push_flow",
                              skeleton="push@0", progress=False, quiet=True)
     assert len(calls) == 1
 
@@ -55,7 +56,7 @@ def test_no_further_tier_once_the_budget_is_spent_with_a_plan_in_hand():
     sol = Solution(sk, False, "snopt info 31", 0.5, 1.0, 60.0, np.zeros((11, 3)),
                    np.zeros((11, 2)))
     with_plan = SearchResult(sol, [sol], 60.0)
-    assert solve_module.budget_spent(with_plan, 50.0)
-    assert not solve_module.budget_spent(with_plan, 70.0)  # time left
-    assert not solve_module.budget_spent(with_plan, None)  # no budget
-    assert not solve_module.budget_spent(SearchResult(None, [], 60.0), 50.0)  # nothing yet
+    assert search_module.budget_spent(with_plan, 50.0)
+    assert not search_module.budget_spent(with_plan, 70.0)  # time left
+    assert not search_module.budget_spent(with_plan, None)  # no budget
+    assert not search_module.budget_spent(SearchResult(None, [], 60.0), 50.0)  # nothing yet

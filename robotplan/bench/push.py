@@ -207,7 +207,7 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: Path, workers: 
                    shapes: tuple[str, ...] = ("box", "lshape"), exhaustive: bool = False,
                    time_budget: float | None = None) -> dict:
     """Solve and execute ``scenes`` scenes per shape type; returns the summary."""
-    from robotplan.api import solve_scene
+    from robotplan.api import solve
 
     (out / "scenes").mkdir(parents=True, exist_ok=True)
     rows_path = out / "rows.jsonl"
@@ -228,9 +228,9 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: Path, workers: 
         scene = parse_scene(doc, scene_path)
         t0 = time.time()
         print(f"[{n + 1}/{len(todo)}] {name}: {scene.objects[0].shape.describe()}", flush=True)
-        result = solve_scene(scene, out / "solutions" / name, model_dir, workers=workers,
-                             progress=False, exhaustive=exhaustive, quiet=True,
-                             time_budget=time_budget)
+        result = solve(scene, out / "solutions" / name, model_dir, workers=workers,
+                       progress=False, exhaustive=exhaustive, quiet=True,
+                       time_budget=time_budget)
         ex = result.get("execution") or {}
         row = {"scene": name, "shape": kind, "family": family_of(i, kind),
                "status": result["status"],

@@ -45,7 +45,7 @@ def cmd_render(args: argparse.Namespace) -> int:
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
-    from robotplan.api import UnsupportedScene, solve_scene
+    from robotplan.api import UnsupportedScene, solve
 
     scene = load_scene(args.scene)
     out = Path(args.out)
@@ -57,10 +57,9 @@ def cmd_solve(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     out.mkdir(parents=True, exist_ok=True)
     try:
-        doc = solve_scene(scene, out, Path(args.model), solver=args.solver,
-                          workers=args.workers, skeleton=args.skeleton,
-                          max_pushes=args.max_pushes, exhaustive=args.exhaustive,
-                          time_budget=args.time_budget)
+        doc = solve(scene, out, Path(args.model), solver=args.solver, workers=args.workers,
+                    skeleton=args.skeleton, max_pushes=args.max_pushes,
+                    exhaustive=args.exhaustive, time_budget=args.time_budget)
     except UnsupportedScene as err:
         print(f"error: {args.scene}: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT

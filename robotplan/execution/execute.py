@@ -38,6 +38,7 @@ class Execution:
     others: dict = field(default_factory=dict)  # other object → (N+1, 3) poses
     # objects outside the pusher's ``touches`` that it touched at some simulation step
     forbidden_contacts: list = field(default_factory=list)
+    times: np.ndarray | None = None  # (N+1,) s of the planned steps, where the caller set them
 
 
 def obstacle_bodies(scene: Scene) -> list:

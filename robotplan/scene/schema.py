@@ -6,7 +6,7 @@ Units are metres and radians in the table frame W (z up, table top at z = 0). A 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
@@ -143,3 +143,27 @@ class Scene:
         return (f"{self.name}: {count(len(self.objects), 'object')}, "
                 f"{count(len(self.obstacles), 'obstacle')}, {count(len(self.pushers), 'pusher')}, "
                 f"{count(len(self.robots), 'robot')}; goal: {goal}")
+
+    def with_state(self, poses: dict[str, tuple[float, float, float]] | None = None,
+                   joints: dict[str, tuple[float, ...]] | None = None) -> Scene:
+        """This scene with objects and obstacles at observed ``poses`` (name → x, y, yaw),
+        free pushers at observed positions (name → x, y) and arms at observed ``joints``
+        (name → angles): what a planner re-planning from a perceived state gets."""
+        poses, joints = dict(poses or {}), dict(joints or {})
+        known = ({b.name for b in (*self.objects, *self.obstacles, *self.pushers)}
+                 | {r.name for r in self.robots})
+        unknown = (set(poses) | set(joints)) - known
+        if unknown:
+            raise KeyError(f"no body named {sorted(unknown)} in scene {self.name!r}")
+
+        def posed(specs: list[BodySpec]) -> list[BodySpec]:
+            return [replace(b, pose=tuple(map(float, poses[b.name]))) if b.name in poses
+                    else b for b in specs]
+
+        moved = replace(self, objects=posed(self.objects), obstacles=posed(self.obstacles),
+                        pushers=[replace(p, position=tuple(map(float, poses[p.name][:2])))
+                                 if p.name in poses else p for p in self.pushers],
+                        robots=[replace(r, q0=tuple(map(float, joints[r.name])))
+                                if r.name in joints else r for r in self.robots])
+        object.__setattr__(moved, "path", self.path)
+        return moved

@@ -59,17 +59,18 @@ class SearchResult:
 
 
 def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings,
-                 space: SkeletonSpace) -> None:
+                 space: SkeletonSpace, guesses: dict[Skeleton, dict] | None = None) -> None:
     from robotplan.models.dynamics import load_model
 
     torch.set_num_threads(1)  # one thread per process (DESIGN §4)
     _worker.update(scene=scene, model=load_model(model_dir), settings=settings,
-                   space=space)
+                   space=space, guesses=guesses or {})
 
 
 def _solve(skeleton: Skeleton) -> Solution:
     w = _worker
-    sol = solve_skeleton(w["scene"], skeleton, w["model"], w["space"], w["settings"])
+    sol = solve_skeleton(w["scene"], skeleton, w["model"], w["space"], w["settings"],
+                         guess=w["guesses"].get(skeleton))
     sol.clearance = plan_clearance(w["scene"], sol)
     return sol
 
@@ -143,17 +144,19 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
                 progress: bool = True, exhaustive: bool = False,
                 time_budget: float | None = None,
                 space: SkeletonSpace | None = None,
-                patience: float = PATIENCE_S) -> SearchResult:
+                patience: float = PATIENCE_S,
+                guesses: dict[Skeleton, dict] | None = None) -> SearchResult:
     """Solve the skeletons (a process per core), most promising first, and pick the best;
     unless ``exhaustive``, stop at the first good-enough plan or, after ``patience``
     seconds, at the first program collected while a solved plan is in hand; start no
-    program after ``time_budget`` seconds (the best so far wins)."""
+    program after ``time_budget`` seconds (the best so far wins). ``guesses``: the learned
+    program's initial guess by skeleton (a warm start skips the kinematic stage)."""
     from tqdm import tqdm
 
     settings = settings or ProgramSettings()
     t0 = time.time()
     space = space or space_for(scene)
-    args = (scene, str(model_dir), settings, space)
+    args = (scene, str(model_dir), settings, space, guesses)
     queue = order_candidates(scene, skeletons, space)
     solutions: list[Solution] = []
     holds_solved = False

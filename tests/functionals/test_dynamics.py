@@ -151,7 +151,7 @@ def test_render_on_grid_matches_the_pointwise_rendering(shape):
 
 def test_bfloat16_head_products_only_where_opted_in_and_the_cpu_multiplies_them(monkeypatch):
     from robotplan.base import arith
-    from robotplan.models import dynamics as learned_dynamics
+    from robotplan.models import spec as model_spec
 
     avx2 = "processor\t: 0\nflags\t\t: fpu sse2 avx avx2 fma\n"
     bf16 = avx2.replace("fma", "fma avx512_bf16")
@@ -169,7 +169,7 @@ def test_bfloat16_head_products_only_where_opted_in_and_the_cpu_multiplies_them(
     pusher = Body("p", "pusher", Circle(0.03), (0.0, 0.0, 0.0), 0.0, 0.06)
     quad = Quadrature(torch.zeros(4, 2), torch.ones(4))
     for native, expected in ((False, torch.float32), (True, torch.bfloat16)):
-        monkeypatch.setattr(learned_dynamics, "bfloat16_head", lambda n=native: n)
+        monkeypatch.setattr(model_spec, "bfloat16_head", lambda n=native: n)
         assert LearnedDynamics(model32, obj, pusher, quad).matmul_dtype == expected
         assert LearnedDynamics(model32.double(), obj, pusher,
                                quad).matmul_dtype == torch.float64

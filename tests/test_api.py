@@ -1,0 +1,45 @@
+"""The facade: plan() without a simulator, from a scene at observed poses and from an
+earlier plan; execute() and write_playback() on its result."""
+
+import numpy as np
+import pytest
+
+import robotplan
+from robotplan import load_scene
+from tests.conftest import TASKS
+
+
+@pytest.fixture(scope="module")
+def box_plan():
+    scene = load_scene(TASKS / "box_push.yaml")
+    return scene, robotplan.plan(scene, skeleton="push@0", workers=1, progress=False,
+                                 quiet=True)
+
+
+def test_plan_needs_no_simulator_and_execute_runs_it(box_plan, tmp_path):
+    _scene, planned = box_plan
+    assert planned.best is not None and planned.solved
+    summary = planned.summary()
+    assert summary["status"] == "solved" and summary["skeleton"][0]["mode"] == "reach"
+    executed = robotplan.execute(planned)
+    assert executed.times.shape == (len(planned.best.q_pusher),)
+    assert 0.0 <= executed.coverage <= 1.0
+    robotplan.write_playback(planned, executed, tmp_path / "playback.html")
+    assert (tmp_path / "playback.html").stat().st_size > 10_000
+
+
+def test_a_scene_at_observed_poses_and_a_warm_start(box_plan):
+    scene, planned = box_plan
+    x, y, yaw = scene.objects[0].pose
+    observed = scene.with_state({"box": (x + 0.01, y - 0.01, yaw + 0.02)})
+    assert observed.bodies["box"].pose == pytest.approx((x + 0.01, y - 0.01, yaw + 0.02))
+    assert scene.bodies["box"].pose == pytest.approx((x, y, yaw))  # the original stays
+    with pytest.raises(KeyError, match="no body"):
+        scene.with_state({"nothing": (0, 0, 0)})
+    again = robotplan.plan(observed, warm_start=planned, workers=1, max_pushes=1,
+                           progress=False, quiet=True)
+    first = again.candidates[0]
+    assert first.skeleton == planned.best.skeleton  # the old skeleton, tried first
+    assert "warm_start" not in first.timings  # the learned program from the earlier plan
+    assert np.allclose(first.q_obj[0], observed.bodies["box"].pose)
+    assert again.best is not None
