@@ -65,7 +65,7 @@ def test_time_profile_sums_the_candidates_timers_over_scenes():
         {"seconds": 1.5, "timings": {"H_F": 0.5, "H_coll": 1.0}}])
     assert a == {"programs": 2.0, "total": 4.5, "H_F": 2.5, "solver": 1.0, "H_coll": 1.0}
     b = candidate_timings([{"seconds": 0.5, "timings": {"solver": 0.5}}])
-    rows = [{"timings": a}, {"timings": b}, {"coverage": 1.0}]  # the last one: an old row
+    rows = [{"timings": a}, {"timings": b}, {"coverage": 1.0}]  # the last one: no timings
     prof = time_profile(rows)
     assert prof["scenes"] == 2 and prof["untimed_scenes"] == 1 and prof["programs"] == 3
     assert prof["candidate_seconds"] == pytest.approx(5.0)

@@ -90,7 +90,7 @@ def test_bench_functional_json_runs_small():
                 "hf_40_steps_peak_rss_mb"):
         assert out[key] > 0, key
     assert out["integral_rel_error"] < 0.2
-    assert isinstance(out["native_kernels"], bool)  # whether robotplan/kernels.c ran
+    assert isinstance(out["native_kernels"], bool)  # whether robotplan/base/kernels.c ran
 
 
 def test_bench_functional_refuses_a_non_model(tmp_path):

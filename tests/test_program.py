@@ -158,9 +158,10 @@ def test_arm_touch_program_ends_in_contact_and_hands_its_touch_point_on():
     reach clearance that contradicted H_touch), the kinematic stage of left-push,
     right-touch solves, and its contact point goes into the next stage's guess.
 
-    SNOPT's path depends on the CPU's arithmetic: with the touch from init 0 it solved on
-    an AMD EPYC and stopped at violation 4.0 on an Intel Xeon, where init 1 solves (the
-    skeleton search tries both): the first of the two that solves is checked."""
+    SNOPT's path depends on the arithmetic: where the libraries choose kernels per CPU the
+    touch from init 0 solves on some CPUs and init 1 on others (the skeleton search tries
+    both; docs/experiments.md#cpu-arithmetic), so the first of the two that solves is
+    checked."""
     from robotplan.program.arm_program import ArmPushProgram
     from robotplan.program.skeleton import space_for
 

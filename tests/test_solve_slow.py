@@ -41,7 +41,7 @@ def test_solve_box_push(tmp_path):
 ])
 def test_solve_two_arm_scenes(tmp_path, task, actors):
     """The arm scenes through the CLI: the right arms push, pybullet executes the joint
-    trajectories of both arms, coverage ≥ 0.95 (#6), joint trajectories in result.json."""
+    trajectories of both arms, coverage ≥ 0.95, joint trajectories in result.json."""
     out = tmp_path / "out"
     doc = solve(task, out)
     assert {row["actor"] for row in doc["skeleton"] if row["mode"] == "push"} == actors
@@ -55,8 +55,8 @@ def test_solve_two_arm_scenes(tmp_path, task, actors):
 
 @pytest.mark.slow
 def test_solve_two_arm_touch(tmp_path):
-    """Left pushes the box into the right arm's reach, the right tip ends on it (#6: within
-    1 cm in pybullet)."""
+    """Left pushes the box into the right arm's reach, the right tip ends on it (within 1 cm
+    in pybullet)."""
     out = tmp_path / "out"
     doc = solve("two_arm_touch", out)
     assert doc["skeleton"][-1]["actor"] == "right" and doc["skeleton"][-1]["mode"] == "reach"
@@ -65,7 +65,7 @@ def test_solve_two_arm_touch(tmp_path):
 
 @pytest.mark.slow
 def test_solve_three_objects(tmp_path):
-    """#7: the pusher may touch red only; the search chains red into blue, and pybullet
+    """The pusher may touch red only; the search chains red into blue, and pybullet
     executes it with blue in the goal (coverage ≥ 0.95) and the pusher never on blue."""
     out = tmp_path / "out"
     doc = solve("three_objects", out)
@@ -79,7 +79,7 @@ def test_solve_three_objects(tmp_path):
 
 @pytest.mark.slow
 def test_solve_obstacle_push(tmp_path):
-    """Around the wall (#7): no plan of one or two pushes, then straight face pushes along a
+    """Around the wall: no plan of one or two pushes, then straight face pushes along a
     route past the wall's end; coverage ≥ 0.95 in pybullet and the box never touches it."""
     out = tmp_path / "out"
     doc = solve("obstacle_push", out)
@@ -94,7 +94,8 @@ def test_solve_obstacle_push(tmp_path):
 def test_arm_search_falls_back_to_init_points_seen_from_the_goal(tmp_path):
     """tasks/variants/left_only_lshape: the one face push in reach is kinematically
     infeasible; the search then tries init points around the L as seen from the goal and
-    plans with the left arm (execution drifts: coverage 0.55 on 2026-11-23, not asserted)."""
+    plans with the left arm. Its open-loop execution drifts, so coverage is not asserted
+    (docs/experiments.md#arm-variants)."""
     out = tmp_path / "out"
     doc = solve("variants/left_only_lshape", out)
     assert "(init points in the goal frame)" in doc["stdout"]

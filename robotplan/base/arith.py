@@ -11,7 +11,9 @@ Opt-ins, for a user who trades reproducibility across machines for speed:
 
 * ``ROBOTPLAN_CPU_FEATURES=native``: leave the libraries' own choice per CPU;
 * ``ROBOTPLAN_HEAD_BFLOAT16=1``: H_F's head multiplies in bfloat16 (float32 accumulation)
-  where the CPU multiplies bfloat16 natively (AVX512-BF16, AMX; emulated it is ~8x slower).
+  where the CPU multiplies bfloat16 natively (AVX512-BF16, AMX; emulated it is slower).
+
+Why: docs/design.md#cpu-arithmetic; measured: docs/experiments.md#bfloat16-head.
 """
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
 /* C kernels of robotplan (float32, one thread), built by setup.py, loaded by robotplan/base/native.py
- * (the system's C compiler, ctypes); see its docstring for why and for the timings.
+ * (the system's C compiler, ctypes); see its docstring for why, and
+ * docs/experiments.md#native-kernels for the timings.
  *
  * SDF encoder convolutions, over a batch of M images (NCHW):
  *   rp_conv_forward   y = ReLU(conv(x, w, stride) + b) over the input channels listed in

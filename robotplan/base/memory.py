@@ -3,9 +3,8 @@
 glibc's malloc serves large blocks (above a threshold that adapts up to 32 MB) with fresh
 ``mmap`` pages and returns them on ``free``, and trims the heap top above 2x that; a fast
 H_F evaluation allocates ~20 MB of short-lived (T, P, 300) tensors per call, so every
-call paid ~5,000 page faults of zeroed memory. Keeping freed memory in the heap instead:
-``LearnedDynamics.evaluate`` (10 steps, 532 points, 1 thread) 56 → 39 ms median, 5,700 →
-0 faults per call (``MALLOC_*`` environment variables, same process script, alternated).
+call would pay thousands of page faults of zeroed memory. Freed memory is kept in the heap
+instead (measured: docs/experiments.md#memory).
 """
 
 from __future__ import annotations

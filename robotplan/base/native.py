@@ -3,17 +3,16 @@
 Two hot spots of H_F (and of the analytic functionals) are many small passes over memory
 in PyTorch:
 
-* **the SDF encoder's convolutions**: 3–5 channels, where oneDNN reaches ~7 GMAC/s on the
-  3 → 3 first layer of the joint encoder (140 × 140, 10 images) and ~14 on the strided
-  ones, and ReLU, channel sums and the ReLU mask are separate passes. The kernels keep
+* **the SDF encoder's convolutions**: 3–5 channels, where oneDNN runs far below the CPU's
+  peak, and ReLU, channel sums and the ReLU mask are separate passes. The kernels keep
   all output channels of a block of pixels in registers, fuse bias, ReLU and the channel
   sums into the forward pass and the ReLU mask into the backward one, and skip the
-  previous layer's dead channels: 0.64 / 0.70 ms forward / backward for the first layer
-  (2.5 / 2.4 ms through oneDNN), ~2.9 ms for all three layers both ways (~8.9 ms);
+  previous layer's dead channels;
 * **closed-form SDFs** of circles, boxes and L-shapes with their gradients, on the grid
   (with the body-frame coordinates) and at given points: one vectorized pass instead of
-  15–60 tensor operations (a box on the grid at 10 poses 1.6 → 0.3 ms, an L-shape
-  14 → 0.8 ms).
+  15–60 tensor operations.
+
+Timings against PyTorch's operations: docs/experiments.md#native-kernels.
 
 ``kernels.c`` is compiled at install time by ``setup.py`` with fixed flags (``-O3``, AVX2,
 FMA), the same on every machine: the kernels' arithmetic does not follow the CPU they were

@@ -128,7 +128,7 @@ def bench_functional(model_dir: str | Path = DEFAULT_MODEL, configurations: int 
     quad = phase_quadrature_for(obj, X1, ws)
     fast = LearnedDynamics(model, obj, pusher, quad)
     result: dict = {"model": str(model_dir), "threads": torch.get_num_threads(),
-                    "native_kernels": kernels() is not None,  # robotplan/kernels.c in use
+                    "native_kernels": kernels() is not None,  # robotplan/base/kernels.c in use
                     "head_matmul_dtype": str(fast.matmul_dtype).removeprefix("torch."),
                     "steps": X1.shape[0] - 1, "quadrature_points": len(quad.points),
                     "quadrature": _describe_quadrature()}

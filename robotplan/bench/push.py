@@ -150,7 +150,7 @@ def candidate_timings(candidates: list[dict]) -> dict[str, float]:
 def time_profile(rows: list[dict]) -> dict:
     """Where the planning time goes over a benchmark: each timer's seconds summed over all
     scenes' candidates and its share of the candidates' total, largest first. Rows without
-    ``timings`` (written before they were recorded) are left out and counted."""
+    ``timings`` (e.g. in a ``rows.jsonl`` written without them) are left out and counted."""
     timed = [r["timings"] for r in rows if r.get("timings")]
     total = sum(t["total"] for t in timed)
     names = {k for t in timed for k in t} - {"programs", "total"}

@@ -13,8 +13,8 @@ from robotplan.scene.schema import RobotSpec
 __all__ = ["Arm", "add_arm"]
 
 JOINT_FORCE = 300.0  # N·m: the iiwa 14's largest joint torques are 320 N·m
-# pybullet's default gain (0.1) lagged 5–33 mm behind a planned reach; 1.0 tracks it to
-# 0.1 mm at the planned speeds
+# pybullet's default gain (0.1) lags behind a planned reach; 1.0 tracks it at the planned
+# speeds (measured: docs/experiments.md#arm-position-gain)
 POSITION_GAIN = 1.0
 
 

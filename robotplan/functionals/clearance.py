@@ -19,9 +19,8 @@ from robotplan.scene import Scene
 
 __all__ = ["OBSTACLE_MARGIN", "densify", "obstacle_clearance"]
 
-# obstacle_push on the AVX2 AMD EPYC: the plain search's best two-push plan (push@3 then
-# push@1, violation 0.005) passed the wall's corner at 1.0 cm twice and executed at coverage
-# 0.0, the box against the wall; routes keep 4 cm (0.9 × that at detours)
+# a plan that skims an obstacle by a centimetre executes against it in open loop; routes
+# keep 4 cm (0.9 × that at detours) (measured: docs/experiments.md#obstacle-margin)
 OBSTACLE_MARGIN = 0.02
 
 

@@ -13,53 +13,47 @@ through the whole network, autograd) in far less time:
 * **reverse mode through the encoder**: H_t is a scalar, so one backward pass per step
   (transposed convolutions masked by the primal's ReLU outputs, no autograd graph) gives
   ∂H_t/∂φ(X_h), which is contracted with the tangents; forward mode would need one pass
-  per tangent (7 per step), and was 1.5× slower overall. The transposed convolutions run
-  as ordinary ones in polyphase form (``conv_input_grad``; 2–3x faster at stride 2), and
-  only between channels that are non-zero somewhere in the batch (F_flow's encoder has 1,
-  2 and 1 dead channels on real pushes; the backward pass 5.9 → 4.3 ms per phase);
+  per tangent (7 per step). The transposed convolutions run as ordinary ones in polyphase
+  form (``conv_input_grad``), and only between channels that are non-zero somewhere in the
+  batch (F_flow's encoder has 1, 2 and 1 dead channels on real pushes);
 * **split first layer**: the SDF part is one (600 → 300) product per step, the point part
   (100 → 300) is computed once for the fixed quadrature points; for the joint encoder its
   linear layer and this SDF part are folded into one (5120 × 300) map (half the products
-  and half the weights to read; bfloat16 would make its backward product 5x faster, 2.2 →
-  0.4 ms, but costs gradient precision the solver needs);
+  and half the weights to read; it stays float32: bfloat16 would cost gradient precision
+  the solver needs);
 * **only live hidden units, tile by tile** (:class:`~robotplan.models.tiled_head.TiledHead`):
   the first layer's point part is affine in the query point, so each unit is active in a
   half-plane per step; the quadrature points are split into compact tiles of ≤ 32 and
   each tile's products use only the units that can be active in it (~110 of 300 forward,
   against ~200 live anywhere in the phase) and, backward, only the second layer's units
-  active in it (~60 of 300). Exact, and 2.5x fewer multiply-adds in the head (42 → 31 ms
-  per phase on an AVX2-only EPYC);
-* **convolutions of our own** (``robotplan/kernels.c``, :mod:`robotplan.base.native`, float32
-  on the CPU): each block of pixels keeps every output channel in registers; bias, ReLU
-  and the live-channel sums are fused into the forward pass, the ReLU mask into the
-  backward one, and a layer skips the previous layer's dead channels. The three layers
-  forward and backward: ~2.9 ms per phase against ~8.9 ms through oneDNN (which reaches
-  ~7 GMAC/s on the 3 → 3 first layer); PyTorch's convolutions (channels-last oneDNN) remain
-  the fallback and the float64 path;
+  active in it (~60 of 300). Exact, with far fewer multiply-adds in the head;
+* **convolutions of our own** (``robotplan/base/kernels.c``, :mod:`robotplan.base.native`,
+  float32 on the CPU): each block of pixels keeps every output channel in registers; bias,
+  ReLU and the live-channel sums are fused into the forward pass, the ReLU mask into the
+  backward one, and a layer skips the previous layer's dead channels. PyTorch's
+  convolutions (channels-last oneDNN) remain the fallback and the float64 path;
 * **fewer quadrature points**: a :class:`~robotplan.functionals.Quadrature` of the
   caller's choice, by default :func:`phase_quadrature` (10 cm cells, 5 cm within r + 5 cm
   and 2.5 cm within r + 1 cm of the object's path; ~350–650 points, worst per-step error
-  of H_t 3.8 % against the 19,600-point grid over 3 × 24 real pushes), instead of X_h;
+  of H_t below 5 % against the 19,600-point grid), instead of X_h;
 * **no autograd**: the head's reverse mode is written out (through its ReLU outputs, like the
-  encoder's), and its hidden-to-hidden products run in bfloat16 for a float32 model on CPUs
-  that multiply bfloat16 natively (float32 accumulation; AVX512-BF16 or AMX halve their
-  cost): per step 0.5 % on H_t and 2.4 % on its gradient at worst over 24 realistic
-  pushes, well below the quadrature's error. Elsewhere (AVX2 only) they stay in float32,
-  since emulated bfloat16 is ~8x slower (:func:`~robotplan.models.dynamics.head_matmul_dtype`);
-  a float64 model (the tests) computes in float64 throughout;
+  encoder's). Its hidden-to-hidden products run in the model's dtype: float32, or bfloat16
+  (float32 accumulation) only where the user opts in (``ROBOTPLAN_HEAD_BFLOAT16=1``) and
+  the CPU multiplies bfloat16 natively
+  (:func:`~robotplan.models.dynamics.head_matmul_dtype`); a float64 model (the tests)
+  computes in float64 throughout;
 * **one-pass rendering**: circles, boxes and L-shapes are rendered on the grid by the same
   C kernels (φ, ∇φ and the body-frame coordinates in one vectorized pass over the
-  pixels: box 1.6 → 0.3 ms, L-shape 14 → 0.8 ms, disc 0.6 → 0.12 ms for 10 poses); other
-  shapes use the separable PyTorch form (a body-frame coordinate is a row term plus a
-  column term; closed-form φ and ∇φ; :func:`render_on_grid`);
+  pixels); other shapes use the separable PyTorch form (a body-frame coordinate is a row
+  term plus a column term; closed-form φ and ∇φ; :func:`render_on_grid`);
 * **exact sparse Jacobians**: per step, ∂H_t/∂q1_{t−1}, ∂q1_t, ∂q2_{t−1}, ∂q2_t from one
   backward pass through the head (each step's inputs are separate leaves);
 * **no page faults**: the ~20 MB of short-lived tensors per call stay in the heap
-  (:func:`~robotplan.base.memory.keep_freed_memory`); with glibc's defaults they were fresh
-  ``mmap`` pages every call (~5,700 faults, 56 → 39 ms at 532 points).
+  (:func:`~robotplan.base.memory.keep_freed_memory`) instead of being fresh ``mmap`` pages
+  every call.
 
-The quadrature error against the full-grid integral and the timings are measured by
-``robotplan bench functional`` (numbers in its docstring and the project notes).
+``robotplan bench functional`` measures the quadrature error against the full-grid integral
+and the timings (measured: docs/experiments.md#hf-evaluation).
 """
 
 from __future__ import annotations
@@ -92,11 +86,8 @@ class LearnedDynamics:
 
     Quadrature: the caller's, by default :func:`phase_quadrature` (multi-level midpoint,
     10 cm cells, 5 cm within r + 5 cm and 2.5 cm within r + 1 cm of the object's path;
-    ~350–650 points). ``robotplan bench functional`` on an AVX2-only AMD EPYC, one thread,
-    shipped F_flow, a real 10-step push of a box with 532 points: value + Jacobian
-    17.4–19.0 ms (value only 10–11 ms) against 3.9–4.2 s for :meth:`evaluate_naive`
-    (216–226x); L-shape pushes 19.5–21.6 ms. Worst per-step error of H_t against the
-    19,600-point grid over 24 real pushes 3.75 % (median 0.45 %).
+    ~350–650 points). Speed against :meth:`evaluate_naive` and the quadrature's error
+    against the 19,600-point grid: docs/experiments.md#hf-evaluation.
     """
 
     def __init__(self, model: PushDynamics, obj: Body, pusher: Body,
@@ -109,8 +100,8 @@ class LearnedDynamics:
         self.workspace = Workspace(spec.workspace_center, spec.workspace_size,
                                    spec.workspace_size[0] / spec.grid[1])
         self.dtype = next(model.parameters()).dtype  # float32, or float64 for checks
-        # the head's hidden products: bfloat16 for a float32 model where the CPU multiplies
-        # bfloat16 natively (see the module notes), else the model's dtype
+        # the head's hidden products: the model's dtype, or bfloat16 for a float32 model where
+        # the user opted in and the CPU multiplies bfloat16 natively (see the module notes)
         self.matmul_dtype = matmul_dtype or head_matmul_dtype(self.dtype)
         self.grid = self.workspace.points(self.dtype).reshape(-1, 2)
         points, weights = quadrature.points.to(self.dtype), quadrature.weights.to(self.dtype)

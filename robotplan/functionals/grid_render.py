@@ -86,7 +86,8 @@ def render_on_grid(body: Body, X_WB: Tensor, workspace: Workspace, tangents: boo
     turns = X.shape[-1] == 3 and not isinstance(body.shape, Circle)
     if turns:
         c, s = torch.cos(X[:, 2:3]), torch.sin(X[:, 2:3])
-    # our own kernel (float32 circles, boxes, L-shapes): one pass, 5–17x faster
+    # our own kernel (float32 circles, boxes, L-shapes): one pass, far faster
+    # (measured: docs/experiments.md#native-kernels)
     native = render_planes(body.shape.kernel_shape, X, torch.cat((c, s), 1) if turns else None,
                            (x0, y0), r, (rows, cols), coordinates=tangents)
     if native is not None:

@@ -18,12 +18,9 @@ QUADRATURE_LEVELS = ((0.05, 0.05), (0.01, 0.025))
 fine; a cell is refined to ``spacing`` when it comes within the object's bounding radius
 plus ``margin`` of the object's path.
 
-Chosen on 3 × 24 real pushes (``bench_functional.realistic_pushes``, seeds 321 / 777 /
-555), worst per-step relative error of H_t against the 1 cm grid X_h: 0.038 / 0.031 /
-0.034 with ~460 points (10 cm; 5 cm within r + 5 cm; 2.5 cm within r + 1 cm), where the
-earlier 14 / 7 / 3.5 cm rule (~280 points) reached 0.10. The worst steps are well-predicted
-ones (small H_t) whose residual is spread over the whole table: thin ridges of the learned
-flow's error run from the object's corners to the table border, and 14 cm cells miss them.
+Fine enough that the worst per-step error of H_t against the 1 cm grid X_h stays below 5 %
+on real pushes: the learned flow's error runs in thin ridges from the object's corners to the
+table's border, which coarser cells miss (measured: docs/experiments.md#quadrature).
 """
 
 

@@ -169,8 +169,8 @@ class CornerClearance(Functional):
     ``v_k (K, 2)`` in the body frame. A push at a corner has no face normal: any direction
     in the corner's normal cone passes the friction cone and, through the centroid, the
     lever arm is 0; but the contact rolls off to either side and the object turns away in
-    pybullet (obstacle_push: a diagonal corner push turned the box by 0.5 rad in 30 cm and
-    the plan failed). A lower bound on these distances keeps pushes on faces.
+    pybullet (measured: docs/experiments.md#corner-clearance). A lower bound on these
+    distances keeps pushes on faces.
     """
 
     def __init__(self, corners_B: np.ndarray) -> None:

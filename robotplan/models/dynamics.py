@@ -72,7 +72,7 @@ class PushDynamics(nn.Module):
         skips the others exactly, as they pass no gradient back (in the shipped F_flow 1 of
         3, 2 of 5 and 1 of 5 are dead on real pushes). Float32 on the CPU runs our own
         kernels (:mod:`robotplan.base.native`), whose next layer also skips them at no cost;
-        through PyTorch that needed a gather costing what it saved. ``linear=False`` stops
+        through PyTorch that would need a gather costing what it saves. ``linear=False`` stops
         before the encoder's linear layer: the last convolution's live channels, flattened
         ``(M, C'·h·w)`` in the (C', h, w) order of the linear layer's inputs.
         """

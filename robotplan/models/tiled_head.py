@@ -28,8 +28,7 @@ __all__ = ["TILE_POINTS", "TiledHead", "tile_points"]
 
 TILE_POINTS = 32
 """Query points per tile: smaller tiles leave fewer live units per tile but gather more
-weight columns per call (32: 1.6x fewer products forward and ~6x fewer backward at ~530
-points; 16 and 64 were no faster)."""
+weight columns per call (measured: docs/experiments.md#tiled-head)."""
 
 
 def tile_points(points: Tensor, size: int = TILE_POINTS) -> tuple[Tensor, Tensor]:
@@ -70,8 +69,8 @@ HeadCache = list[BucketCache]
 
 BUCKETS = 2
 """Groups of tiles with similar counts of live first-layer units, one batched product each
-(each group padded to its own largest count, not the largest of all): 2 groups cut the
-padding from ~13 % to ~5 % of the forward product; more add small operations."""
+(each group padded to its own largest count, not the largest of all): more groups pad
+less but add small operations (measured: docs/experiments.md#tiled-head)."""
 
 
 class TiledHead:
@@ -81,7 +80,7 @@ class TiledHead:
     n_tiles · tile_size``). :meth:`forward` maps the SDF term ``S (B, H1)`` to the outputs
     ``(B, N')`` in metres; :meth:`input_grad` pulls ``∂/∂output (B, N')`` back to ``(B, H1)``.
     Both equal :meth:`PushDynamics.head_with_activations` / ``head_input_grad`` up to
-    rounding. ``matmul_dtype`` as there (bfloat16 on CPUs that multiply it natively).
+    rounding. ``matmul_dtype`` as there (bfloat16 only where the user opted in).
     """
 
     def __init__(self, model: PushDynamics, points: Tensor, tiles: int,

@@ -51,7 +51,8 @@ class ArmSettings:
     link_min: float = 0.12  # m: lowest allowed height of the other check links
     arm_gap: float = 0.10  # m between the two arms' check points
     # m per step and axis of the acting tip while reaching: H_coll sees the sampled states
-    # only, and a 20 cm step between them cut through the box's corner in pybullet
+    # only, and a long step between them can cut through the object in pybullet
+    # (measured: docs/experiments.md#tip-reach-step)
     tip_reach_step: float = 0.04
     joint_step_weight: float = 0.01  # cost per rad² of joint motion per step
 
@@ -60,18 +61,18 @@ ARM_SETTINGS = ArmSettings()
 ARM_PROGRAM_SETTINGS = replace(
     ProgramSettings(),
     # the learned stage keeps the friction cone but not the turning law: the three arm
-    # scenarios were tuned and pass that way (the free pushers' default turns too)
+    # scenarios pass that way (the free pushers' default turns too)
     turn_in_learned=False,
-    sparse_jacobians=True,  # dense rows over every joint: kinematic stage 30 s, sparse 11 s
-    # SNOPT's default minor iteration limit (their 2,000-4,500 rows, mostly per joint, would
-    # raise it to 27,000-54,000; with 100,000 a failing touch candidate of two_arm_touch took
-    # 38 s instead of 8 s and still failed)
+    sparse_jacobians=True,  # dense rows over every joint are slow
+    # SNOPT's default minor iteration limit: the per-row limit would multiply it for the
+    # arms' many rows, and failing candidates would only fail slower
+    # (measured: docs/experiments.md#arm-program)
     minor_iterations_per_row=0,
 )
 """The program settings of scenes with arms (the free pushers' are ``ProgramSettings()``)."""
 # m beyond the goal region's inradius that straight face pushes may end from its centre and
-# still be tried: turning the object on the way covers that much (two_arm_handover: 0.22 m
-# for the left-then-right push from the same face, inradius 0.175 m)
+# still be tried: turning the object on the way covers that much
+# (measured: docs/experiments.md#goal-gap-slack)
 GOAL_GAP_SLACK = 0.1
 
 
@@ -171,8 +172,9 @@ class ArmPushProgram(PushProgram):
 
     def _limit_tip_steps(self) -> None:
         """|Δx| per step and axis of the acting tip ≤ tip_reach_step while reaching and ≤
-        the data's speed (``warm_max_step``) while pushing, in both stages: the learned
-        stage once swept the tip 14 cm across the box's face between two planned states."""
+        the data's speed (``warm_max_step``) while pushing, in both stages: without it the
+        learned stage can sweep the tip across the box's face between two planned states
+        (measured: docs/experiments.md#tip-reach-step)."""
         D = np.hstack((np.eye(2), -np.eye(2)))
         for t in range(1, self.N + 1):
             if self.actor_of_state[t] != self.actor_of_state[t - 1]:

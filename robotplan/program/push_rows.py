@@ -81,7 +81,7 @@ class PushRows(ProgramRows):
     def _hold_object_while_reaching(self) -> None:
         """A reach phase moves the pusher without touching (H_coll keeps it off), so the
         object stays where it is: q_obj,t = q_obj,t−1 in reach steps. Without this, the
-        cost on H_F alone let the optimiser drift the object a few mm per step."""
+        cost on H_F alone lets the optimiser drift the object a few mm per step."""
         T = self.T
         for k, ph in enumerate(self.skeleton.phases):
             if ph.mode != "reach":
@@ -92,7 +92,7 @@ class PushRows(ProgramRows):
     def _add_collision(self) -> None:
         """H_coll in every step: at most a pressed-in face contact in push steps, and
         ``reach_clearance`` of free space in the other steps (the pusher follows straight
-        lines between the planned points; brushing the object on the way turned it)."""
+        lines between the planned points; brushing the object on the way turns it)."""
         s = self.settings
         H = Collision(self.obj, self.pusher, a=s.a_coll)
         touch = max(s.coll_area, face_contact_overlap(self.pusher, s.a_coll, s.coll_depth))

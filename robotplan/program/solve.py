@@ -41,7 +41,7 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
         warm_seconds = warm.seconds
         if warm.violation > WARM_USABLE:
             # not even the kinematics can do it at the data's speeds: the learned program
-            # would only wander (measured: 80–230 mm H_F residuals after 100 iterations)
+            # would only wander (measured: docs/experiments.md#warm-usable)
             warm.status = f"kinematic stage infeasible ({warm.status})"
             return warm
         guess = kin.as_guess(warm)

@@ -1,4 +1,5 @@
-"""The scene file format (DESIGN.md §3.1) as typed dataclasses: these classes *are* the schema.
+"""The scene file format (docs/design.md#scene-files) as typed dataclasses: these classes *are*
+the schema.
 
 Units are metres and radians in the table frame W (z up, table top at z = 0). A planar pose
 ``X_WB = (x, y, yaw)`` places a shape frame B on the table.

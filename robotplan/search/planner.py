@@ -31,18 +31,15 @@ from robotplan.scene import Scene
 __all__ = ["PATIENCE_S", "SearchResult", "is_solved", "merge_results", "search_push",
            "stops_search"]
 
-GOOD_RMS_MM = 5.0  # H_F residual (RMS over steps) good enough to stop: F_flow errs ~4.2 mm
-# a plan whose H_F residual exceeds the no-motion baseline (10.8 mm) is one the learned
-# dynamics call impossible: it breaks the dynamics, however well it meets the constraints
+GOOD_RMS_MM = 5.0  # H_F residual (RMS over steps) good enough to stop: F_flow's own error
+# a plan whose H_F residual exceeds the no-motion baseline is one the learned dynamics call
+# impossible: it breaks the dynamics, however well it meets the constraints
+# (measured: docs/experiments.md#dynamics-residual)
 PLAUSIBLE_RMS_MM = 10.0
 PATIENCE_S = 30.0
 """Seconds after which a search that holds a solved plan stops at the next program it
-collects. Without it, a search whose solved plans all miss GOOD_RMS_MM (most L-shapes: F_flow
-errs more on them) ran to its time budget. On the 40 scenes of ``robotplan bench push
---seed 0 --time-budget 100`` (session 17, A/B in one session): L-shape plan time median
-101.7 → 52.3 s, boxes 18.8 → 18.2 s, all 40 81.7 → 39.1 s; coverage medians box 1.000 →
-1.000, L 0.932 → 0.949. Three scenes changed their plan through it (L_007 0.245 → 1.0,
-L_014 0.468 → 0.431, box_008 0.209 → 0.0), one more by timing (L_005 0.523 → 0.803)."""
+collects, so that a search whose solved plans all miss GOOD_RMS_MM (most L-shapes: F_flow
+errs more on them) does not run to its time budget (measured: docs/experiments.md#patience)."""
 
 _worker: dict = {}
 
@@ -62,7 +59,7 @@ def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings,
                  space: SkeletonSpace, guesses: dict[Skeleton, dict] | None = None) -> None:
     from robotplan.models.dynamics import load_model
 
-    torch.set_num_threads(1)  # one thread per process (DESIGN §4)
+    torch.set_num_threads(1)  # one thread per process (docs/experiments.md#torch-threads)
     _worker.update(scene=scene, model=load_model(model_dir), settings=settings,
                    space=space, guesses=guesses or {})
 

@@ -38,16 +38,9 @@ __all__ = ["ROUTE_SETTINGS", "Route", "centred_pushes", "face_routes", "route_se
 
 # Straight, centred pushes: a friction cone of ±1.1° (μ 0.02) keeps the object moving along
 # the face normal, and a lever cost of 100 per cm² keeps the line of force within a fraction
-# of a millimetre of the centroid. obstacle_push, route north–east–south (3 × 25 steps),
-# kinematic plan executed in pybullet: coverage 0.0 with the defaults (μ 0.08, lever 0.01;
-# the first push turned the box 0.1 rad), 0.85 with μ 0.02 and lever 1, 1.0 with μ 0.02 and
-# lever 100 (final yaw −0.04 rad, no wall contact). Hard limits instead (the object within
-# 1 mm of the segment's line and 0.005 rad of its yaw in every step, the pusher on the
-# centroid's line) made SNOPT stop infeasible on a variant (a 0.14 × 0.10 box) and still
-# turned the box by 0.06 rad in pybullet in the first push of obstacle_push. Not the
-# default elsewhere: in the plain search (init points around the object, seed 0 benchmark)
-# the first three scenes went 0.98 / 1.0 / 0.74 -> 1.0 / 0.0 / 0.0, and the arms' failing
-# variants 0.59 / 0.68 / 0.28 -> 0.65 / 0.41 / 0.21.
+# of a millimetre of the centroid. Soft costs, not hard limits (those stop SNOPT infeasible),
+# and for routes only: elsewhere they make plans worse
+# (measured: docs/experiments.md#route-settings).
 ROUTE_SETTINGS = {"push_friction": 0.02, "lever_weight": 100.0}
 ROUTE_CLEARANCE = 0.04  # m between the routed footprint and every obstacle
 MAX_STEPS_PER_PHASE = 30  # longer segments are split into several pushes

@@ -69,7 +69,8 @@ def test_float32_works(box, pusher):
 
 def test_face_contact_overlap_is_what_touching_costs(box, pusher, fine):
     """The planner's collision bound: a face contact pressed in ``depth`` stays within it, a
-    deeper one does not, and it exceeds the old fixed 2e-5 m² for a 3 cm pusher."""
+    deeper one does not, and for a 3 cm pusher it exceeds 2e-5 m² (``coll_area``, a floor
+    below what touching costs: docs/experiments.md#collision-bound)."""
     bound = face_contact_overlap(pusher, a=500.0, depth=0.0005)
     H = Collision(box, pusher, fine, a=500.0)
     X_box = poses([0.0, 0.0, 0.0])
