@@ -1,0 +1,47 @@
+"""What every task script shares: its command line and the plan → execute → playback run.
+
+A task script loads its scene, may change it in code, and calls :func:`run` with the
+scene and the skeleton of its fast variant (``--fast``: that one skeleton, one worker, the
+variant the test suite runs; without it the full skeleton search).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import robotplan
+
+HERE = Path(__file__).resolve().parent
+
+
+def arguments(description: str) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--out", default=None, metavar="DIR",
+                        help="where playback.html goes (default: runs/<script name>)")
+    parser.add_argument("--fast", action="store_true",
+                        help="plan one given skeleton instead of searching")
+    return parser.parse_args()
+
+
+def run(scene: robotplan.Scene, out: Path, fast: bool, fast_skeleton: str,
+        label: str | None = None) -> float | None:
+    """Plan (``fast``: ``fast_skeleton`` only), execute in pybullet, write
+    ``out/playback.html``; print one line and return the coverage (touch goals: None)."""
+    planned = robotplan.plan(scene, skeleton=fast_skeleton if fast else None,
+                             workers=1 if fast else 2, progress=not fast, quiet=fast)
+    name = label or scene.name
+    if planned.best is None:
+        print(f"{name}: no plan")
+        return None
+    executed = robotplan.execute(planned)
+    out.mkdir(parents=True, exist_ok=True)
+    robotplan.write_playback(planned, executed, out / "playback.html")
+    print(f"{name}: {'solved' if planned.solved else 'not solved'}, violation "
+          f"{planned.best.violation:.3g}, coverage in pybullet {executed.coverage}, touch "
+          f"distance {executed.touch_distance}; {out / 'playback.html'}")
+    return executed.coverage
+
+
+def out_dir(args: argparse.Namespace, script: str) -> Path:
+    return Path(args.out) if args.out else Path("runs") / Path(script).stem
