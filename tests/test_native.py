@@ -20,7 +20,8 @@ from robotplan.sdf import Box, Circle, LShape, Polygon, Workspace
 
 F32, F64 = torch.float32, torch.float64
 
-needs_kernels = pytest.mark.skipif(native.kernels() is None, reason="no C compiler here")
+needs_kernels = pytest.mark.skipif(native.kernels() is None,
+                                   reason="C kernels not in use (not built, or ROBOTPLAN_NATIVE=0)")
 
 # (images, channels in, H, W, channels out, kernel, stride): the shipped encoder's layers at
 # T = 10, and odd sizes that end mid-vector, narrower than a block, one channel in
