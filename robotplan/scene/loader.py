@@ -6,15 +6,15 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from robotplan.polygons import intersection_area
-from robotplan.scene.reader import SchemaError, read
+from robotplan.scene.files import read_data
+from robotplan.scene.limits import check_counts, check_grid
+from robotplan.scene.reader import SchemaError, read, show
 from robotplan.scene.schema import RegionGoal, Scene, TouchGoal
 
 __all__ = ["SceneError", "load_scene", "parse_scene"]
@@ -32,69 +32,14 @@ class SceneError(Exception):
         super().__init__(f"{file}: {field}: {message}" if field else f"{file}: {message}")
 
 
-class _StrictSafeLoader(yaml.SafeLoader):
-    """The safe loader, refusing duplicate keys instead of keeping the last silently."""
-
-    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
-        seen: set[Any] = set()
-        for key_node, _ in node.value:
-            key = self.construct_object(key_node, deep=deep)
-            if key in seen:
-                mark = key_node.start_mark
-                raise yaml.constructor.ConstructorError(
-                    None, None, f"duplicate key {key!r} (line {mark.line + 1})", mark)
-            seen.add(key)
-        return super().construct_mapping(node, deep=deep)
-
-
-def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict:
-    out: dict[str, Any] = {}
-    for k, v in pairs:
-        if k in out:
-            raise ValueError(f"duplicate key {k!r}")
-        out[k] = v
-    return out
-
-
-def _parse_text(text: str, path: Path) -> Any:
-    if path.suffix.lower() == ".json":
-        try:
-            return json.loads(text, object_pairs_hook=_no_duplicates)
-        except (json.JSONDecodeError, ValueError) as err:
-            raise SceneError(path, "", f"invalid JSON: {err}") from None
-    try:
-        return yaml.load(text, Loader=_StrictSafeLoader)
-    except yaml.constructor.ConstructorError as err:
-        mark = err.problem_mark
-        where = f"line {mark.line + 1}" if mark else "YAML"
-        problem = err.problem or str(err)
-        if "could not determine a constructor" in problem:
-            problem = (f"YAML tag {problem.split('tag')[-1].strip()} is not allowed: "
-                       "scene files hold plain data only")
-        raise SceneError(path, where, problem) from None
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else "YAML"
-        problem = getattr(err, "problem", None) or str(err)
-        raise SceneError(path, where, f"invalid YAML: {problem}") from None
-
-
 def load_scene(path: str | Path) -> Scene:
     """Read, check and return the scene in ``path`` (YAML or JSON)."""
     path = Path(path)
     try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise SceneError(path, "", "no such file") from None
-    except IsADirectoryError:
-        raise SceneError(path, "", "is a directory, not a scene file") from None
-    except OSError as err:
-        raise SceneError(path, "", f"cannot read: {err.strerror}") from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise SceneError(path, "", "not a UTF-8 text file") from None
-    return parse_scene(_parse_text(text, path), path)
+        data = read_data(path)
+    except SchemaError as err:
+        raise SceneError(path, err.field, err.message) from None
+    return parse_scene(data, path)
 
 
 def parse_scene(data: Any, path: str | Path = "<scene>") -> Scene:
@@ -107,9 +52,10 @@ def parse_scene(data: Any, path: str | Path = "<scene>") -> Scene:
         raise SceneError(path, "version", f"missing required field (use version: "
                          f"{SUPPORTED_VERSION})")
     if data["version"] != SUPPORTED_VERSION or isinstance(data["version"], bool):
-        raise SceneError(path, "version", f"unsupported version {data['version']!r}; this "
+        raise SceneError(path, "version", f"unsupported version {show(data['version'])}; this "
                          f"robotplan reads version {SUPPORTED_VERSION}")
     try:
+        check_counts(data)
         scene = read(Scene, data)
         _check_scene(scene)
     except SchemaError as err:
@@ -120,6 +66,7 @@ def parse_scene(data: Any, path: str | Path = "<scene>") -> Scene:
 
 def _check_scene(scene: Scene) -> None:
     """Cross-field checks the types cannot express. Raises SchemaError."""
+    check_grid(scene.workspace)
     if not scene.objects:
         raise SchemaError("objects", "at least one movable object is required")
     if not scene.pushers and not scene.robots:
@@ -132,14 +79,15 @@ def _check_scene(scene: Scene) -> None:
             path = f"{group}[{i}]"
             if item.name in where:
                 raise SchemaError(f"{path}.name",
-                                  f"duplicate name {item.name!r} (also {where[item.name]})")
+                                  f"duplicate name {show(item.name)} (also {where[item.name]})")
             where[item.name] = path
     object_names = [o.name for o in scene.objects]
     for i, p in enumerate(scene.pushers):
         for j, target in enumerate(p.touches or []):
             if target not in object_names:
                 raise SchemaError(f"pushers[{i}].touches[{j}]",
-                                  f"{target!r} is not an object (objects: {object_names})")
+                                  f"{show(target)} is not an object (objects: "
+                                  f"{show(object_names)})")
     _check_goal(scene, object_names)
     _check_robots(scene)
     _check_placement(scene, where)
@@ -148,15 +96,15 @@ def _check_scene(scene: Scene) -> None:
 def _check_goal(scene: Scene, object_names: list[str]) -> None:
     goal = scene.goal
     if goal.object not in object_names:
-        raise SchemaError("goal.object",
-                          f"{goal.object!r} is not an object (objects: {object_names})")
+        raise SchemaError("goal.object", f"{show(goal.object)} is not an object (objects: "
+                          f"{show(object_names)})")
     if isinstance(goal, TouchGoal):
         if goal.robot is not None and goal.robot not in [r.name for r in scene.robots]:
-            raise SchemaError("goal.robot", f"{goal.robot!r} is not a robot of this scene "
-                              f"(robots: {[r.name for r in scene.robots]})")
+            raise SchemaError("goal.robot", f"{show(goal.robot)} is not a robot of this "
+                              f"scene (robots: {show([r.name for r in scene.robots])})")
         if goal.pusher is not None and goal.pusher not in [p.name for p in scene.pushers]:
-            raise SchemaError("goal.pusher", f"{goal.pusher!r} is not a pusher of this scene "
-                              f"(pushers: {[p.name for p in scene.pushers]})")
+            raise SchemaError("goal.pusher", f"{show(goal.pusher)} is not a pusher of this "
+                              f"scene (pushers: {show([p.name for p in scene.pushers])})")
 
 
 def _check_robots(scene: Scene) -> None:
@@ -164,7 +112,7 @@ def _check_robots(scene: Scene) -> None:
 
     for i, r in enumerate(scene.robots):
         if r.model not in available_models():
-            raise SchemaError(f"robots[{i}].model", f"unknown robot model {r.model!r}; "
+            raise SchemaError(f"robots[{i}].model", f"unknown robot model {show(r.model)}; "
                               f"available: {available_models()}")
         model = load_robot_model(r.model)
         if r.q0 is not None:
