@@ -9,19 +9,15 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from robotplan.polygons import intersection_area
 from robotplan.scene.files import read_data
 from robotplan.scene.limits import check_counts, check_grid
+from robotplan.scene.placement import check_placement
 from robotplan.scene.reader import SchemaError, read, show
-from robotplan.scene.schema import RegionGoal, Scene, TouchGoal
+from robotplan.scene.schema import Scene, TouchGoal
 
 __all__ = ["SceneError", "load_scene", "parse_scene"]
 
 SUPPORTED_VERSION = 1
-_OVERLAP_AREA = 1e-9  # m²: footprints sharing less than this merely touch
-_TOL = 1e-9
 
 
 class SceneError(Exception):
@@ -90,7 +86,7 @@ def _check_scene(scene: Scene) -> None:
                                   f"{show(object_names)})")
     _check_goal(scene, object_names)
     _check_robots(scene)
-    _check_placement(scene, where)
+    check_placement(scene, where)
 
 
 def _check_goal(scene: Scene, object_names: list[str]) -> None:
@@ -121,35 +117,3 @@ def _check_robots(scene: Scene) -> None:
                                   f"{r.model}, got {len(r.q0)}")
             if not model.within_limits(r.q0):
                 raise SchemaError(f"robots[{i}].q0", f"outside the joint limits of {r.model}")
-
-
-def _check_placement(scene: Scene, where: dict[str, str]) -> None:
-    x0, x1, y0, y1 = scene.workspace.bounds
-    bounds = f"x in [{x0:g}, {x1:g}], y in [{y0:g}, {y1:g}]"
-
-    def inside(outline: np.ndarray) -> bool:
-        return bool(outline[:, 0].min() >= x0 - _TOL and outline[:, 0].max() <= x1 + _TOL
-                    and outline[:, 1].min() >= y0 - _TOL and outline[:, 1].max() <= y1 + _TOL)
-
-    table_bodies = [b for b in scene.bodies.values() if b.role != "robot"]
-    outlines = {b.name: b.outline_world() for b in table_bodies}
-    for b in table_bodies:
-        if not inside(outlines[b.name]):
-            field = "position" if b.role == "pusher" else "pose"
-            raise SchemaError(f"{where[b.name]}.{field}",
-                              f"{b.name!r} lies (partly) outside the workspace ({bounds})")
-    if isinstance(scene.goal, RegionGoal) and not inside(scene.goal_region.outline_world()):
-        raise SchemaError("goal.region.pose", f"the goal region lies (partly) outside the "
-                          f"workspace ({bounds})")
-    bodies = list(scene.bodies.values())
-    for i, a in enumerate(bodies):
-        for b in bodies[i + 1:]:
-            if a.top <= b.bottom or b.top <= a.bottom:
-                continue  # one passes above the other
-            oa = outlines.get(a.name, a.outline_world())
-            ob = outlines.get(b.name, b.outline_world())
-            area = intersection_area(oa, ob)
-            if area > _OVERLAP_AREA:
-                raise SchemaError(f"{where[b.name]}.{'position' if b.role == 'pusher' else 'pose'}",
-                                  f"{b.name!r} overlaps {a.name!r} at the start "
-                                  f"({area * 1e4:.2f} cm²)")

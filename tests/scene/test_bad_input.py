@@ -15,7 +15,7 @@ from robotplan import SceneError, load_scene
 from robotplan.scene import parse_scene
 from robotplan.scene.limits import MAX_BODIES, MAX_GRID_CELLS, MAX_POLYGON_VERTICES
 from tests.conftest import TASKS
-from tests.scene.test_loader import BASE, mutate
+from tests.scene.test_loader import ARMS, BASE, mutate
 
 
 def refused(path) -> SceneError:
@@ -127,6 +127,30 @@ def test_big_scene_files_are_refused_quickly(tmp_path):
     assert (tmp_path / "big0.yaml").stat().st_size > 4_000_000
 
 
+def test_a_scene_at_the_limits_checks_in_seconds(tmp_path):
+    """Eight 128-vertex stars whose spikes interleave (their bounding boxes overlap, they do
+    not) and 91 pushers packed so that neighbours touch: every pair needs a real test."""
+    data = mutate(BASE, "workspace.size", [4.0, 4.0])
+    data["obstacles"] = [polygon_obstacle(f"s{k}", [-1.5 + 0.399 * k, 1.5, (k % 2) * math.pi / 64],
+                                          star(MAX_POLYGON_VERTICES)) for k in range(8)]
+    r = 0.03
+    data["pushers"] = [{"name": f"p{i}", "radius": r,
+                        "position": [-1.8 + (i % 10) * 2 * r + (i // 10 % 2) * r,
+                                     -1.8 + (i // 10) * r * math.sqrt(3)]} for i in range(91)]
+    data["objects"][0]["pose"] = [1.0, -1.0, 0.0]
+    data["goal"]["region"]["pose"] = [1.5, -1.5, 0.0]
+    f = tmp_path / "limits.yaml"
+    f.write_text(yaml.safe_dump(data))
+    t0 = time.perf_counter()
+    scene = load_scene(f)
+    assert time.perf_counter() - t0 < 5
+    assert len(scene.bodies) == MAX_BODIES
+    data["pushers"][1]["position"][0] -= 1e-3  # 1 mm into its neighbour
+    with pytest.raises(SceneError, match="overlaps 'p0'") as err:
+        parse_scene(data)
+    assert err.value.field == "pushers[1].position"
+
+
 # --- wrong types anywhere ------------------------------------------------------------------
 
 @pytest.mark.parametrize(("path", "value", "field"), [
@@ -172,3 +196,13 @@ def test_yaml_merge_keys_are_plain_data(tmp_path):
     f.write_text((TASKS / "box_push.yaml").read_text().replace(
         "    radius: 0.03\n", "    <<: {radius: 0.03}\n"))
     assert load_scene(f).pushers[0].radius == 0.03
+
+
+def test_a_robot_tip_overlapping_names_the_field_that_places_it():
+    big_tip = mutate(ARMS, "robots.0.tip_radius", 0.5)
+    with pytest.raises(SceneError, match="'left' overlaps") as err:
+        parse_scene(big_tip)
+    assert err.value.field == "robots[0].base"
+    with pytest.raises(SceneError, match="'left' overlaps") as err:
+        parse_scene(mutate(big_tip, "robots.0.q0", [0.0, 0.7, 0.0, -1.4, 0.0, 1.0, 0.0]))
+    assert err.value.field == "robots[0].q0"
