@@ -13,7 +13,7 @@ from robotplan.scene.files import read_data
 from robotplan.scene.limits import check_counts, check_grid
 from robotplan.scene.placement import check_placement
 from robotplan.scene.reader import SchemaError, read, show
-from robotplan.scene.schema import Scene, TouchGoal
+from robotplan.scene.schema import RegionGoal, Scene, TouchGoal
 
 __all__ = ["SceneError", "load_scene", "parse_scene"]
 
@@ -101,6 +101,19 @@ def _check_goal(scene: Scene, object_names: list[str]) -> None:
         if goal.pusher is not None and goal.pusher not in [p.name for p in scene.pushers]:
             raise SchemaError("goal.pusher", f"{show(goal.pusher)} is not a pusher of this "
                               f"scene (pushers: {show([p.name for p in scene.pushers])})")
+    else:
+        _check_region_area(scene, goal)
+
+
+def _check_region_area(scene: Scene, goal: RegionGoal) -> None:
+    """The object must fit in the region: full coverage of a smaller region is impossible."""
+    (obj,) = [o for o in scene.objects if o.name == goal.object]
+    region_area, object_area = goal.region.shape.area, obj.shape.area
+    if region_area < object_area * (1 - 1e-9):  # equal areas fit when the shapes match
+        raise SchemaError("goal.region", f"the region's area ({region_area * 1e4:.4g} cm²) is "
+                          f"smaller than the footprint of {show(goal.object)} ("
+                          f"{object_area * 1e4:.4g} cm²): the object can never lie entirely "
+                          "inside it")
 
 
 def _check_robots(scene: Scene) -> None:

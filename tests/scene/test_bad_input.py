@@ -91,6 +91,24 @@ def test_numbers_far_beyond_any_table_are_refused(tmp_path):
         assert err.value.field == "objects[0].pose[0]"
 
 
+# --- a goal region smaller than the object -------------------------------------------------
+
+def test_a_region_smaller_than_the_object_is_refused_naming_both_areas():
+    with pytest.raises(SceneError) as err:
+        parse_scene(mutate(BASE, "goal.region.shape.size", [0.1, 0.1]))
+    assert err.value.field == "goal.region"
+    assert "100 cm²" in err.value.message and "240 cm²" in err.value.message  # box 20 x 12 cm
+    with pytest.raises(SceneError) as err:
+        parse_scene(mutate(BASE, "goal.region.shape", {"type": "circle", "radius": 0.08}))
+    assert err.value.field == "goal.region"
+
+
+def test_a_region_exactly_the_object_is_accepted():
+    same = mutate(BASE, "goal.region", {"shape": BASE["objects"][0]["shape"],
+                                        "pose": [0.36, 0.05, 0.4]})
+    assert parse_scene(same).goal.region.shape == parse_scene(BASE).objects[0].shape
+
+
 # --- big files -----------------------------------------------------------------------------
 
 def star(n: int, r0: float = 0.2, r1: float = 0.05) -> list[list[float]]:
