@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import yaml
 
@@ -122,3 +123,44 @@ def test_solve_refuses_unsupported_scenes_and_used_folders(tmp_path):
 def test_view_needs_a_playback(tmp_path):
     res = run("view", str(tmp_path))
     assert res.returncode == 2 and "playback" in res.stderr
+
+
+def test_check_reads_exponents_and_check_and_solve_refuse_oversized_scenes(tmp_path):
+    base = yaml.safe_load((TASKS / "box_push.yaml").read_text())
+
+    def scene(name: str, change, text=None) -> str:
+        data = json.loads(json.dumps(base))
+        change(data)
+        f = tmp_path / name
+        f.write_text(text(data) if text else yaml.safe_dump(data))
+        return str(f)
+
+    def tiny_x(d: dict) -> None:
+        d["objects"][0]["pose"][0] = 3e-06  # YAML 1.1 alone would read "3e-06" as a string
+
+    exponents = [scene("exp.json", tiny_x, json.dumps), scene("exp.yaml", tiny_x)]
+    km = scene("km.yaml", lambda d: d["workspace"].update(size=[1e6, 1e6]))
+    region = scene("region.yaml", lambda d: d["goal"]["region"]["shape"].update(size=[.1, .1]))
+    # a 5 MB file of 30,000 triangles: refused by its size, before any parsing
+    big = scene("big.yaml", lambda d: d.update(obstacles=[
+        {"name": f"o{i}", "pose": [0.5, 0.5, 0], "shape": {"type": "polygon", "vertices": [
+            [0.001 * i, 0], [0.001 * i + 0.01, 0], [0.001 * i, 0.01]]}} for i in range(30_000)]),
+        json.dumps)
+    type_map = scene("type.yaml", lambda d: d["objects"][0]["shape"].update(type={}))
+    assert Path(big).stat().st_size > 4_000_000
+    res = run("check", *exponents, km, region, big, type_map)
+    assert res.returncode == 2 and "Traceback" not in res.stderr
+    assert [line.split(":")[0] for line in res.stdout.splitlines()] == [f"ok {f}"
+                                                                        for f in exponents]
+    fields = [(km, "workspace.size: "), (region, "goal.region: "), (big, ""),
+              (type_map, "objects[0].shape.type: ")]
+    errors = res.stderr.splitlines()
+    assert len(errors) == len(fields), res.stderr
+    for line, (f, field) in zip(errors, fields, strict=True):
+        assert line.startswith(f"error: {f}: {field}"), line
+    assert "MB is too large for a scene file" in errors[2]
+    for f in (km, region):
+        out = tmp_path / f"out_{Path(f).stem}"
+        res = run("solve", f, "--out", str(out))
+        assert res.returncode == 2 and "Traceback" not in res.stderr
+        assert res.stderr.count("\n") == 1 and not out.exists()

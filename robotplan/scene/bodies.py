@@ -15,6 +15,7 @@ import torch
 from torch import Tensor
 
 from robotplan.geometry.transforms import planar_to_body
+from robotplan.scene.robots import load_robot_model
 from robotplan.sdf import Circle, Shape2D
 
 if TYPE_CHECKING:
@@ -78,8 +79,6 @@ def scene_bodies(scene: Scene) -> dict[str, Body]:
         bodies[p.name] = Body(p.name, "pusher", Circle(p.radius), (*p.position, 0.0),
                               0.0, 2 * p.radius)
     for r in scene.robots:
-        from robotplan.scene.robots import load_robot_model
-
         model = load_robot_model(r.model)
         tip = model.tip_position(r.q0 if r.q0 is not None else model.home, r.base)
         bodies[r.name] = Body(r.name, "robot", Circle(r.tip_radius),

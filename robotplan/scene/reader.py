@@ -1,21 +1,30 @@
 """Typed reading of plain data (parsed YAML/JSON) into dataclasses: the dataclass is the schema.
 
 ``read(cls, data, where)`` checks every field against the dataclass's type hints: unknown or
-missing fields, wrong types, NaN/inf, non-positive values where ``field(metadata=
-{"positive": True})`` asks for them, tuple lengths, ``Literal`` choices, and unions of
-dataclasses told apart by their ``type`` tag. A dataclass may add its own cross-field check
-as ``check() -> (field, message) | None``. Any failure raises :class:`SchemaError` naming the
-field by its path, e.g. ``objects[0].shape.size``.
+missing fields, wrong types, NaN/inf, numbers beyond ``MAX_MAGNITUDE``, non-positive values
+where ``field(metadata={"positive": True})`` asks for them, tuple lengths, ``Literal``
+choices, and unions of dataclasses told apart by their ``type`` tag. A dataclass may add its
+own cross-field check as ``check() -> (field, message) | None``. Any failure raises
+:class:`SchemaError` naming the field by its path, e.g. ``objects[0].shape.size``.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import reprlib
 import types
 from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
 
-__all__ = ["SchemaError", "read"]
+__all__ = ["MAX_MAGNITUDE", "SchemaError", "read", "show"]
+
+# Every number of an input file is a length in metres or an angle in radians: beyond this it
+# is a typo, and squares and products of such numbers stay far from float overflow.
+MAX_MAGNITUDE = 1e6
+
+_repr = reprlib.Repr()
+_repr.maxlevel, _repr.maxlist, _repr.maxtuple, _repr.maxdict = 3, 6, 6, 4
+_repr.maxstring, _repr.maxother, _repr.maxlong = 60, 60, 40
 
 
 class SchemaError(ValueError):
@@ -25,6 +34,12 @@ class SchemaError(ValueError):
         super().__init__(f"{field}: {message}" if field else message)
         self.field = field
         self.message = message
+
+
+def show(value: Any) -> str:
+    """A short repr of an input value for a message: nested or huge data (a whole list, a
+    YAML alias repeated) shows as its first few entries."""
+    return _repr.repr(value)
 
 
 def _join(where: str, name: str) -> str:
@@ -68,8 +83,9 @@ def read(cls: Any, data: Any, where: str = "") -> Any:
         tag = data.get("type")
         if tag is None:
             raise SchemaError(_join(where, "type"), f"missing; one of {sorted(tags)}")
-        if tag not in tags:
-            raise SchemaError(_join(where, "type"), f"unknown type {tag!r}; one of {sorted(tags)}")
+        if not isinstance(tag, str) or tag not in tags:
+            raise SchemaError(_join(where, "type"),
+                              f"unknown type {show(tag)}; one of {sorted(tags)}")
         cls = tags[tag]
     if not isinstance(data, dict):
         raise SchemaError(where, "must be a mapping")
@@ -77,7 +93,8 @@ def read(cls: Any, data: Any, where: str = "") -> Any:
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
     for key in data:
         if key not in fields:
-            raise SchemaError(_join(where, str(key)),
+            shown = key if isinstance(key, str) and len(key) <= 60 else show(key)
+            raise SchemaError(_join(where, shown),
                               f"unknown field; expected one of {sorted(fields)}")
     kwargs: dict[str, Any] = {}
     for name, f in fields.items():
@@ -107,7 +124,7 @@ def _convert(tp: Any, value: Any, where: str, meta: dict[str, Any]) -> Any:
         return _convert(inner, value, where, meta)
     if origin is Literal:
         if value not in get_args(tp):
-            raise SchemaError(where, f"must be one of {list(get_args(tp))}, got {value!r}")
+            raise SchemaError(where, f"must be one of {list(get_args(tp))}, got {show(value)}")
         return value
     if origin is tuple:
         args = get_args(tp)
@@ -128,20 +145,27 @@ def _convert(tp: Any, value: Any, where: str, meta: dict[str, Any]) -> Any:
         return read(tp, value, where)
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise SchemaError(where, f"must be a number, got {value!r}")
-        value = float(value)
+            raise SchemaError(where, f"must be a number, got {show(value)}")
+        try:
+            value = float(value)
+        except OverflowError:  # an integer of hundreds of digits
+            raise SchemaError(where, f"must be at most {MAX_MAGNITUDE:g} in magnitude, got "
+                              f"{show(value)}") from None
         if not math.isfinite(value):
             raise SchemaError(where, f"must be a finite number, got {value}")
+        if abs(value) > MAX_MAGNITUDE:
+            raise SchemaError(where, f"must be at most {MAX_MAGNITUDE:g} in magnitude (metres "
+                              f"or radians), got {value:g}")
         if meta.get("positive") and value <= 0:
             raise SchemaError(where, f"must be positive, got {value:g}")
         return value
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
-            raise SchemaError(where, f"must be an integer, got {value!r}")
+            raise SchemaError(where, f"must be an integer, got {show(value)}")
         return value
     if tp is str:
         if not isinstance(value, str) or not value:
-            raise SchemaError(where, f"must be a non-empty string, got {value!r}")
+            raise SchemaError(where, f"must be a non-empty string, got {show(value)}")
         return value
     raise TypeError(f"schema type {tp!r} at {where} is not supported")  # programming error
 

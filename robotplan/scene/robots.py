@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from robotplan.base.quiet import connect_direct, drake_quiet, import_pybullet
 from robotplan.base.resources import robots_dir
 from robotplan.scene.reader import read
 
@@ -101,8 +102,6 @@ def load_robot_model(name: str) -> RobotModel:
 def _kinematics_handle(model: RobotModel) -> tuple[int, int, int, tuple[int, ...]]:
     """A pybullet DIRECT client holding the model at the origin, loaded once per process:
     ``(client, body, tip link index, movable joint indices)``."""
-    from robotplan.base.quiet import connect_direct, import_pybullet
-
     pb = import_pybullet()
     client = connect_direct()
     body = pb.loadURDF(str(model.urdf_path), useFixedBase=True, physicsClientId=client)
@@ -119,7 +118,6 @@ def _kinematics_handle(model: RobotModel) -> tuple[int, int, int, tuple[int, ...
 @lru_cache(maxsize=256)
 def _tip_position(model: RobotModel, q: tuple[float, ...],
                   base: tuple[float, float, float, float]) -> np.ndarray:
-    from robotplan.base.quiet import import_pybullet
 
     pb = import_pybullet()
     client, body, tip_link, movable = _kinematics_handle(model)
@@ -144,7 +142,6 @@ class DrakeArm:
         from pydrake.math import RigidTransform, RollPitchYaw
         from pydrake.multibody.plant import MultibodyPlant
 
-        from robotplan.base.quiet import drake_quiet
 
         self.model = model
         plant = MultibodyPlant(0.0)
