@@ -21,7 +21,7 @@ from robotplan.base.resources import learned_dir
 from robotplan.execution.execute import Execution, execute_arms, execute_push, reach_substeps
 from robotplan.execution.sim import PHYSICS
 from robotplan.functionals.clearance import OBSTACLE_MARGIN
-from robotplan.program.arm_program import ARM_SETTINGS
+from robotplan.program.settings import ARM_PROGRAM_SETTINGS
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import Solution
 from robotplan.program.solve import warm_guess
@@ -118,7 +118,7 @@ def execute(planned: Plan, scene: Scene | None = None) -> Execution:
     T = steps // len(best.skeleton.phases)
     push = np.array([best.skeleton.phases[t // T].mode == "push" for t in range(steps)])
     if scene.robots:
-        slow = round(ARM_SETTINGS.reach_slowdown)
+        slow = round(ARM_PROGRAM_SETTINGS.reach_slowdown)
         substeps = [PHYSICS.keep_every * (1 if p else slow) for p in push]
         ex = execute_arms(scene, obj, best.q_joints, substeps)
     else:

@@ -20,8 +20,6 @@ Costs: the squared joint steps of every arm, besides the push program's own.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-
 import numpy as np
 import torch
 
@@ -34,42 +32,14 @@ from robotplan.functionals.kinematics import (
     track_tip_path,
 )
 from robotplan.program.push_program import PushProgram
-from robotplan.program.settings import ProgramSettings
+from robotplan.program.settings import ARM_PROGRAM_SETTINGS, ProgramSettings
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import Solution
 from robotplan.scene import Scene
 
-__all__ = ["ARM_PROGRAM_SETTINGS", "ArmPushProgram", "ArmSettings"]
+__all__ = ["ArmPushProgram", "reach_check"]
 
 
-@dataclass(frozen=True)
-class ArmSettings:
-    step_seconds: float = 1.0 / 12.0  # one planned step: 20 simulation steps, as the data
-    reach_slowdown: float = 3.0  # reach steps last this many planned steps in execution
-    idle_lift: float = 0.04  # m between an idle tip's bottom and the objects' tops
-    flange_clearance: float = 0.01  # m between the flange and the objects' tops
-    link_min: float = 0.12  # m: lowest allowed height of the other check links
-    arm_gap: float = 0.10  # m between the two arms' check points
-    # m per step and axis of the acting tip while reaching: H_coll sees the sampled states
-    # only, and a long step between them can cut through the object in pybullet
-    # (measured: docs/experiments.md#tip-reach-step)
-    tip_reach_step: float = 0.04
-    joint_step_weight: float = 0.01  # cost per rad² of joint motion per step
-
-
-ARM_SETTINGS = ArmSettings()
-ARM_PROGRAM_SETTINGS = replace(
-    ProgramSettings(),
-    # the learned stage keeps the friction cone but not the turning law: the three arm
-    # scenarios pass that way (the free pushers' default turns too)
-    turn_in_learned=False,
-    sparse_jacobians=True,  # dense rows over every joint are slow
-    # SNOPT's default minor iteration limit: the per-row limit would multiply it for the
-    # arms' many rows, and failing candidates would only fail slower
-    # (measured: docs/experiments.md#arm-program)
-    minor_iterations_per_row=0,
-)
-"""The program settings of scenes with arms (the free pushers' are ``ProgramSettings()``)."""
 # m beyond the goal region's inradius that straight face pushes may end from its centre and
 # still be tried: turning the object on the way covers that much
 # (measured: docs/experiments.md#goal-gap-slack)
@@ -87,10 +57,8 @@ class ArmPushProgram(PushProgram):
 
     def __init__(self, scene: Scene, skeleton: Skeleton, model, space: SkeletonSpace,
                  settings: ProgramSettings = ARM_PROGRAM_SETTINGS,
-                 guess: dict[str, np.ndarray] | None = None,
-                 arm_settings: ArmSettings = ARM_SETTINGS) -> None:
+                 guess: dict[str, np.ndarray] | None = None) -> None:
         self.kin = {r.name: arm_kinematics(r) for r in scene.robots}
-        self.arm_settings = arm_settings
         self.QJ: dict[str, np.ndarray] = {}
         super().__init__(scene, skeleton, model, space, settings, guess)
         N = self.N
@@ -111,7 +79,7 @@ class ArmPushProgram(PushProgram):
             a, b = names
             H = ArmSeparation(self.kin[a], self.kin[b])
             self._add_rows(H, [self.QJ[a][1:], self.QJ[b][1:]], 1, 100.0,
-                           arm_settings.arm_gap * 100, np.inf, "arm_gap")  # cm
+                           settings.arm_gap * 100, np.inf, "arm_gap")  # cm
 
     # ------------------------------------------------------------ structure
     def _actors(self) -> list[str]:
@@ -133,7 +101,7 @@ class ArmPushProgram(PushProgram):
         return sorted(t for t in out if t >= 1)
 
     def _add_arm(self, name: str) -> None:
-        kin, s, prog = self.kin[name], self.arm_settings, self.prog
+        kin, s, prog = self.kin[name], self.settings, self.prog
         Q, N, dof = self.QJ[name], self.N, kin.dof
         lower, upper = np.array(kin.model.joint_lower), np.array(kin.model.joint_upper)
         prog.AddBoundingBoxConstraint(np.tile(lower, N + 1), np.tile(upper, N + 1), Q.ravel())
@@ -180,7 +148,7 @@ class ArmPushProgram(PushProgram):
             if self.actor_of_state[t] != self.actor_of_state[t - 1]:
                 continue
             lim = (self.settings.warm_max_step if self._is_push_step(t)
-                   else self.arm_settings.tip_reach_step)
+                   else self.settings.tip_reach_step)
             self.prog.AddLinearConstraint(D, -np.full(2, lim), np.full(2, lim),
                                           np.concatenate((self.Q2[t], self.Q2[t - 1])))
 
@@ -191,7 +159,7 @@ class ArmPushProgram(PushProgram):
     def _joint_guess(self) -> dict[str, np.ndarray]:
         """Inverse kinematics along the guessed tip path of each arm: the planar guess at
         push height in its push states, descending while it reaches; idle, back home."""
-        s, N, T = self.arm_settings, self.N, self.T
+        s, N, T = self.settings, self.N, self.T
         top, r = objects_top(self.scene), self.tip_radius
         high = top + s.idle_lift + r + 0.03
         out = {}

@@ -35,6 +35,7 @@ from robotplan.functionals.dynamics import LearnedDynamics
 from robotplan.models.dynamics import PushDynamics
 from robotplan.program.guess import initial_guess
 from robotplan.program.push_rows import PushRows
+from robotplan.program.row_table import rows_for_stage
 from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import FEASIBLE, SNOPT_MINOR_DEFAULT, WARM_USABLE, Solution, rank
@@ -80,24 +81,11 @@ class PushProgram(PushRows):
         prog.AddBoundingBoxConstraint(np.array(self.pusher.pose[:2]),
                                       np.array(self.pusher.pose[:2]), self.Q2[0])
         self._bound_to_workspace(self.Q1[:, :2], self.Q2, self.P)
-        if settings.hold_while_reaching:
-            self._hold_object_while_reaching()
-        self.dynamics = None
-        if model is not None:
-            self.dynamics = self._add_dynamics(model, self.obj, self.Q1, self.pusher, self.Q2,
-                                               self.guess["q_obj"], "H_F")
-            self._add_step_limits(settings.max_step, settings.max_turn)
-            if settings.cone_in_learned and settings.push_friction > 0 and len(self.push_steps):
-                self._add_quasi_static(turn=settings.turn_in_learned)
-        else:
-            self._add_kinematic_pushing()
-            self._add_step_limits(settings.warm_max_step, settings.warm_max_turn)
-        self._add_collision()
-        self._add_contact()
-        self._add_goal()
-        self._add_costs()
-        self._add_lever_cost()
-        self._add_corner_clearance()
+        self.model, self.dynamics = model, None
+        # the rows of the table (skeletons/rows.yaml) of this stage, in its order
+        for spec in rows_for_stage(learned=model is not None):
+            if spec.enabled is None or getattr(settings, spec.enabled):
+                self.add_row(spec)
 
     # ------------------------------------------------------------------ hooks
     def _add_variables(self) -> None:

@@ -8,7 +8,6 @@ import torch
 
 from robotplan.functionals import Collision, ContactPoint, GoalRegion
 from robotplan.functionals.collision import FixedCollision, SweptClearance, face_contact_overlap
-from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
 from robotplan.functionals.sticking import (
     CornerClearance,
     PushingDirection,
@@ -19,66 +18,63 @@ from robotplan.functionals.sticking import (
     convex_corners,
     limit_surface_radius,
 )
-from robotplan.models.dynamics import PushDynamics
 from robotplan.program.bridge import bridge, stepwise
-from robotplan.program.rows import ProgramRows
+from robotplan.program.dynamics_rows import DynamicsRows
+from robotplan.program.row_table import RowSpec
 from robotplan.sdf.footprint import support_corners
 
-__all__ = ["PushRows"]
+__all__ = ["ROW_BUILDERS", "PushRows"]
+
+ROW_BUILDERS = {  # a row of skeletons/rows.yaml → the PushRows method that adds it
+    "hold_object": "_hold_object_while_reaching",
+    "H_F": "_row_dynamics",
+    "step_limits": "_row_step_limits",
+    "friction_cone": "_row_friction_cone",
+    "sticking": "_add_sticking",
+    "pushing": "_add_pushing",
+    "quasi_static": "_row_quasi_static",
+    "object_motion": "_row_object_motion",
+    "H_coll": "_add_collision",
+    "swept": "_add_swept",
+    "H_coll_obstacles": "_add_obstacle_collision",
+    "H_PoC": "_add_contact",
+    "goal": "_add_goal",
+    "acceleration": "_add_costs",
+    "lever": "_add_lever_cost",
+    "corner": "_add_corner_clearance",
+}
 
 
-class PushRows(ProgramRows):
+class PushRows(DynamicsRows):
     """The rows of one pushed object (``obj``, poses ``Q1``) and one actor (``pusher``,
     positions ``Q2``), contact points ``P`` in push steps."""
 
-    def _add_dynamics(self, model: PushDynamics, obj, Q_obj: np.ndarray, actor,
-                      Q_actor: np.ndarray, path: np.ndarray, name: str) -> LearnedDynamics:
-        """H_F of ``obj`` (poses ``Q_obj (N+1, 3)``) pushed by ``actor`` (``Q_actor (N+1, 2)``
-        positions of a disc, or ``(N+1, 3)`` poses of an object) in every step, integrated
-        around ``path (N+1, ≥2)``, the object's guessed centres."""
+    def add_row(self, spec: RowSpec) -> None:
+        """Add the row ``spec`` of the table (``skeletons/rows.yaml``) to the program."""
+        getattr(self, ROW_BUILDERS[spec.row])(spec)
+
+    def _row_step_limits(self, spec: RowSpec) -> None:
+        """The stage's step limits (the learned stage's ``max_*``, the kinematic ``warm_*``)."""
         s = self.settings
-        quad = phase_quadrature(torch.as_tensor(path[:, :2], dtype=torch.float32),
-                                obj.shape.bound_radius, self.scene.workspace,
-                                coarse=s.quad_coarse)
-        dynamics = LearnedDynamics(model, obj, actor, quad)
-        N, d = self.N, Q_actor.shape[1]
-        area = float(self.scene.workspace.size[0] * self.scene.workspace.size[1])
-        scale = 1e6 / area  # H (m²) → mean squared residual in mm²
+        if spec.stage == "learned":
+            self._add_step_limits(s.max_step, s.max_turn)
+        else:
+            self._add_step_limits(s.warm_max_step, s.warm_max_turn)
 
-        def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
-            X1 = torch.from_numpy(x[:3 * (N + 1)].reshape(N + 1, 3))
-            X2 = torch.from_numpy(x[3 * (N + 1):].reshape(N + 1, d))
-            H, J1, J2 = dynamics.evaluate(X1, X2, jacobian=jac)
-            values = H.double().numpy() * scale
-            if not jac:
-                return values, None
-            J = np.zeros((N, (3 + d) * (N + 1)))
-            rows = np.arange(N)
-            J1n, J2n = J1.double().numpy() * scale, J2.double().numpy() * scale
-            for which in (0, 1):
-                states = rows + which
-                for k in range(3):
-                    J[rows, 3 * states + k] = J1n[:, which, k]
-                for k in range(d):
-                    J[rows, 3 * (N + 1) + d * states + k] = J2n[:, which, k]
-            return values, J
+    def _row_friction_cone(self, spec: RowSpec) -> None:
+        """The learned stage's quasi-static rows: the cone, the turning law with
+        ``turn_in_learned``."""
+        if self.settings.push_friction > 0 and len(self.push_steps):
+            self._add_quasi_static(turn=self.settings.turn_in_learned, scale=spec.scale)
 
-        variables = np.concatenate((Q_obj.ravel(), Q_actor.ravel()))
-        if s.dynamics_weight > 0:
-            def total(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
-                values, J = fn(x, jac)
-                w = s.dynamics_weight
-                return (np.array([w * values.sum()]),
-                        None if J is None else w * J.sum(axis=0, keepdims=True))
+    def _row_quasi_static(self, spec: RowSpec) -> None:
+        if len(self.push_steps) and self.settings.push_friction > 0:
+            self._add_quasi_static(turn=True, scale=spec.scale)
 
-            self._add_cost(total, variables, name)
-            return dynamics
-        bound = (s.dynamics_rmse * 1e3) ** 2
-        self.prog.AddConstraint(bridge(fn, self.timings, name), np.zeros(N), np.full(N, bound),
-                                variables, name)
-        return dynamics
+    def _row_object_motion(self, spec: RowSpec) -> None:
+        self._add_motion_cost(self.Q1)
 
-    def _hold_object_while_reaching(self) -> None:
+    def _hold_object_while_reaching(self, spec: RowSpec) -> None:
         """A reach phase moves the pusher without touching (H_coll keeps it off), so the
         object stays where it is: q_obj,t = q_obj,t−1 in reach steps. Without this, the
         cost on H_F alone lets the optimiser drift the object a few mm per step."""
@@ -89,58 +85,69 @@ class PushRows(ProgramRows):
             for t in range(k * T + 1, (k + 1) * T + 1):
                 self._hold(self.Q1, t)
 
-    def _add_collision(self) -> None:
+    def _clear_overlap(self) -> float:
+        """H_coll of the actor ``reach_clearance`` off a face (m²)."""
+        s = self.settings
+        return face_contact_overlap(self.pusher, s.a_coll, -s.reach_clearance)
+
+    def _add_collision(self, spec: RowSpec) -> None:
         """H_coll in every step: at most a pressed-in face contact in push steps, and
         ``reach_clearance`` of free space in the other steps (the pusher follows straight
         lines between the planned points; brushing the object on the way turns it)."""
-        s = self.settings
+        s, k = self.settings, spec.scale
         H = Collision(self.obj, self.pusher, a=s.a_coll)
         touch = max(s.coll_area, face_contact_overlap(self.pusher, s.a_coll, s.coll_depth))
-        clear = face_contact_overlap(self.pusher, s.a_coll, -s.reach_clearance)
-        ub = np.full(self.N, clear)
+        ub = np.full(self.N, self._clear_overlap())
         ub[self.push_steps - 1] = touch
         if self.scene.goal.type == "touch":
             ub[-1] = touch  # the touch goal's last state is a contact, not a reach
-        self._add_rows(H, [self.Q1[1:], self.Q2[1:]], 1, 1e4, 0.0, ub * 1e4,
-                       "H_coll")  # in cm²
+        self._add_rows(H, [self.Q1[1:], self.Q2[1:]], 1, k, 0.0, ub * k, spec.row)
+
+    def _add_swept(self, spec: RowSpec) -> None:
+        """Along each free move of a free pusher, its gap to the object at a few points."""
+        s, scale = self.settings, spec.scale
         pushing = set(self.push_steps.tolist())
         free = np.array([t for t in range(1, self.N + 1) if t not in pushing], dtype=int)
         if self.planar_pusher and s.swept_samples > 0 and len(free):
             # the object holds still in these steps (hold_while_reaching): its pose at t
             k = s.swept_samples
             self._add_rows(SweptClearance(self.obj, self.pusher, k),
-                           [self.Q1[free], self.Q2[free - 1], self.Q2[free]], k, 100,
-                           -100 * s.swept_tolerance, np.inf, "swept")  # cm
-        for spec in self.scene.obstacles:
-            wall = self.scene.bodies[spec.name]
-            self._add_rows(FixedCollision(self.obj, wall, s.a_coll), [self.Q1[1:]], 1, 1e4,
-                           0.0, s.obstacle_overlap * 1e4, f"H_coll_{spec.name}")
-            self._add_rows(FixedCollision(self.pusher, wall, s.a_coll), [self.Q2[1:]], 1, 1e4,
-                           0.0, clear * 1e4, f"H_coll_{spec.name}_pusher")
+                           [self.Q1[free], self.Q2[free - 1], self.Q2[free]], k, scale,
+                           -scale * s.swept_tolerance, np.inf, spec.row)
 
-    def _add_contact(self) -> None:
+    def _add_obstacle_collision(self, spec: RowSpec) -> None:
+        """H_coll of the object and of the actor with every obstacle, in every step."""
+        s, k = self.settings, spec.scale
+        for obstacle in self.scene.obstacles:
+            wall = self.scene.bodies[obstacle.name]
+            self._add_rows(FixedCollision(self.obj, wall, s.a_coll), [self.Q1[1:]], 1, k,
+                           0.0, s.obstacle_overlap * k, f"H_coll_{obstacle.name}")
+            self._add_rows(FixedCollision(self.pusher, wall, s.a_coll), [self.Q2[1:]], 1, k,
+                           0.0, self._clear_overlap() * k, f"H_coll_{obstacle.name}_pusher")
+
+    def _add_contact(self, spec: RowSpec) -> None:
         if len(self.push_steps):
             H = ContactPoint(self.obj, self.pusher)
             steps = self.push_steps
-            self._add_rows(H, [self.Q1[steps], self.Q2[steps], self.P], 2, 100, 0.0, 0.0,
-                           "H_PoC")  # cm
+            self._add_rows(H, [self.Q1[steps], self.Q2[steps], self.P], 2, spec.scale, 0.0,
+                           0.0, spec.row)
 
-    def _add_lever_cost(self) -> None:
+    def _add_lever_cost(self, spec: RowSpec) -> None:
         """``lever_weight`` · Σ (lever arm in cm)² over push steps (see PushLever)."""
         w = self.settings.lever_weight
         if w <= 0 or not len(self.push_steps):
             return
         H = PushLever(centroid(self.obj.shape.outline()))
         steps = self.push_steps
-        fn, variables = stepwise(H, [self.Q1[steps], self.Q2[steps], self.P], 100.0)
+        fn, variables = stepwise(H, [self.Q1[steps], self.Q2[steps], self.P], spec.scale)
 
         def total(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
             r, J = fn(x, jac)
             return np.array([w * r @ r]), None if J is None else (2 * w * r @ J)[None]
 
-        self._add_cost(total, variables, "lever")
+        self._add_cost(total, variables, spec.row)
 
-    def _add_corner_clearance(self) -> None:
+    def _add_corner_clearance(self, spec: RowSpec) -> None:
         """|p_B − corner| ≥ corner_clearance in every push step (see CornerClearance)."""
         if self.settings.corner_clearance <= 0 or not len(self.push_steps):
             return
@@ -152,9 +159,9 @@ class PushRows(ProgramRows):
         shorter_face = np.minimum(edges, np.roll(edges, 1))[corners]  # the faces at a corner
         bound = np.minimum(self.settings.corner_clearance, shorter_face / 3)
         self._add_rows(CornerClearance(outline[corners]), [self.Q1[self.push_steps], self.P],
-                       len(corners), 100, 100 * bound[None], np.inf, "corner")  # cm
+                       len(corners), spec.scale, spec.scale * bound[None], np.inf, spec.row)
 
-    def _add_quasi_static(self, turn: bool) -> None:
+    def _add_quasi_static(self, turn: bool, scale: float = 100.0) -> None:
         """QuasiStaticPush rows in every push step: the friction cone, and with ``turn`` the
         limit surface's turning rate (the kinematic stage, and the learned stage with
         ``turn_in_learned``; otherwise the learned stage keeps the cone only and H_F alone
@@ -163,21 +170,22 @@ class PushRows(ProgramRows):
         radius = limit_surface_radius(support_corners(self.obj.shape), c_B)
         H = QuasiStaticPush(c_B, radius, self.settings.push_friction, turn=turn)
         k = self.push_steps
-        self._add_quasi_static_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P])
+        self._add_quasi_static_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P],
+                                    scale=scale)
 
     def _add_quasi_static_rows(self, H: QuasiStaticPush, blocks: list[np.ndarray],
-                               suffix: str = "") -> None:
+                               suffix: str = "", scale: float = 100.0) -> None:
         """``H``'s rows on ``blocks``: [turn (= 0)], cone edge, cone edge (≥ 0), in cm."""
         m = 3 if H.turn else 2
         lb, ub = np.zeros((1, m)), np.full((1, m), np.inf)
         if H.turn:
             ub[0, 0] = 0.0
-        self._add_rows(H, blocks, m, 100, lb, ub,
+        self._add_rows(H, blocks, m, scale, lb, ub,
                        ("quasi_static" if H.turn else "friction_cone") + suffix)
 
-    def _add_kinematic_pushing(self) -> None:
-        """The kinematic stand-in for H_F: in push steps the contact point sticks to the
-        object and the pusher moves into it; the object's travel is a small cost."""
+    def _add_sticking(self, spec: RowSpec) -> None:
+        """The kinematic stand-in for H_F: the contact point sticks to the object between
+        consecutive push steps of a phase."""
         steps = list(self.push_steps)
         pairs = [(i - 1, i) for i in range(1, len(steps)) if steps[i] == steps[i - 1] + 1
                  and (steps[i] - 1) % self.T != 0]
@@ -185,22 +193,22 @@ class PushRows(ProgramRows):
             a, b = np.array(pairs).T
             ta, tb = self.push_steps[a], self.push_steps[b]
             self._add_rows(StickingContact(), [self.Q1[ta], self.P[a], self.Q1[tb], self.P[b]],
-                           2, 100, 0.0, 0.0, "sticking")
-        if steps:
+                           2, spec.scale, 0.0, 0.0, spec.row)
+
+    def _add_pushing(self, spec: RowSpec) -> None:
+        """In push steps the actor moves into the contact point."""
+        if len(self.push_steps):
             self._add_rows(PushingDirection(), [self.Q2[self.push_steps - 1],
                                                 self.Q2[self.push_steps], self.P],
-                           1, 100, 0.0, np.inf, "pushing")
-        if steps and self.settings.push_friction > 0:
-            self._add_quasi_static(turn=True)
-        self._add_motion_cost(self.Q1)
+                           1, spec.scale, 0.0, np.inf, spec.row)
 
-    def _add_goal(self) -> None:
+    def _add_goal(self, spec: RowSpec) -> None:
         if self.scene.goal.type == "touch":
             # the touching tip is the last phase's actor; it ends on the object (H_PoC)
             self.P_touch = self.prog.NewContinuousVariables(1, 2, "p_touch")
             H = ContactPoint(self.obj, self.scene.bodies[self.scene.goal.actor])
             self._add_rows(H, [self.Q1[-1:], self.Q2[-1:], self.P_touch], 2, 100, 0.0, 0.0,
-                           "H_touch")  # cm
+                           "H_touch")  # cm, as H_PoC
             return
         if self.region is None:
             return
@@ -223,7 +231,7 @@ class PushRows(ProgramRows):
                                 np.array([self.settings.goal_tol]),
                                 self.goal_Q[self.N], "H_g")
 
-    def _add_costs(self) -> None:
+    def _add_costs(self, spec: RowSpec) -> None:
         def accel_cost(Q: np.ndarray, weight: float, prefix: bool) -> None:
             n = Q.shape[0]
             if n < 2:

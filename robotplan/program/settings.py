@@ -4,11 +4,17 @@ are in docs/experiments.md."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
+from functools import cache
+from pathlib import Path
 
+import yaml
+
+from robotplan.base.resources import skeletons_dir
 from robotplan.functionals.dynamics import QUADRATURE_COARSE
 
-__all__ = ["ProgramSettings"]
+__all__ = ["ARM_PROGRAM_SETTINGS", "DEFAULT_SETTINGS", "SCENE_CLASSES", "ProgramSettings",
+           "load_overlays", "settings_for"]
 
 
 @dataclass(frozen=True)
@@ -48,7 +54,8 @@ class ProgramSettings:
     contact_accel_weight: float = 0.1
     solver: str = "snopt"
     # hand SNOPT the per-step sparsity of the stepwise constraints. Off for free pushers (it
-    # can turn a feasible kinematic stage infeasible); on for arms (ARM_PROGRAM_SETTINGS),
+    # can turn a feasible kinematic stage infeasible); on for arms (the `arms` overlay of
+    # skeletons/settings.yaml),
     # whose dense rows over every joint are slow (measured: docs/experiments.md#sparse-jacobians)
     sparse_jacobians: bool = False
     optimality_tol: float = 2e-3
@@ -97,6 +104,52 @@ class ProgramSettings:
     # of the turning pybullet produces, the law much more
     # (measured: docs/experiments.md#turn-in-learned)
     turn_in_learned: bool = True
+    # arms (robotplan/program/arm_program.py)
+    step_seconds: float = 1.0 / 12.0  # one planned step: 20 simulation steps, as the data
+    reach_slowdown: float = 3.0  # reach steps last this many planned steps in execution
+    idle_lift: float = 0.04  # m between an idle tip's bottom and the objects' tops
+    flange_clearance: float = 0.01  # m between the flange and the objects' tops
+    link_min: float = 0.12  # m: lowest allowed height of the other check links
+    arm_gap: float = 0.10  # m between the two arms' check points
+    # m per step and axis of the acting tip while reaching: H_coll sees the sampled states
+    # only, and a long step between them can cut through the object in pybullet
+    # (measured: docs/experiments.md#tip-reach-step)
+    tip_reach_step: float = 0.04
+    joint_step_weight: float = 0.01  # cost per rad² of joint motion per step
 
 
 DEFAULT_SETTINGS = ProgramSettings()  # the free pushers' settings
+SCENE_CLASSES = ("arms", "routes")
+
+
+@cache
+def load_overlays(path: Path | None = None) -> dict[str, dict]:
+    """The overlays of ``skeletons/settings.yaml``, checked against the fields."""
+    path = path or skeletons_dir() / "settings.yaml"
+    data = yaml.safe_load(path.read_text()) or {}
+    types = {f.name: f.type for f in fields(ProgramSettings)}
+    for name, overlay in data.items():
+        if name not in SCENE_CLASSES:
+            raise ValueError(f"{path}: {name}: not a scene class; one of {SCENE_CLASSES}")
+        for key, value in overlay.items():
+            if key not in types:
+                raise ValueError(f"{path}: {name}.{key}: not a program setting")
+            default = getattr(DEFAULT_SETTINGS, key)
+            if default is not None and type(value) is not type(default) and not (
+                    isinstance(default, float) and type(value) is int):
+                raise ValueError(f"{path}: {name}.{key}: must be a {type(default).__name__}")
+    return data
+
+
+def settings_for(*classes: str, base: ProgramSettings = DEFAULT_SETTINGS,
+                 **changes: object) -> ProgramSettings:
+    """``base`` with the overlays of the scene ``classes`` (``arms``, ``routes``) from
+    ``skeletons/settings.yaml`` in order, then ``changes``."""
+    out = base
+    for name in classes:
+        out = replace(out, **load_overlays().get(name, {}))
+    return replace(out, **changes)
+
+
+ARM_PROGRAM_SETTINGS = settings_for("arms")
+"""The program settings of scenes with arms."""

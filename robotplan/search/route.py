@@ -13,7 +13,8 @@ initial guess, with phases long enough for the longest push.
 Straight pushes suit open-loop execution: a sphere pushing a face through the centroid
 moves a box straight in pybullet, while a push 2 mm off the centre turns it by 0.13 rad in
 0.3 m and 0.5 rad in 0.6 m (tests/test_route.py), an error no later push of the open-loop
-plan sees. Routed programs therefore use :data:`ROUTE_SETTINGS`, and a route only takes
+plan sees. Routed programs therefore use the ``routes`` settings (``skeletons/settings.yaml``),
+and a route only takes
 directions in which the pusher can meet a face on the centroid's line
 (:func:`centred_pushes`).
 """
@@ -28,20 +29,12 @@ import torch
 
 from robotplan.functionals.clearance import densify, obstacle_clearance
 from robotplan.functionals.sticking import centroid
-from robotplan.program.settings import ProgramSettings
 from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
 from robotplan.scene import Scene
 from robotplan.sdf import Shape2D
 
-__all__ = ["ROUTE_SETTINGS", "Route", "centred_pushes", "face_routes", "route_settings",
-           "routed_candidates"]
+__all__ = ["Route", "centred_pushes", "face_routes", "routed_candidates"]
 
-# Straight, centred pushes: a friction cone of ±1.1° (μ 0.02) keeps the object moving along
-# the face normal, and a lever cost of 100 per cm² keeps the line of force within a fraction
-# of a millimetre of the centroid. Soft costs, not hard limits (those stop SNOPT infeasible),
-# and for routes only: elsewhere they make plans worse
-# (measured: docs/experiments.md#route-settings).
-ROUTE_SETTINGS = {"push_friction": 0.02, "lever_weight": 100.0}
 ROUTE_CLEARANCE = 0.04  # m between the routed footprint and every obstacle
 MAX_STEPS_PER_PHASE = 30  # longer segments are split into several pushes
 
@@ -199,8 +192,3 @@ def routed_candidates(scene: Scene, actor: str, obj: str, space: SkeletonSpace,
                                 via=(float(r.waypoints[k + 1][0]), float(r.waypoints[k + 1][1]))))
         skeletons.append(Skeleton(tuple(phases)))
     return routed, skeletons
-
-
-def route_settings(settings: ProgramSettings) -> ProgramSettings:
-    """``settings`` with :data:`ROUTE_SETTINGS` (straight, centred pushes)."""
-    return replace(settings, **ROUTE_SETTINGS)

@@ -12,9 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from robotplan.functionals.clearance import OBSTACLE_MARGIN
-from robotplan.program.arm_program import ARM_PROGRAM_SETTINGS, reach_check
+from robotplan.program.arm_program import reach_check
 from robotplan.program.chain_program import objects_touch
 from robotplan.program.settings import ProgramSettings
+from robotplan.program.settings import settings_for as program_settings
 from robotplan.program.skeleton import (
     Skeleton,
     SkeletonSpace,
@@ -26,7 +27,7 @@ from robotplan.program.skeleton import (
 from robotplan.program.solution import Solution
 from robotplan.scene import Scene
 from robotplan.search.planner import FEASIBLE, SearchResult, merge_results, search_push
-from robotplan.search.route import route_settings, routed_candidates
+from robotplan.search.route import routed_candidates
 
 __all__ = ["UnsupportedScene", "budget_spent", "candidate_table", "candidate_tiers",
            "check_supported", "metres", "search_scene", "settings_for"]
@@ -141,7 +142,8 @@ def _search_routes(scene: Scene, obj: str, actor: str, model_dir: Path,
               f"the obstacles ({routed.steps_per_phase} steps per phase)")
     if not skeletons:
         return routed, SearchResult(None)
-    return routed, search_push(scene, model_dir, skeletons, route_settings(settings), workers,
+    routes = program_settings("routes", base=settings)
+    return routed, search_push(scene, model_dir, skeletons, routes, workers,
                                progress, exhaustive, time_budget, routed)
 
 
@@ -169,8 +171,7 @@ def candidate_table(result: SearchResult) -> str:
 
 def settings_for(scene: Scene, solver: str = "snopt") -> ProgramSettings:
     """The program settings of a scene's actors: the arms' overlay, or the free pusher's."""
-    base = ARM_PROGRAM_SETTINGS if scene.robots else ProgramSettings()
-    return replace(base, solver=solver)
+    return program_settings(*(("arms",) if scene.robots else ()), solver=solver)
 
 
 def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: int = 2,

@@ -1,0 +1,72 @@
+"""H_F (eq. 5) as a row of a push program: the learned dynamics of an object pushed by an
+actor (a disc or another object), a cost on its mean squared residual or a bound on it."""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
+from robotplan.models.dynamics import PushDynamics
+from robotplan.program.bridge import bridge
+from robotplan.program.row_table import RowSpec
+from robotplan.program.rows import ProgramRows
+
+__all__ = ["DynamicsRows"]
+
+
+class DynamicsRows(ProgramRows):
+    """H_F rows of a program with ``model``, ``obj``/``Q1``, ``pusher``/``Q2`` and a
+    ``guess``."""
+
+    def _row_dynamics(self, spec: RowSpec) -> None:
+        """H_F (eq. 5) of the object pushed by the actor in every step."""
+        self.dynamics = self._add_dynamics(self.model, self.obj, self.Q1, self.pusher, self.Q2,
+                                           self.guess["q_obj"], spec.row)
+
+    def _add_dynamics(self, model: PushDynamics, obj, Q_obj: np.ndarray, actor,
+                      Q_actor: np.ndarray, path: np.ndarray, name: str) -> LearnedDynamics:
+        """H_F of ``obj`` (poses ``Q_obj (N+1, 3)``) pushed by ``actor`` (``Q_actor (N+1, 2)``
+        positions of a disc, or ``(N+1, 3)`` poses of an object) in every step, integrated
+        around ``path (N+1, ≥2)``, the object's guessed centres."""
+        s = self.settings
+        quad = phase_quadrature(torch.as_tensor(path[:, :2], dtype=torch.float32),
+                                obj.shape.bound_radius, self.scene.workspace,
+                                coarse=s.quad_coarse)
+        dynamics = LearnedDynamics(model, obj, actor, quad)
+        N, d = self.N, Q_actor.shape[1]
+        area = float(self.scene.workspace.size[0] * self.scene.workspace.size[1])
+        scale = 1e6 / area  # H (m²) → mean squared residual in mm²
+
+        def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
+            X1 = torch.from_numpy(x[:3 * (N + 1)].reshape(N + 1, 3))
+            X2 = torch.from_numpy(x[3 * (N + 1):].reshape(N + 1, d))
+            H, J1, J2 = dynamics.evaluate(X1, X2, jacobian=jac)
+            values = H.double().numpy() * scale
+            if not jac:
+                return values, None
+            J = np.zeros((N, (3 + d) * (N + 1)))
+            rows = np.arange(N)
+            J1n, J2n = J1.double().numpy() * scale, J2.double().numpy() * scale
+            for which in (0, 1):
+                states = rows + which
+                for k in range(3):
+                    J[rows, 3 * states + k] = J1n[:, which, k]
+                for k in range(d):
+                    J[rows, 3 * (N + 1) + d * states + k] = J2n[:, which, k]
+            return values, J
+
+        variables = np.concatenate((Q_obj.ravel(), Q_actor.ravel()))
+        if s.dynamics_weight > 0:
+            def total(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
+                values, J = fn(x, jac)
+                w = s.dynamics_weight
+                return (np.array([w * values.sum()]),
+                        None if J is None else w * J.sum(axis=0, keepdims=True))
+
+            self._add_cost(total, variables, name)
+            return dynamics
+        bound = (s.dynamics_rmse * 1e3) ** 2
+        self.prog.AddConstraint(bridge(fn, self.timings, name), np.zeros(N), np.full(N, bound),
+                                variables, name)
+        return dynamics

@@ -1,0 +1,75 @@
+"""The program's rows as data: the table in skeletons/rows.yaml and the settings overlays in
+skeletons/settings.yaml, and the one builder that reads them."""
+
+import pytest
+
+from robotplan import load_scene
+from robotplan.program import settings as settings_module
+from robotplan.program.push_program import PushProgram
+from robotplan.program.push_rows import ROW_BUILDERS
+from robotplan.program.row_table import load_rows, rows_for_stage
+from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings, settings_for
+from robotplan.program.skeleton import load_skeleton_space, parse_skeleton
+from tests.conftest import TASKS
+
+
+def test_every_row_of_the_table_has_a_builder_and_a_known_setting():
+    rows = load_rows()
+    assert rows and all(r.row in ROW_BUILDERS for r in rows)
+    for r in rows:
+        assert r.enabled is None or isinstance(getattr(DEFAULT_SETTINGS, r.enabled), bool)
+        assert set(r.bodies) <= {"object", "actor", "contact", "obstacles", "region"}
+    kinematic, learned = rows_for_stage(False), rows_for_stage(True)
+    assert "H_F" in [r.row for r in learned] and "H_F" not in [r.row for r in kinematic]
+    assert "sticking" in [r.row for r in kinematic] and "sticking" not in [r.row for r in learned]
+
+
+@pytest.mark.parametrize("learned", [False, True], ids=["kinematic", "learned"])
+def test_the_program_adds_the_rows_in_table_order(learned, monkeypatch):
+    """The builder follows the table: the rows it adds come in the table's order, and a row
+    left out of the table is left out of the program."""
+    scene = load_scene(TASKS / "obstacle_push.yaml")
+    sk = parse_skeleton("push@0", "pusher", "box")
+    added: list[str] = []
+    original = PushProgram.add_row
+
+    def spy(self, spec):
+        added.append(spec.row)
+        original(self, spec)
+
+    monkeypatch.setattr(PushProgram, "add_row", spy)
+    model = None
+    if learned:
+        from robotplan.base.resources import learned_dir
+        from robotplan.models.dynamics import load_model
+        model = load_model(learned_dir())
+    prog = PushProgram(scene, sk, model, load_skeleton_space(), ProgramSettings())
+    expected = [r.row for r in rows_for_stage(learned)]
+    assert added == expected
+    names = [b.evaluator().get_description() for b in prog.prog.GetAllConstraints()]
+    assert "H_coll" in names and "H_coll_wall" in names and "H_PoC" in names
+    assert names.index("H_coll") < names.index("H_PoC") < names.index("H_g")
+
+    without = tuple(r for r in load_rows() if r.row != "swept")
+    monkeypatch.setattr("robotplan.program.push_program.rows_for_stage",
+                        lambda learned: [r for r in without
+                                         if r.stage in ("both", "learned" if learned
+                                                        else "kinematic")])
+    prog = PushProgram(scene, sk, model, load_skeleton_space(), ProgramSettings())
+    assert "swept" not in {b.evaluator().get_description()
+                           for b in prog.prog.GetAllConstraints()}
+
+
+def test_settings_overlays_per_scene_class(tmp_path, monkeypatch):
+    arms = settings_for("arms")
+    assert arms.sparse_jacobians and not arms.turn_in_learned
+    assert arms.a_coll == DEFAULT_SETTINGS.a_coll
+    routes = settings_for("routes", base=arms, solver="ipopt")
+    assert routes.lever_weight == 100.0 and routes.sparse_jacobians and routes.solver == "ipopt"
+    bad = tmp_path / "settings.yaml"
+    for text, why in (("arms: {no_such: 1}", "not a program setting"),
+                      ("pets: {}", "not a scene class"),
+                      ("arms: {sparse_jacobians: 3}", "must be a bool")):
+        bad.write_text(text)
+        with pytest.raises(ValueError, match=why):
+            settings_module.load_overlays.__wrapped__(bad)
