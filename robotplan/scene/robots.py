@@ -135,7 +135,7 @@ def _tip_position(model: RobotModel, q: tuple[float, ...],
 class DrakeArm:
     """The same robot folder loaded into a Drake ``MultibodyPlant`` (base welded at ``base =
     (x, y, z, yaw)``): forward kinematics of the tip with exact gradients, for the programs
-    over joint angles. Agrees with pybullet's kinematics (tests/test_robot.py)."""
+    over joint angles. Agrees with pybullet's kinematics (tests/scene/test_robots.py)."""
 
     def __init__(self, model: RobotModel, base: tuple[float, float, float, float]
                  = (0.0, 0.0, 0.0, 0.0)) -> None:

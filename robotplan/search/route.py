@@ -12,7 +12,7 @@ initial guess, with phases long enough for the longest push.
 
 Straight pushes suit open-loop execution: a sphere pushing a face through the centroid
 moves a box straight in pybullet, while a push 2 mm off the centre turns it by 0.13 rad in
-0.3 m and 0.5 rad in 0.6 m (tests/test_route.py), an error no later push of the open-loop
+0.3 m and 0.5 rad in 0.6 m (tests/search/test_route.py), an error no later push of the open-loop
 plan sees. Routed programs therefore use the ``routes`` settings (``skeletons/settings.yaml``),
 and a route only takes
 directions in which the pusher can meet a face on the centroid's line

@@ -8,7 +8,7 @@ from robotplan.models.dynamics import load_model
 from robotplan.training.evaluation import evaluate_push
 from robotplan.training.model_card import record_heldout, write_model_card
 from robotplan.training.train import TrainConfig, train
-from tests.learned.conftest import TINY_SPEC
+from tests.conftest import TINY_SPEC
 
 
 def config(data, out, steps):

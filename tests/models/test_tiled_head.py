@@ -3,7 +3,7 @@ import torch
 
 from robotplan.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.models.tiled_head import TiledHead, tile_points
-from tests.learned.conftest import TINY_SPEC
+from tests.conftest import TINY_SPEC
 
 F64 = torch.float64
 

@@ -2,7 +2,7 @@ import pytest
 import torch
 
 from robotplan.models.dynamics import DynamicsSpec, PushDynamics, load_model, save_model
-from tests.learned.conftest import TINY_SPEC
+from tests.conftest import TINY_SPEC
 
 
 def test_paper_architecture_by_default():

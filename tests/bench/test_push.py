@@ -17,7 +17,7 @@ from robotplan.functionals.coverage import coverage
 from robotplan.program.skeleton import load_skeleton_space
 from robotplan.scene import parse_scene
 from robotplan.search.planner import order_candidates
-from tests.test_cli import run
+from tests.cli.test_main import run
 
 
 @pytest.mark.parametrize("kind", ["box", "lshape"])

@@ -6,8 +6,8 @@ import numpy as np
 
 from robotplan import load_scene
 from robotplan.training.diagnose import check_steps, summarize, table
+from tests.cli.test_main import run
 from tests.conftest import DATA, ROOT
-from tests.test_cli import run
 
 FLOW = ROOT / "learned" / "push_flow"
 
