@@ -19,9 +19,15 @@ def test_a_regular_install_solves_box_push_from_elsewhere(tmp_path):
     # and so its editable robotplan not read): robotplan itself only from the install
     site = next(p for p in sys.path if p.endswith("site-packages"))
     (next((venv / "lib").glob("python*")) / "site-packages" / "deps.pth").write_text(site)
-    pip = [str(venv / "bin" / "python"), "-m", "pip", "install", "-q", "--no-deps",
-           "--disable-pip-version-check", "--no-build-isolation", str(ROOT)]
-    subprocess.run(pip, check=True, cwd=tmp_path)
+    # the wheel is built here (this environment's setuptools, no download), as `pip install .`
+    # builds it, and installed there without its dependencies
+    wheels = tmp_path / "wheels"
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps",
+                    "--disable-pip-version-check", "--no-build-isolation", "-w", str(wheels),
+                    str(ROOT)], check=True, cwd=tmp_path)
+    (wheel,) = wheels.glob("robotplan-*.whl")
+    subprocess.run([str(venv / "bin" / "python"), "-m", "pip", "install", "-q", "--no-deps",
+                    "--disable-pip-version-check", str(wheel)], check=True, cwd=tmp_path)
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     shutil.copy(TASKS / "box_push.yaml", elsewhere)
