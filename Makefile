@@ -20,7 +20,7 @@ test-slow: setup
 	$(PY) -m pytest -m slow
 
 lint: setup
-	$(VENV)/bin/ruff check robotplan tests
+	$(VENV)/bin/ruff check robotplan tests tasks
 
 demo: setup
 	$(VENV)/bin/robotplan check tasks/*.yaml
