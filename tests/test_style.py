@@ -13,8 +13,8 @@ def test_ruff_clean():
     ruff = shutil.which("ruff") or str(ROOT / ".venv" / "bin" / "ruff")
     if not shutil.which(ruff):
         pytest.skip("ruff is not installed")
-    res = subprocess.run([ruff, "check", "robotplan", "tests", "tasks"], cwd=ROOT, capture_output=True,
-                         text=True)
+    res = subprocess.run([ruff, "check", "robotplan", "tests", "tasks"], cwd=ROOT,
+                         capture_output=True, text=True)
     assert res.returncode == 0, res.stdout + res.stderr
 
 
