@@ -26,7 +26,7 @@ from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import Solution
 from robotplan.program.solve import warm_guess
 from robotplan.scene import Scene
-from robotplan.search.planner import FEASIBLE, PLAUSIBLE_RMS_MM, SearchResult
+from robotplan.search.planner import FEASIBLE, PLAUSIBLE_RMS_MM, merge_results
 from robotplan.search.scene_search import (
     UnsupportedScene,
     candidate_table,
@@ -93,18 +93,12 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     if not result.solved and guesses is not None:  # the old skeleton is lost: search afresh
         again, more = search_scene(scene, model_dir, solver, workers, None, max_pushes,
                                    progress, exhaustive, quiet, time_budget)
-        result, spaces = _better(result, again), {**spaces, **more}
+        result, spaces = merge_results(result, again), {**spaces, **more}
     if not quiet:
         print(candidate_table(result))
     best = result.best
     return Plan(scene, obj, best, result.solved, result.candidates, result.seconds,
                 spaces.get(id(best)) if best is not None else None)
-
-
-def _better(a: SearchResult, b: SearchResult) -> SearchResult:
-    return SearchResult(min((r.best for r in (a, b) if r.best is not None),
-                            key=lambda s: (s.violation > FEASIBLE, s.violation, s.cost),
-                            default=None), a.candidates + b.candidates, a.seconds + b.seconds)
 
 
 def execute(planned: Plan, scene: Scene | None = None) -> Execution:
@@ -129,12 +123,19 @@ def execute(planned: Plan, scene: Scene | None = None) -> Execution:
     return ex
 
 
+def _object_tracks(planned: Plan, executed: Execution) -> tuple[dict, dict]:
+    """The moved objects' planned and simulated poses by name, each ``(N+1, 3)``."""
+    best, obj = planned.best, planned.obj
+    planned_poses = {obj: best.q_obj, **best.q_others}
+    simulated = {obj: executed.object_poses,
+                 **{k: v for k, v in executed.others.items() if k in planned_poses}}
+    return planned_poses, simulated
+
+
 def write_playback(planned: Plan, executed: Execution, path: Path) -> None:
     """The self-contained MeshCat page replaying the plan (ghosted) and its execution."""
     best, ex, scene = planned.best, executed, planned.scene
-    planned_poses = {planned.obj: best.q_obj, **best.q_others}
-    simulated = {planned.obj: ex.object_poses,
-                 **{k: v for k, v in ex.others.items() if k in planned_poses}}
+    planned_poses, simulated = _object_tracks(planned, executed)
     actor = scene.pushers[0].name if scene.pushers else None
     plan_tracks = {**planned_poses, **({actor: best.q_pusher} if actor else {})}
     executed_tracks = {**simulated, **({actor: ex.pusher_positions} if actor else {})}
@@ -145,9 +146,7 @@ def write_playback(planned: Plan, executed: Execution, path: Path) -> None:
 def execution_summary(planned: Plan, executed: Execution) -> dict:
     """The execution's entries of ``result.json``: outcome, planned and executed tracks."""
     best, ex, obj = planned.best, executed, planned.obj
-    planned_poses = {obj: best.q_obj, **best.q_others}
-    simulated = {obj: ex.object_poses,
-                 **{k: v for k, v in ex.others.items() if k in planned_poses}}
+    planned_poses, simulated = _object_tracks(planned, executed)
     final = {obj: ex.final_pose, **{k: v[-1] for k, v in ex.others.items()}}
     doc = {"execution": {"simulator": "pybullet", "mode": "open_loop",
                          "coverage": ex.coverage,
