@@ -11,6 +11,7 @@ earlier trajectories where they fit the skeleton's steps.
 from __future__ import annotations
 
 import json
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -18,10 +19,12 @@ import numpy as np
 
 from robotplan.base.files import write_atomically
 from robotplan.base.resources import learned_dir
-from robotplan.execution.execute import Execution, execute_arms, execute_push, reach_substeps
+from robotplan.execution.closed_loop import LoopSettings, execute_closed_loop
+from robotplan.execution.execute import Execution, plan_substeps, run_open_loop
+from robotplan.execution.perturb import Perturbation
+from robotplan.execution.scene_world import actuation
 from robotplan.execution.sim import PHYSICS
 from robotplan.functionals.clearance import OBSTACLE_MARGIN
-from robotplan.program.settings import ARM_PROGRAM_SETTINGS
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import Solution
 from robotplan.program.solve import warm_guess
@@ -34,12 +37,17 @@ from robotplan.search.scene_search import (
     metres,
     search_scene,
 )
+from robotplan.viz.viewer import Layer
 from robotplan.viz.viewer import write_playback as write_playback_html
 
 __all__ = ["Execution", "Plan", "UnsupportedScene", "execute", "plan", "solve",
            "write_playback"]
 
-STEP_SECONDS = 1.0 / 12.0  # a kept step of the push data: 20 × 1/240 s
+MODES = ("closed_loop", "open_loop")
+DEFAULT_LOOP = LoopSettings()
+# s of search per re-plan before it settles for the plans in hand (a fresh search goes on
+# until it has one)
+REPLAN_BUDGET = 20.0
 
 
 @dataclass
@@ -54,6 +62,8 @@ class Plan:
     candidates: list[Solution] = field(default_factory=list)
     seconds: float = 0.0
     space: SkeletonSpace | None = None
+    # how it was planned (model folder, solver, workers, max_pushes): re-plans plan alike
+    options: dict = field(default_factory=dict)
 
     def summary(self) -> dict:
         """The plan's entries of ``result.json``."""
@@ -74,13 +84,15 @@ class Plan:
 def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt",
          workers: int = 2, skeleton: str | Skeleton | None = None, max_pushes: int = 2,
          progress: bool = True, exhaustive: bool = False, quiet: bool = False,
-         time_budget: float | None = None, warm_start: Plan | None = None) -> Plan:
+         time_budget: float | None = None, warm_start: Plan | None = None,
+         fallback: bool = True) -> Plan:
     """Search the scene's skeletons and solve their programs; no simulator runs.
 
     ``model``: the learned dynamics' folder (default: the shipped F_flow). ``skeleton``: one
     skeleton (in the CLI's notation, or a ``Skeleton``) instead of the search.
     ``warm_start``: an earlier plan of this scene (at other poses): its skeleton is tried
-    first, from its trajectories; a fresh search follows when that does not solve.
+    first, from its trajectories; a fresh search follows when that does not solve (unless
+    ``fallback`` is False).
     """
     model_dir = Path(model) if model is not None else learned_dir("push_flow")
     guesses = None
@@ -90,7 +102,7 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     obj, _actors = check_supported(scene)
     result, spaces = search_scene(scene, model_dir, solver, workers, skeleton, max_pushes,
                                   progress, exhaustive, quiet, time_budget, guesses)
-    if not result.solved and guesses is not None:  # the old skeleton is lost: search afresh
+    if not result.solved and guesses is not None and fallback:  # the old skeleton is lost
         again, more = search_scene(scene, model_dir, solver, workers, None, max_pushes,
                                    progress, exhaustive, quiet, time_budget)
         result, spaces = merge_results(result, again), {**spaces, **more}
@@ -98,81 +110,136 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
         print(candidate_table(result))
     best = result.best
     return Plan(scene, obj, best, result.solved, result.candidates, result.seconds,
-                spaces.get(id(best)) if best is not None else None)
+                spaces.get(id(best)) if best is not None else None,
+                {"model": model_dir, "solver": solver, "workers": workers,
+                 "max_pushes": max_pushes})
 
 
-def execute(planned: Plan, scene: Scene | None = None) -> Execution:
-    """Run the best plan open loop in pybullet (paper §7.2.3) in ``scene`` (default: the
-    plan's); reaches run slower than the data's pushes (see ``reach_substeps``)."""
+def execute(planned: Plan, scene: Scene | None = None, *, mode: str = "closed_loop",
+            perturb: Perturbation | None = None, loop: LoopSettings = DEFAULT_LOOP,
+            quiet: bool = True) -> Execution:
+    """Run the best plan in pybullet in ``scene`` (default: the plan's).
+
+    ``mode="closed_loop"`` observes the scene after every planned step and calls
+    :func:`plan` again from the observed state when it departs from the plan
+    (:mod:`robotplan.execution.closed_loop`); ``"open_loop"`` runs the plan as it is, the
+    paper's protocol (§7.2.3). Reaches run slower than the data's pushes (see
+    ``plan_substeps``). ``perturb``: friction, mass and observation noise of a perturbed
+    world. ``quiet=False`` prints a line per re-plan."""
     if planned.best is None:
         raise ValueError("nothing to execute: the plan has no solution")
+    if mode not in MODES:
+        raise ValueError(f"mode {mode!r}: expected one of {', '.join(MODES)}")
     scene = scene or planned.scene
     best, obj = planned.best, planned.obj
-    steps = len(best.q_pusher) - 1
-    T = steps // len(best.skeleton.phases)
-    push = np.array([best.skeleton.phases[t // T].mode == "push" for t in range(steps)])
-    if scene.robots:
-        slow = round(ARM_PROGRAM_SETTINGS.reach_slowdown)
-        substeps = [PHYSICS.keep_every * (1 if p else slow) for p in push]
-        ex = execute_arms(scene, obj, best.q_joints, substeps)
-    else:
-        substeps = reach_substeps(best.q_pusher, push)
-        ex = execute_push(scene, obj, scene.pushers[0].name, best.q_pusher, substeps=substeps)
-    times = np.concatenate(([0.0], np.cumsum(substeps) / PHYSICS.keep_every * STEP_SECONDS))
-    ex.times = times
-    return ex
+    physics = perturb.physics() if perturb is not None else PHYSICS
+    if mode == "open_loop":
+        return run_open_loop(scene, obj, actuation(scene, best.q_pusher, best.q_joints),
+                             plan_substeps(scene, best, physics), physics)
+    return execute_closed_loop(scene, obj, best, _replanner(planned), loop, physics,
+                               perturb.observer() if perturb is not None else None,
+                               None if quiet else print)
 
 
-def _object_tracks(planned: Plan, executed: Execution) -> tuple[dict, dict]:
-    """The moved objects' planned and simulated poses by name, each ``(N+1, 3)``."""
-    best, obj = planned.best, planned.obj
-    planned_poses = {obj: best.q_obj, **best.q_others}
-    simulated = {obj: executed.object_poses,
-                 **{k: v for k, v in executed.others.items() if k in planned_poses}}
-    return planned_poses, simulated
+def _replanner(planned: Plan):
+    """:func:`plan` from an observed scene, as ``planned`` was made, warm started from the
+    current plan's ``tail`` (None: a fresh search), a fresh search following when the tail
+    does not solve only if ``fresh``."""
+    options = dict(planned.options)
+    model = options.pop("model", None)
+
+    def replan(observed: Scene, tail: Solution | None, fresh: bool) -> Plan:
+        warm = Plan(observed, planned.obj, tail, True) if tail is not None else None
+        return plan(observed, model, **options, progress=False, quiet=True,
+                    time_budget=REPLAN_BUDGET, warm_start=warm, fallback=fresh)
+
+    return replan
+
+
+def _plan_layer(scene: Scene, obj: str, sol: Solution, start: float, name: str,
+                shown: tuple[float, float | None] | None) -> Layer:
+    """A plan as a ghosted playback layer from ``start`` s on."""
+    times = start + np.concatenate(([0.0], np.cumsum(plan_substeps(scene, sol)))) * (
+        PHYSICS.timestep)
+    tracks = {obj: sol.q_obj, **sol.q_others}
+    if scene.pushers and not scene.robots:
+        tracks[scene.pushers[0].name] = sol.q_pusher
+    return Layer(name, times, tracks, sol.q_joints, ghost=True, shown=shown)
+
+
+def playback_layers(planned: Plan, executed: Execution) -> list[Layer]:
+    """The executed motion and every plan it followed (the first, then each re-plan), each
+    plan shown from when it was made until the next one."""
+    scene, obj, ex = planned.scene, planned.obj, executed
+    plans = ex.plans or [(0, planned.best)]
+    starts = [float(ex.times[step]) for step, _ in plans]
+    layers = []
+    for k, (_step, sol) in enumerate(plans):
+        until = starts[k + 1] if k + 1 < len(plans) else None
+        shown = (starts[k], until) if len(plans) > 1 else None
+        layers.append(_plan_layer(scene, obj, sol, starts[k], "plan" if k == 0
+                                  else f"replan_{k}", shown))
+    tracks = {obj: ex.object_poses, **{k: v for k, v in ex.others.items()}}
+    if scene.pushers and not scene.robots:
+        tracks[scene.pushers[0].name] = ex.pusher_positions
+    layers.append(Layer("executed", ex.times, tracks, ex.joints, ghost=False))
+    return layers
 
 
 def write_playback(planned: Plan, executed: Execution, path: Path) -> None:
-    """The self-contained MeshCat page replaying the plan (ghosted) and its execution."""
-    best, ex, scene = planned.best, executed, planned.scene
-    planned_poses, simulated = _object_tracks(planned, executed)
-    actor = scene.pushers[0].name if scene.pushers else None
-    plan_tracks = {**planned_poses, **({actor: best.q_pusher} if actor else {})}
-    executed_tracks = {**simulated, **({actor: ex.pusher_positions} if actor else {})}
-    write_playback_html(scene, Path(path), plan_tracks, executed_tracks,
-                        joints=(best.q_joints, ex.joints), times=executed.times)
+    """The self-contained MeshCat page replaying the execution with its plans ghosted."""
+    write_playback_html(planned.scene, Path(path), playback_layers(planned, executed))
 
 
-def execution_summary(planned: Plan, executed: Execution) -> dict:
-    """The execution's entries of ``result.json``: outcome, planned and executed tracks."""
-    best, ex, obj = planned.best, executed, planned.obj
-    planned_poses, simulated = _object_tracks(planned, executed)
+def _track_doc(sol: Solution, scene: Scene, obj: str) -> dict:
+    times = np.concatenate(([0.0], np.cumsum(plan_substeps(scene, sol)))) * PHYSICS.timestep
+    doc = {"t": [round(float(v), 6) for v in times], "skeleton": sol.skeleton.describe(),
+           "pusher": sol.q_pusher.tolist(),
+           "objects": {obj: sol.q_obj.tolist(), **{k: v.tolist() for k, v in sol.q_others.items()}},
+           "contact_points": sol.contact.tolist(),
+           "joints": {k: v.tolist() for k, v in sol.q_joints.items()}}
+    if sol.contact_others:
+        doc["object_contact_points"] = {k: v.tolist() for k, v in sol.contact_others.items()}
+    return doc
+
+
+def execution_summary(planned: Plan, executed: Execution,
+                      perturb: Perturbation | None = None) -> dict:
+    """The execution's entries of ``result.json``: mode and outcome, every re-plan, the
+    planned trajectories (the first plan and each adopted re-plan) and the executed ones."""
+    ex, obj = executed, planned.obj
     final = {obj: ex.final_pose, **{k: v[-1] for k, v in ex.others.items()}}
-    doc = {"execution": {"simulator": "pybullet", "mode": "open_loop",
+    plans = ex.plans or [(0, planned.best)]
+    tracks = []
+    for step, sol in plans:
+        track = _track_doc(sol, planned.scene, obj)
+        tracks.append({"step": step, "time": round(float(ex.times[step]), 4), **track})
+    doc = {"execution": {"simulator": "pybullet", "mode": ex.mode,
                          "coverage": ex.coverage,
                          "final_poses": {k: [float(x) for x in v] for k, v in final.items()},
                          "touch_distance": ex.touch_distance,
                          "obstacle_contact": ex.obstacle_contact,
-                         "forbidden_contacts": ex.forbidden_contacts},
-           "trajectory": {"t": [round(float(v), 6) for v in executed.times],
-                          "pusher": best.q_pusher.tolist(),
-                          "objects": {k: v.tolist() for k, v in planned_poses.items()},
-                          "contact_points": best.contact.tolist(),
-                          "joints": {k: v.tolist() for k, v in best.q_joints.items()}},
-           "executed": {"pusher": ex.pusher_positions.tolist(),
-                        "objects": {k: v.tolist() for k, v in simulated.items()},
+                         "forbidden_contacts": ex.forbidden_contacts,
+                         "replans": [r.as_dict() for r in ex.replans],
+                         "perturbation": perturb.describe() if perturb else None},
+           "trajectory": {k: v for k, v in tracks[0].items() if k not in ("step", "time")},
+           "replanned": tracks[1:],
+           "executed": {"t": [round(float(v), 6) for v in ex.times],
+                        "pusher": ex.pusher_positions.tolist(),
+                        "objects": {obj: ex.object_poses.tolist(),
+                                    **{k: v.tolist() for k, v in ex.others.items()}},
                         "joints": {k: v.tolist() for k, v in ex.joints.items()},
                         "tips": {k: v.tolist() for k, v in ex.tips.items()}}}
-    if best.contact_others:
-        doc["trajectory"]["object_contact_points"] = {
-            k: v.tolist() for k, v in best.contact_others.items()}
     return doc
 
 
 def solve(scene: Scene, out: Path, model: str | Path | None = None, *, quiet: bool = False,
-          **options: object) -> dict:
-    """Plan, execute the best plan, write ``out/playback.html`` and ``out/result.json``
-    (whole or not at all); the result document. ``options``: those of :func:`plan`."""
+          mode: str = "closed_loop", perturb: Perturbation | None = None,
+          compare_open_loop: bool = False, **options: object) -> dict:
+    """Plan, execute the best plan (``mode``, in a world perturbed by ``perturb``), write
+    ``out/playback.html`` and ``out/result.json`` (whole or not at all); the result
+    document. ``compare_open_loop`` also runs the same plan open loop and records its
+    outcome under ``open_loop``. ``options``: those of :func:`plan`."""
     out = Path(out)
     planned = plan(scene, model, quiet=quiet, **options)
     doc: dict = {"scene": scene.name, **planned.summary()}
@@ -181,8 +248,16 @@ def solve(scene: Scene, out: Path, model: str | Path | None = None, *, quiet: bo
         if not quiet and best.q_others:
             print(f"plan: {' and '.join([planned.obj, *best.q_others])} pushed by "
                   f"{best.skeleton.phases[0].actor}; executing in pybullet")
-        executed = execute(planned)
-        doc.update(execution_summary(planned, executed))
+        t0 = time.perf_counter()
+        executed = execute(planned, mode=mode, perturb=perturb, quiet=quiet)
+        doc.update(execution_summary(planned, executed, perturb))
+        doc["execution"]["seconds"] = round(time.perf_counter() - t0, 2)
+        if compare_open_loop:
+            t0 = time.perf_counter()
+            baseline = execute(planned, mode="open_loop", perturb=perturb)
+            doc["open_loop"] = {"coverage": baseline.coverage,
+                                "touch_distance": baseline.touch_distance,
+                                "seconds": round(time.perf_counter() - t0, 2)}
         write_playback(planned, executed, out / "playback.html")
         doc["playback"] = "playback.html"
         doc["candidates"] = [{"skeleton": s.skeleton.describe(), "violation": s.violation,

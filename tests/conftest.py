@@ -45,3 +45,13 @@ def tiny_push_data(tmp_path_factory) -> Path:
 
 
 TINY_SPEC = {"channels": (2, 2, 2), "sdf_features": 8, "point_features": 8, "hidden": (16, 16)}
+
+
+def playback_commands(html: str) -> list[bytes]:
+    """The MeshCat commands a written playback page replays, as packed bytes (their paths
+    and mesh data appear verbatim in them)."""
+    import base64
+    import re
+
+    return [base64.b64decode(m) for m in
+            re.findall(r'fetch\("data:application/octet-binary;base64,([^"]+)"\)', html)]

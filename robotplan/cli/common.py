@@ -37,3 +37,24 @@ def device_name(name: str) -> str:
     if name == "auto":
         return "cuda" if torch.cuda.is_available() else "cpu"
     return name
+
+
+def add_execution_options(parser) -> None:
+    """How a plan is executed: closed loop (default) or the paper's open loop, in the
+    nominal world or a perturbed one."""
+    parser.add_argument("--open-loop", action="store_true",
+                        help="execute the plan as it is, without re-planning (the paper's "
+                        "protocol); default: closed loop, re-planning from the observed scene")
+    parser.add_argument("--perturb", type=int, nargs="?", const=0, default=None,
+                        metavar="SEED", help="execute in a perturbed world: friction and "
+                        "mass ±20 %%, observation noise 1 mm / 0.5°, drawn from SEED "
+                        "(default 0)")
+
+
+def perturbation(seed: int | None):
+    """The perturbed world of ``--perturb SEED`` (None without it)."""
+    if seed is None:
+        return None
+    from robotplan.execution.perturb import Perturbation
+
+    return Perturbation(seed)

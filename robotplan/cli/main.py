@@ -12,7 +12,7 @@ import sys
 
 from robotplan.base.memory import keep_freed_memory
 from robotplan.base.resources import learned_dir, tasks_dir
-from robotplan.cli.common import EXIT_BAD_INPUT
+from robotplan.cli.common import EXIT_BAD_INPUT, add_execution_options
 from robotplan.cli.model_commands import (
     cmd_bench,
     cmd_bench_functional,
@@ -67,13 +67,17 @@ def _parser() -> argparse.ArgumentParser:
     bp.add_argument("--model", default=str(learned_dir("push_flow")), metavar="DIR")
     bp.add_argument("--shapes", default="box,lshape",
                     help="comma-separated: box, lshape, ood (unseen footprints: triangle, "
-                    "pentagon, hexagon, circle, T, cross, U, trapezoid)")
+                    "pentagon, hexagon, circle, T, cross, U, trapezoid), pose (a box or a "
+                    "T-shape to a target pose turned 30–90°)")
     bp.add_argument("--workers", type=int, default=2)
     bp.add_argument("--exhaustive", action="store_true", help="solve every skeleton")
     bp.add_argument("--time-budget", type=float, default=None, metavar="S",
                     help="per scene: start no program after S seconds (best so far wins)")
     bp.add_argument("--overwrite", action="store_true")
     bp.add_argument("--json", action="store_true")
+    bp.add_argument("--perturb", type=int, nargs="?", const=0, default=None, metavar="SEED",
+                    help="execute in a perturbed world (friction and mass ±20 %%, observation "
+                    "noise 1 mm / 0.5°), drawn per scene from SEED (default 0)")
     bp.set_defaults(run=cmd_bench_push)
 
     default_model = str(learned_dir("push_flow"))
@@ -90,6 +94,7 @@ def _parser() -> argparse.ArgumentParser:
                     help="solve every candidate skeleton (default: stop at the first good one)")
     so.add_argument("--time-budget", type=float, default=None, metavar="S",
                     help="start no program after S seconds; the best so far wins")
+    add_execution_options(so)
     so.set_defaults(run=cmd_solve)
 
     dg = sub.add_parser("diagnose", help="a plan's push steps against one-step pybullet and "

@@ -108,9 +108,10 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
     if args.scenes < 1:
         print("error: --scenes: must be at least 1", file=sys.stderr)
         return EXIT_BAD_INPUT
-    bad = set(args.shapes.split(",")) - {"box", "lshape", "ood"}
+    bad = set(args.shapes.split(",")) - {"box", "lshape", "ood", "pose"}
     if bad:
-        print(f"error: --shapes: unknown shape type {sorted(bad)[0]!r} (box, lshape, ood)",
+        print(f"error: --shapes: unknown shape type {sorted(bad)[0]!r} (box, lshape, ood, "
+              "pose)",
               file=sys.stderr)
         return EXIT_BAD_INPUT
     out = Path(args.out)
@@ -123,15 +124,22 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
         for name in ("summary.json", "rows.jsonl", "results.csv", "coverage.png"):
             (out / name).unlink(missing_ok=True)
     summary = run_bench_push(args.scenes, args.seed, out, Path(args.model), args.workers,
-                             tuple(args.shapes.split(",")), args.exhaustive, args.time_budget)
+                             tuple(args.shapes.split(",")), args.exhaustive, args.time_budget,
+                             args.perturb)
     if args.json:
         print(json.dumps(summary))
     else:
         for kind, q in summary["coverage"].items():
+            o = summary["open_loop_coverage"][kind]
             t = summary["plan_seconds"][kind]
-            print(f"{kind:>7}: coverage median {q['median']:.3f} (quartiles {q['q1']:.3f}–"
-                  f"{q['q3']:.3f}, min {q['min']:.3f}, n={q['n']}); plan time median "
-                  f"{t['median']:.1f} s (quartiles {t['q1']:.1f}–{t['q3']:.1f})")
+            r = summary["replans"][kind]
+            c, w = summary["closed_loop_seconds"][kind], summary["open_loop_seconds"][kind]
+            print(f"{kind:>7}: coverage median closed loop {q['median']:.3f} (quartiles "
+                  f"{q['q1']:.3f}–{q['q3']:.3f}, min {q['min']:.3f}), open loop "
+                  f"{o['median']:.3f} ({o['q1']:.3f}–{o['q3']:.3f}, min {o['min']:.3f}), "
+                  f"n={q['n']}; re-plans per scene median {r['median']:.0f}; plan time median "
+                  f"{t['median']:.1f} s; plan + execution median {c['median']:.1f} s closed, "
+                  f"{w['median']:.1f} s open loop")
         prof = summary["time_profile"]
         if prof["candidate_seconds"]:
             top = ", ".join(f"{k} {100 * v:.0f} %" for k, v in list(prof["share"].items())[:6])

@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from robotplan.cli.common import EXIT_BAD_INPUT, not_a_model, print_result
+from robotplan.cli.common import EXIT_BAD_INPUT, not_a_model, perturbation, print_result
 from robotplan.scene import SceneError, load_scene
 
 __all__ = ["cmd_check", "cmd_diagnose", "cmd_render", "cmd_solve", "cmd_view"]
@@ -59,7 +59,9 @@ def cmd_solve(args: argparse.Namespace) -> int:
     try:
         doc = solve(scene, out, Path(args.model), solver=args.solver, workers=args.workers,
                     skeleton=args.skeleton, max_pushes=args.max_pushes,
-                    exhaustive=args.exhaustive, time_budget=args.time_budget)
+                    exhaustive=args.exhaustive, time_budget=args.time_budget,
+                    mode="open_loop" if args.open_loop else "closed_loop",
+                    perturb=perturbation(args.perturb))
     except UnsupportedScene as err:
         print(f"error: {args.scene}: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -67,8 +69,10 @@ def cmd_solve(args: argparse.Namespace) -> int:
         print(f"error: --skeleton: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
     ex = doc.get("execution") or {}
+    loop = (f" ({ex['mode'].replace('_', ' ')}, {len(ex['replans'])} re-plans)" if ex else "")
     print(f"{doc['status']}: violation {doc['violation']:.3g}, coverage in pybullet "
-          f"{ex.get('coverage')}, plan {doc['plan_seconds']} s; wrote {out / 'result.json'}"
+          f"{ex.get('coverage')}{loop}, plan {doc['plan_seconds']} s; "
+          f"wrote {out / 'result.json'}"
           + (f" and {out / 'playback.html'}" if "playback" in doc else ""))
     return 0 if doc["status"] == "solved" else 1
 

@@ -1,6 +1,7 @@
-"""Open-loop execution of a push plan in pybullet (paper §7.2.3): the pusher follows the
-planned positions with ``keep_every`` (20) linear interpolation steps between consecutive
-ones, in the same world as the push data; the result comes from the simulator alone.
+"""Execution of a push plan in pybullet: open loop as in the paper (§7.2.3), where the
+actors follow the planned states with ``keep_every`` (20) linear interpolation steps
+between consecutive ones, in the same world as the push data; the result comes from the
+simulator alone.
 
 Free moves (reach steps, where the plan holds the object still) are not bound to the
 data's speeds in the program and can be long (up to 60 cm a step); squeezed into 20
@@ -10,39 +11,43 @@ the object it was meant to pass. They run at most ``REACH_SPEED`` per kept step 
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from robotplan.execution.sim import PHYSICS, Physics, PushWorld
+from robotplan.execution.scene_world import Observation, SceneWorld, obstacle_bodies
+from robotplan.execution.sim import PHYSICS, Physics
 from robotplan.functionals.coverage import coverage
+from robotplan.program.settings import ARM_PROGRAM_SETTINGS
+from robotplan.program.solution import Solution
 from robotplan.scene import Scene
 
-__all__ = ["REACH_SPEED", "Execution", "execute_arms", "execute_push", "reach_substeps"]
+__all__ = ["REACH_SPEED", "STEP_SECONDS", "Execution", "execute_arms", "execute_push",
+           "obstacle_bodies", "outcome", "plan_substeps", "reach_substeps", "recorded",
+           "run_open_loop"]
 
-OBSTACLE_GAP = 0.001  # m: closer than this counts as the object touching an obstacle
 REACH_SPEED = 0.03  # m per kept step (20 × 1/240 s) in free moves: the data's top push speed
+STEP_SECONDS = PHYSICS.keep_every * PHYSICS.timestep  # a kept step of the push data
 
 
 @dataclass
 class Execution:
-    object_poses: np.ndarray  # (N+1, 3) at the planned steps
-    pusher_positions: np.ndarray  # (N+1, 2)
+    object_poses: np.ndarray  # (M+1, 3) after each executed step
+    pusher_positions: np.ndarray  # (M+1, 2)
     final_pose: np.ndarray  # (3,)
     coverage: float | None
     touch_distance: float | None
-    tips: dict = field(default_factory=dict)  # robot → (N+1, 3) tip centres
-    joints: dict = field(default_factory=dict)  # robot → (N+1, dof) measured joint angles
+    tips: dict = field(default_factory=dict)  # robot → (M+1, 3) tip centres
+    joints: dict = field(default_factory=dict)  # robot → (M+1, dof) measured joint angles
     obstacle_contact: bool = False  # the object touched an obstacle (within 1 mm) at any step
-    others: dict = field(default_factory=dict)  # other object → (N+1, 3) poses
+    others: dict = field(default_factory=dict)  # other object → (M+1, 3) poses
     # objects outside the pusher's ``touches`` that it touched at some simulation step
     forbidden_contacts: list = field(default_factory=list)
-    times: np.ndarray | None = None  # (N+1,) s of the planned steps, where the caller set them
-
-
-def obstacle_bodies(scene: Scene) -> list:
-    return [(o.shape, o.height, o.pose) for o in scene.obstacles]
+    times: np.ndarray | None = None  # (M+1,) s of the executed steps
+    mode: str = "open_loop"
+    replans: list = field(default_factory=list)  # robotplan.execution.closed_loop.Replan
+    # (step, Solution): the plans executed, each from the executed step it started at
+    plans: list = field(default_factory=list)
 
 
 def reach_substeps(q_pusher: np.ndarray, push_step: np.ndarray, physics: Physics = PHYSICS
@@ -56,45 +61,91 @@ def reach_substeps(q_pusher: np.ndarray, push_step: np.ndarray, physics: Physics
             for push, k in zip(push_step, slow, strict=True)]
 
 
+def plan_substeps(scene: Scene, sol: Solution, physics: Physics = PHYSICS) -> list[int]:
+    """Simulation steps of each planned step of ``sol``: a push step as the data
+    (``keep_every``); a free pusher's reach step slowed to ``REACH_SPEED``, an arm's
+    ``reach_slowdown`` times (the program lets its joints move that much more)."""
+    steps = len(sol.q_pusher) - 1
+    T = steps // len(sol.skeleton.phases)
+    push = np.array([sol.skeleton.phases[t // T].mode == "push" for t in range(steps)])
+    if scene.robots:
+        slow = round(ARM_PROGRAM_SETTINGS.reach_slowdown)
+        return [physics.keep_every * (1 if p else slow) for p in push]
+    return reach_substeps(sol.q_pusher, push, physics)
+
+
+def run_open_loop(scene: Scene, obj: str, drive: dict[str, np.ndarray], substeps: list[int],
+                  physics: Physics = PHYSICS) -> Execution:
+    """Drive the actors along ``drive`` (actor → ``(N+1, d)`` states: the free pusher's
+    positions or each arm's joints) open loop, step t over ``substeps[t−1]`` simulation
+    steps, with every object of the scene in the world (``obj`` first)."""
+    with SceneWorld(scene, obj, physics) as world:
+        seen = [world.observe()]
+        for t, n in enumerate(substeps, start=1):
+            world.run_step({k: v[t - 1] for k, v in drive.items()},
+                           {k: v[t] for k, v in drive.items()}, n)
+            seen.append(world.observe())
+        return recorded(scene, obj, seen, world.obstacle_contact, sorted(world.forbidden),
+                        substeps, physics)
+
+
 def execute_push(scene: Scene, obj: str, pusher: str, q_pusher: np.ndarray,
                  physics: Physics = PHYSICS, substeps: list[int] | None = None) -> Execution:
-    """Run the planned pusher positions ``q_pusher (N+1, 2)`` open loop, with every object
-    of the scene in the world (``obj`` first); coverage is the goal object's. Step t
-    interpolates linearly over ``substeps[t−1]`` simulation steps (default ``keep_every``
-    each; see :func:`reach_substeps`)."""
-    body, tool = scene.bodies[obj], scene.bodies[pusher]
-    spec = next(o for o in scene.objects if o.name == obj)
-    others = [o for o in scene.objects if o.name != obj]
-    allowed = next(p.touches for p in scene.pushers if p.name == pusher)
-    watch = [i for i, o in enumerate(others) if allowed is not None and o.name not in allowed]
-    with PushWorld(physics) as world:
-        world.reset(body.shape, spec.height, body.pose, tool.shape.radius, tool.pose[:2],
-                    obstacle_bodies(scene), [(scene.bodies[o.name].shape, o.height,
-                                         scene.bodies[o.name].pose) for o in others])
-        poses = [world.object_pose()[0]]
-        other_poses = [world.other_poses()]
-        pushers = [world.pusher_position()]
-        hit, forbidden = False, set()
-        if substeps is None:
-            substeps = [physics.keep_every] * (len(q_pusher) - 1)
-        for (a, b), n in zip(itertools.pairwise(q_pusher), substeps, strict=True):
-            for s in range(1, n + 1):
-                world.step(tuple(a + (b - a) * s / n))
-                hit = hit or world.touches_obstacle(OBSTACLE_GAP)
-                forbidden.update(others[i].name for i in watch if world.pusher_touches_other(i))
-            poses.append(world.object_pose()[0])
-            other_poses.append(world.other_poses())
-            pushers.append(world.pusher_position())
-    by_name = {o.name: np.array([p[i] for p in other_poses]) for i, o in enumerate(others)}
+    """Run the planned pusher positions ``q_pusher (N+1, 2)`` open loop; coverage is the
+    goal object's. Step t takes ``substeps[t−1]`` simulation steps (default
+    ``keep_every`` each; see :func:`reach_substeps`)."""
+    if substeps is None:
+        substeps = [physics.keep_every] * (len(q_pusher) - 1)
+    return run_open_loop(scene, obj, {pusher: np.asarray(q_pusher)[:, :2]}, substeps, physics)
+
+
+def execute_arms(scene: Scene, obj: str, q_joints: dict[str, np.ndarray],
+                 step_substeps: list[int], physics: Physics = PHYSICS) -> Execution:
+    """Run planned joint trajectories ``q_joints[robot] (N+1, dof)`` open loop: every arm's
+    joint targets move linearly from state t−1 to t over ``step_substeps[t−1]`` simulation
+    steps (20 for a push step, as the data)."""
+    return run_open_loop(scene, obj, {k: np.asarray(v, dtype=float) for k, v in q_joints.items()},
+                         step_substeps, physics)
+
+
+def recorded(scene: Scene, obj: str, seen: list[Observation], obstacle_contact: bool,
+             forbidden: list[str], substeps: list[int], physics: Physics = PHYSICS
+             ) -> Execution:
+    """The execution of the observed states ``seen`` (one per executed step, the start
+    first). ``pusher_positions`` are the free pusher's, or the tips of the arm that touches
+    the goal's object last (the touch goal's, else the one nearest at the end)."""
+    poses = np.array([s.poses[obj] for s in seen])
+    others = {name: np.array([s.poses[name] for s in seen])
+              for name in seen[0].poses if name != obj}
+    tips = {name: np.array([s.tips[name] for s in seen]) for name in seen[0].tips}
+    joints = {name: np.array([s.joints[name] for s in seen]) for name in seen[0].joints}
     goal_obj = getattr(scene.goal, "object", obj)
-    final = poses[-1] if goal_obj == obj else by_name[goal_obj][-1]
-    cov, touch = _outcome(scene, scene.bodies[goal_obj], final, pushers[-1], tool.shape.radius)
-    return Execution(np.array(poses), np.array(pushers), poses[-1], cov, touch,
-                     obstacle_contact=hit, others=by_name, forbidden_contacts=sorted(forbidden))
+    final = seen[-1].poses[goal_obj]
+    body = scene.bodies[goal_obj]
+    if seen[0].pusher is not None:
+        pusher = np.array([s.pusher for s in seen])
+        radius = scene.pushers[0].radius
+    else:
+        last = _last_arm(scene, body, final, tips)
+        pusher, radius = tips[last][:, :2], scene.bodies[last].shape.radius
+    cov, touch = outcome(scene, body, final, pusher[-1], radius)
+    steps = np.asarray(substeps, dtype=float) * physics.timestep
+    return Execution(poses, pusher, poses[-1], cov, touch, tips, joints, obstacle_contact,
+                     others, forbidden, np.concatenate(([0.0], np.cumsum(steps))))
 
 
-def _outcome(scene: Scene, body, final: np.ndarray, tip_xy: np.ndarray, radius: float
-             ) -> tuple[float | None, float | None]:
+def _last_arm(scene: Scene, body, final: np.ndarray, tips: dict[str, np.ndarray]) -> str:
+    if scene.goal.type == "touch":
+        return scene.goal.actor
+    import torch
+
+    gaps = {k: float(body.sdf(torch.tensor(v[-1:, :2]), torch.tensor(final))[0])
+            for k, v in tips.items()}
+    return min(gaps, key=gaps.get)
+
+
+def outcome(scene: Scene, body, final: np.ndarray, tip_xy: np.ndarray, radius: float
+            ) -> tuple[float | None, float | None]:
     """Coverage of the goal region, or the gap (m) between the touching tip and the object."""
     if scene.goal_region is not None:
         return coverage(body, final, scene.goal_region), None
@@ -103,48 +154,3 @@ def _outcome(scene: Scene, body, final: np.ndarray, tip_xy: np.ndarray, radius: 
     gap = body.sdf(torch.tensor(np.asarray(tip_xy, dtype=float)[None]),
                    torch.tensor(np.asarray(final, dtype=float)))
     return None, max(0.0, float(gap[0]) - radius)
-
-
-def execute_arms(scene: Scene, obj: str, q_joints: dict[str, np.ndarray],
-                 step_substeps: list[int], physics: Physics = PHYSICS) -> Execution:
-    """Run planned joint trajectories ``q_joints[robot] (N+1, dof)`` open loop: every arm's
-    joint targets move linearly from state t−1 to t over ``step_substeps[t−1]`` simulation
-    steps (20 for a push step, as the data). ``pusher_positions`` are the tips of the arm
-    that touches the object last (the touch goal's, else the one nearest at the end)."""
-    from robotplan.execution.sim_arms import add_arm
-
-    body = scene.bodies[obj]
-    spec = next(o for o in scene.objects if o.name == obj)
-    with PushWorld(physics) as world:
-        world.reset(body.shape, spec.height, body.pose, None, obstacles=obstacle_bodies(scene))
-        hit = False
-        arms = {r.name: add_arm(world, r) for r in scene.robots}
-        poses = [world.object_pose()[0]]
-        tips = {name: [arm.tip_position()] for name, arm in arms.items()}
-        angles = {name: [arm.joint_angles()] for name, arm in arms.items()}
-        for t, substeps in enumerate(step_substeps, start=1):
-            for s in range(1, substeps + 1):
-                for name, arm in arms.items():
-                    a, b = q_joints[name][t - 1], q_joints[name][t]
-                    arm.drive(a + (b - a) * s / substeps)
-                world.pb.stepSimulation(physicsClientId=world.client)
-                hit = hit or world.touches_obstacle(OBSTACLE_GAP)
-            poses.append(world.object_pose()[0])
-            for name, arm in arms.items():
-                tips[name].append(arm.tip_position())
-                angles[name].append(arm.joint_angles())
-    final = poses[-1]
-    tips = {k: np.array(v) for k, v in tips.items()}
-    goal = scene.goal
-    if goal.type == "touch":
-        last = goal.actor
-    else:
-        import torch
-
-        gaps = {k: float(body.sdf(torch.tensor(v[-1:, :2]), torch.tensor(final))[0])
-                for k, v in tips.items()}
-        last = min(gaps, key=gaps.get)
-    radius = scene.bodies[last].shape.radius
-    cov, touch = _outcome(scene, body, final, tips[last][-1, :2], radius)
-    return Execution(np.array(poses), tips[last][:, :2], final, cov, touch, tips,
-                     {k: np.array(v) for k, v in angles.items()}, hit)

@@ -73,6 +73,8 @@ class ProgramSettings:
     # warm start: first solve the kinematic program (sticking contact, pushing direction,
     # no H_F: milliseconds per iteration) and start the learned program from its solution
     warm_start: bool = True
+    # with a given guess (a re-plan from an earlier plan), the kinematic stage starts from it
+    warm_from_guess: bool = True
     warm_iterations: int = 300
     # a kinematic solve that ends above this violation (but usable, ≤ WARM_USABLE) is solved
     # again from where it ended (a fresh quasi-Newton model): it rescues SNOPT's
@@ -119,7 +121,7 @@ class ProgramSettings:
 
 
 DEFAULT_SETTINGS = ProgramSettings()  # the free pushers' settings
-SCENE_CLASSES = ("arms", "routes")
+SCENE_CLASSES = ("arms", "routes", "pose")
 
 
 @cache

@@ -45,6 +45,14 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
             warm.status = f"kinematic stage infeasible ({warm.status})"
             return warm
         guess = kin.as_guess(warm)
+    elif settings.warm_start and guess is not None and settings.warm_from_guess:
+        # an earlier plan re-anchored at a moved start: the kinematic program repairs it
+        # first, where it can (measured: docs/experiments.md#closed-loop)
+        kin = program(scene, skeleton, None, space, settings, guess=guess)
+        warm = kin.solve()
+        warm_seconds = warm.seconds
+        if warm.violation <= WARM_USABLE:
+            guess = kin.as_guess(warm)
     sol = program(scene, skeleton, model, space, settings, guess=guess).solve()
     if settings.warm_start and warm_seconds:
         sol.seconds += warm_seconds
@@ -52,26 +60,63 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
     return sol
 
 
+def _carried(points: np.ndarray, centres: np.ndarray, turns: np.ndarray,
+             shifts: np.ndarray) -> np.ndarray:
+    """``points (n, 2)`` moved with the rigid motions that turn by ``turns (n,)`` about
+    ``centres (n, 2)`` and then shift by ``shifts (n, 2)``."""
+    c, s = np.cos(turns), np.sin(turns)
+    rel = points - centres
+    return centres + shifts + np.stack((c * rel[:, 0] - s * rel[:, 1],
+                                        s * rel[:, 0] + c * rel[:, 1]), axis=1)
+
+
+def _step_rows(sol: Solution, chained: bool = False) -> np.ndarray:
+    """The state index of each contact row of ``sol`` (its push steps, or its chained
+    push steps)."""
+    T = (len(sol.q_obj) - 1) // len(sol.skeleton.phases)
+    return np.array([k * T + s + 1 for k, ph in enumerate(sol.skeleton.phases)
+                     if ph.mode == "push" and (ph.chain is not None or not chained)
+                     for s in range(T)], dtype=int)
+
+
 def warm_guess(scene: Scene, sol: Solution) -> dict[str, np.ndarray]:
     """An earlier solution of a skeleton as the initial guess of its learned program in
-    ``scene``, whose bodies may have moved since: every trajectory keeps its shape and
-    starts at the scene's present state (state 0 is pinned to it in the program)."""
+    ``scene``, whose bodies may have moved since. The rigid motion that takes the earlier
+    start of the pushed object to its present pose carries the whole plan (object, actor,
+    contact points) at its start and fades out linearly to nothing at its end, so the
+    guess starts at the present state and still ends where the earlier plan did."""
     first = sol.skeleton.phases[0]
+    N = len(sol.q_obj) - 1
+    now = np.asarray(scene.bodies[first.object].pose, dtype=float)
+    fade = 1.0 - np.arange(N + 1) / max(N, 1)
+    turn = (now[2] - sol.q_obj[0, 2] + np.pi) % (2 * np.pi) - np.pi
+    turns, shifts = fade * turn, fade[:, None] * (now[:2] - sol.q_obj[0, :2])
+    centres = sol.q_obj[:, :2]
+
+    def carry(points: np.ndarray, at: np.ndarray) -> np.ndarray:
+        return _carried(points, centres[at], turns[at], shifts[at])
+
+    every = np.arange(N + 1)
     q_obj = sol.q_obj.copy()
-    q_obj[0] = scene.bodies[first.object].pose
+    q_obj[:, :2] = centres + shifts
+    q_obj[:, 2] += turns
+    q_obj[0] = now
     q_pusher = sol.q_pusher.copy()
+    q_pusher[:, :2] = carry(sol.q_pusher[:, :2], every)
     if not scene.robots:
         q_pusher[0] = scene.bodies[first.actor].pose[:2]
-    guess = {"q_obj": q_obj, "q_pusher": q_pusher, "p": sol.contact}
+    rows = _step_rows(sol)
+    guess = {"q_obj": q_obj, "q_pusher": q_pusher,
+             "p": carry(sol.contact, rows) if len(rows) else sol.contact}
     if sol.touch_point is not None:
-        guess["p_touch"] = sol.touch_point
+        guess["p_touch"] = carry(sol.touch_point, np.array([N]))
     if sol.q_joints:
         joints = {name: q.copy() for name, q in sol.q_joints.items()}
         for robot in scene.robots:
             if robot.q0 is not None and robot.name in joints:
                 joints[robot.name][0] = robot.q0
         guess["q_joints"] = joints
-    for name, q in sol.q_others.items():  # a chained object
+    for name, q in sol.q_others.items():  # a chained object: moved only by its own offset
         q_chain = q.copy()
         q_chain[0] = scene.bodies[name].pose
         guess.update(q_chain=q_chain, p_chain=sol.contact_others[name])

@@ -4,6 +4,7 @@ from robotplan.scene.bodies import Body
 from robotplan.scene.loader import SceneError, load_scene, parse_scene
 from robotplan.scene.schema import (
     BodySpec,
+    PoseGoal,
     PusherSpec,
     Region,
     RegionGoal,
@@ -15,6 +16,7 @@ from robotplan.scene.schema import (
 __all__ = [
     "Body",
     "BodySpec",
+    "PoseGoal",
     "PusherSpec",
     "Region",
     "RegionGoal",

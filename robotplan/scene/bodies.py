@@ -19,7 +19,7 @@ from robotplan.scene.robots import load_robot_model
 from robotplan.sdf import Circle, Shape2D
 
 if TYPE_CHECKING:
-    from robotplan.scene.schema import RegionGoal, Scene
+    from robotplan.scene.schema import PoseGoal, RegionGoal, Scene
 
 __all__ = ["Body", "region_body", "scene_bodies"]
 
@@ -87,6 +87,10 @@ def scene_bodies(scene: Scene) -> dict[str, Body]:
     return bodies
 
 
-def region_body(goal: RegionGoal) -> Body:
-    """The goal region of a region goal as a (flat) body named ``goal``."""
+def region_body(goal: RegionGoal | PoseGoal, objects: list | None = None) -> Body:
+    """The goal region of a region goal, or of a pose goal the object's own footprint at
+    the goal pose, as a (flat) body named ``goal``."""
+    if goal.type == "pose":
+        shape = next(o.shape for o in objects if o.name == goal.object)
+        return Body("goal", "region", shape, tuple(goal.pose), 0.0, 0.0)
     return Body("goal", "region", goal.region.shape, goal.region.pose, 0.0, 0.0)

@@ -102,7 +102,7 @@ def _check_goal(scene: Scene, object_names: list[str]) -> None:
         if goal.pusher is not None and goal.pusher not in [p.name for p in scene.pushers]:
             raise SchemaError("goal.pusher", f"{show(goal.pusher)} is not a pusher of this "
                               f"scene (pushers: {show([p.name for p in scene.pushers])})")
-    else:
+    elif isinstance(goal, RegionGoal):
         _check_region_area(scene, goal)
 
 

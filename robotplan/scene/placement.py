@@ -17,7 +17,6 @@ import numpy as np
 
 from robotplan.geometry.polygons import intersection_area, signed_area
 from robotplan.scene.reader import SchemaError
-from robotplan.scene.schema import RegionGoal
 from robotplan.sdf import Circle
 
 if TYPE_CHECKING:
@@ -54,8 +53,9 @@ def check_placement(scene: Scene, where: dict[str, str]) -> None:
         if b.role != "robot" and not inside(outlines[b.name]):
             raise SchemaError(pose_field(b),
                               f"{b.name!r} lies (partly) outside the workspace ({bounds})")
-    if isinstance(scene.goal, RegionGoal) and not inside(scene.goal_region.outline_world()):
-        raise SchemaError("goal.region.pose", f"the goal region lies (partly) outside the "
+    if scene.goal_region is not None and not inside(scene.goal_region.outline_world()):
+        where = "goal.pose" if scene.goal.type == "pose" else "goal.region.pose"
+        raise SchemaError(where, f"the goal region lies (partly) outside the "
                           f"workspace ({bounds})")
     boxes = {name: (o.min(axis=0), o.max(axis=0)) for name, o in outlines.items()}
     for i, a in enumerate(bodies):

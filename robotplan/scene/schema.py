@@ -20,6 +20,7 @@ if TYPE_CHECKING:
 __all__ = [
     "DEFAULT_HEIGHT",
     "BodySpec",
+    "PoseGoal",
     "PusherSpec",
     "Region",
     "RegionGoal",
@@ -88,6 +89,23 @@ class RegionGoal:
 
 
 @dataclass(frozen=True)
+class PoseGoal:
+    """``object`` must end at ``pose`` (x, y, yaw): success is coverage of its own footprint
+    at that pose of at least ``coverage`` (Push-T's measure, 0.95). Planned as a region goal
+    whose region is that footprint (H_g, eq. 8)."""
+
+    object: str
+    pose: tuple[float, float, float]
+    coverage: float = 0.95
+    type: Literal["pose"] = "pose"
+
+    def check(self) -> tuple[str, str] | None:
+        if not 0.0 < self.coverage <= 1.0:
+            return "coverage", "must be in (0, 1]"
+        return None
+
+
+@dataclass(frozen=True)
 class TouchGoal:
     """The tip of ``robot`` (or the pusher ``pusher``) must end in contact with ``object``."""
 
@@ -112,7 +130,7 @@ class Scene:
 
     version: int
     objects: list[BodySpec]
-    goal: RegionGoal | TouchGoal
+    goal: RegionGoal | PoseGoal | TouchGoal
     name: str = "scene"
     workspace: Workspace = field(default_factory=Workspace)
     obstacles: list[BodySpec] = field(default_factory=list)
@@ -132,6 +150,8 @@ class Scene:
         """The goal region as a body (for H_g and coverage), or None for a touch goal."""
         from robotplan.scene.bodies import region_body
 
+        if isinstance(self.goal, PoseGoal):
+            return region_body(self.goal, self.objects)
         return region_body(self.goal) if isinstance(self.goal, RegionGoal) else None
 
     def summary(self) -> str:
@@ -140,7 +160,8 @@ class Scene:
 
         g = self.goal
         goal = (f"{g.object} into a region" if isinstance(g, RegionGoal)
-                else f"{g.actor} touches {g.object}")
+                else f"{g.object} to the pose ({', '.join(f'{v:g}' for v in g.pose)})"
+                if isinstance(g, PoseGoal) else f"{g.actor} touches {g.object}")
         return (f"{self.name}: {count(len(self.objects), 'object')}, "
                 f"{count(len(self.obstacles), 'obstacle')}, {count(len(self.pushers), 'pusher')}, "
                 f"{count(len(self.robots), 'robot')}; goal: {goal}")

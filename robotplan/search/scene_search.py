@@ -54,7 +54,7 @@ def check_supported(scene: Scene) -> tuple[str, list[str]]:
     """The object the actors touch and the actors (pushers or arms) of a scene the
     planner handles."""
     chain = _chain_target(scene)
-    if chain is not None and scene.goal.type == "region":
+    if chain is not None and scene.goal.type != "touch":
         return chain[0], [scene.pushers[0].name]
     if len(scene.objects) != 1:
         raise UnsupportedScene("objects: more than one movable object is planned only when "
@@ -64,7 +64,7 @@ def check_supported(scene: Scene) -> tuple[str, list[str]]:
         raise UnsupportedScene("pushers: free pushers beside robot arms are not planned yet")
     if not scene.robots and len(scene.pushers) != 1:
         raise UnsupportedScene("pushers: only one free pusher is planned yet")
-    if scene.goal.type != "region" and not scene.robots:
+    if scene.goal.type == "touch" and not scene.robots:
         raise UnsupportedScene("goal: touch goals are planned for robot arms only")
     actors = [r.name for r in scene.robots] or [scene.pushers[0].name]
     return scene.objects[0].name, actors
@@ -170,8 +170,11 @@ def candidate_table(result: SearchResult) -> str:
 
 
 def settings_for(scene: Scene, solver: str = "snopt") -> ProgramSettings:
-    """The program settings of a scene's actors: the arms' overlay, or the free pusher's."""
-    return program_settings(*(("arms",) if scene.robots else ()), solver=solver)
+    """The program settings of a scene's actors (the arms' overlay, or the free pusher's)
+    and goal (the pose goals' overlay)."""
+    classes = (("arms",) if scene.robots else ()) + (
+        ("pose",) if scene.goal.type == "pose" else ())
+    return program_settings(*classes, solver=solver)
 
 
 def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: int = 2,

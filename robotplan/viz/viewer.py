@@ -1,10 +1,12 @@
-"""MeshCat playback of a plan and its simulated execution: one self-contained HTML page
-(Drake ``Meshcat.StaticHtml()``) with the table, the goal region, the executed motion
-(solid) and the planned motion (ghosted) on one timeline."""
+"""MeshCat playback of plans and their simulated execution: one self-contained HTML page
+(Drake ``Meshcat.StaticHtml()``) with the table, the goal region and layers on one
+timeline: the executed motion (solid), the plan and each re-plan (ghosted, each shown from
+the time it was made until the next one; the MeshCat controls switch a layer off)."""
 
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +14,9 @@ import numpy as np
 from robotplan.geometry.polygons import triangulate
 from robotplan.scene import Scene
 
-__all__ = ["extrude", "write_playback"]
+__all__ = ["GHOST_ALPHA", "Layer", "extrude", "write_playback"]
+
+GHOST_ALPHA = 0.3  # opacity of planned (ghosted) bodies
 
 os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
 
@@ -53,17 +57,28 @@ OBJECT_COLORS = {"red": (0.85, 0.2, 0.2), "blue": (0.2, 0.4, 0.9), "green": (0.2
 PALETTE = ((0.95, 0.55, 0.15), (0.2, 0.4, 0.9), (0.85, 0.2, 0.2), (0.2, 0.7, 0.3))
 
 
-def write_playback(scene: Scene, path: Path, plan: dict[str, np.ndarray],
-                   executed: dict[str, np.ndarray], fps: float = 12.0,
-                   joints: tuple[dict, dict] | None = None,
-                   times: np.ndarray | None = None) -> None:
-    """``plan`` and ``executed`` map body names to trajectories ``(N+1, 3)`` (objects) or
-    ``(N+1, 2)`` (pushers); ``joints`` = (planned, executed) joint trajectories of the
-    arms, ``(N+1, dof)`` by robot; ``times`` (s) of the states (default 1/fps apart).
-    Writes ``path`` whole or not at all."""
+@dataclass
+class Layer:
+    """One motion on the timeline, drawn under ``/<name>``: ``tracks`` map body names to
+    ``(M+1, 3)`` object poses or ``(M+1, 2)`` pusher positions, ``joints`` robots to
+    ``(M+1, dof)`` angles, at ``times (M+1,)`` s. A ghost is translucent; ``shown`` =
+    (from, until) s limits when it is visible (None: always)."""
+
+    name: str
+    times: np.ndarray
+    tracks: dict[str, np.ndarray]
+    joints: dict[str, np.ndarray] = field(default_factory=dict)
+    ghost: bool = True
+    shown: tuple[float, float | None] | None = None
+
+
+def write_playback(scene: Scene, path: Path, layers: list[Layer], fps: float = 12.0) -> None:
+    """Write the page of ``layers`` over ``scene`` to ``path``, whole or not at all.
+    Bodies without a track in any layer (obstacles, objects never moved) are drawn once,
+    at their pose in the scene."""
     import logging
 
-    from pydrake.geometry import Box, Meshcat, MeshcatAnimation, Rgba, Sphere
+    from pydrake.geometry import Box, Meshcat, MeshcatAnimation, Rgba
 
     from robotplan.base.files import write_atomically
     from robotplan.base.quiet import drake_quiet
@@ -80,44 +95,66 @@ def write_playback(scene: Scene, path: Path, plan: dict[str, np.ndarray],
         g = scene.goal_region
         meshcat.SetObject("/goal", extrude(g.shape.outline(), 0.002), Rgba(0.2, 0.8, 0.3, 0.5))
         meshcat.SetTransform("/goal", _pose(*g.pose))
-    colors = {"object": Rgba(0.95, 0.55, 0.15, 1), "obstacle": Rgba(0.35, 0.35, 0.35, 1),
-              "pusher": Rgba(0.95, 0.8, 0.1, 1), "robot": Rgba(0.6, 0.3, 0.8, 1)}
-    for spec_list in (scene.objects, scene.obstacles):
-        for i, spec in enumerate(spec_list):
-            body = scene.bodies[spec.name]
-            mesh = extrude(body.shape.outline(), spec.height)
-            color = colors[body.role]
-            if body.role == "object":  # its own name's colour ("red"), else the palette
-                color = Rgba(*OBJECT_COLORS.get(body.name, PALETTE[i % len(PALETTE)]), 1)
-            meshcat.SetObject(f"/executed/{body.name}", mesh, color)
-            meshcat.SetTransform(f"/executed/{body.name}", _pose(*body.pose))
-            if body.name in plan:
-                ghost = color
-                meshcat.SetObject(f"/plan/{body.name}", mesh,
-                                  Rgba(ghost.r(), ghost.g(), ghost.b(), 0.3))
-    for p in scene.pushers:
-        for layer, alpha in (("executed", 1.0), ("plan", 0.3)):
-            c = colors["pusher"]
-            meshcat.SetObject(f"/{layer}/{p.name}", Sphere(p.radius),
-                              Rgba(c.r(), c.g(), c.b(), alpha))
-            meshcat.SetTransform(f"/{layer}/{p.name}", _pose(*p.position, 0.0, p.radius))
+    moved = {name for layer in layers for name in layer.tracks}
     animation = MeshcatAnimation(fps)
-    n = len(next(iter(plan.values())))
-    frames = (np.arange(n) if times is None
-              else np.round(np.asarray(times) * fps).astype(int))
-    for layer, trajs in (("plan", plan), ("executed", executed)):
-        for name, traj in trajs.items():
+    for layer in layers:
+        _add_layer(meshcat, animation, scene, layer, fps)
+    for name in (*(o.name for o in scene.objects), *(o.name for o in scene.obstacles)):
+        if name not in moved:
             body = scene.bodies[name]
-            for k, q in zip(frames, np.asarray(traj), strict=True):
-                if body.role == "pusher":
-                    X = _pose(q[0], q[1], 0.0, body.top / 2)
-                else:
-                    X = _pose(q[0], q[1], q[2])
-                animation.SetTransform(int(k), f"/{layer}/{name}", X)
-    if joints is not None:
-        from robotplan.viz.viewer_arms import add_arms
-
-        add_arms(meshcat, animation, scene, joints, frames)
+            meshcat.SetObject(f"/scene/{name}", _body_mesh(scene, name), _color(scene, name))
+            meshcat.SetTransform(f"/scene/{name}", _pose(*body.pose))
     meshcat.SetAnimation(animation)
     html = meshcat.StaticHtml()
     write_atomically(path, lambda tmp: tmp.write_text(html))
+
+
+def _body_mesh(scene: Scene, name: str):
+    spec = next(o for o in (*scene.objects, *scene.obstacles) if o.name == name)
+    return extrude(scene.bodies[name].shape.outline(), spec.height)
+
+
+def _color(scene: Scene, name: str, alpha: float = 1.0):
+    """An object's colour (its own name's, "red", else the palette in scene order), the
+    obstacles' grey, the pushers' yellow."""
+    from pydrake.geometry import Rgba
+
+    role = scene.bodies[name].role
+    if role == "object":
+        i = [o.name for o in scene.objects].index(name)
+        rgb = OBJECT_COLORS.get(name, PALETTE[i % len(PALETTE)])
+    else:
+        rgb = {"obstacle": (0.35, 0.35, 0.35), "pusher": (0.95, 0.8, 0.1)}[role]
+    return Rgba(*rgb, alpha)
+
+
+def _add_layer(meshcat, animation, scene: Scene, layer: Layer, fps: float) -> None:
+    from pydrake.geometry import Sphere
+
+    alpha = GHOST_ALPHA if layer.ghost else 1.0
+    frames = np.round(np.asarray(layer.times) * fps).astype(int)
+    root = f"/{layer.name}"
+    for name, traj in layer.tracks.items():
+        body = scene.bodies[name]
+        if body.role == "pusher":
+            meshcat.SetObject(f"{root}/{name}", Sphere(body.shape.radius),
+                              _color(scene, name, alpha))
+        else:
+            meshcat.SetObject(f"{root}/{name}", _body_mesh(scene, name),
+                              _color(scene, name, alpha))
+        for k, q in zip(frames, np.asarray(traj), strict=True):
+            X = (_pose(q[0], q[1], 0.0, body.top / 2) if body.role == "pusher"
+                 else _pose(q[0], q[1], q[2]))
+            animation.SetTransform(int(k), f"{root}/{name}", X)
+    if layer.joints:
+        from robotplan.viz.viewer_arms import add_arms
+
+        add_arms(meshcat, animation, scene, layer.name, layer.joints, frames, layer.ghost)
+    if layer.shown is not None:
+        start, until = layer.shown
+        first = round(start * fps)
+        if first > 0:
+            animation.SetProperty(0, root, "visible", False)
+        animation.SetProperty(first, root, "visible", True)
+        if until is not None:
+            animation.SetProperty(round(until * fps), root, "visible", False)

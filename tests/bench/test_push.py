@@ -6,13 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from robotplan.bench.push import (
-    GOAL_DISTANCE,
-    candidate_timings,
-    draw_scene,
-    summarize,
-    time_profile,
-)
+from robotplan.bench.push import candidate_timings, summarize, time_profile
+from robotplan.bench.push_scenes import GOAL_DISTANCE, draw_scene
 from robotplan.functionals.coverage import coverage
 from robotplan.program.skeleton import load_skeleton_space
 from robotplan.scene import parse_scene
@@ -107,7 +102,7 @@ def test_bench_push_refuses_bad_options(tmp_path):
 def test_unseen_shape_scenes_cover_eight_families_three_concave():
     """``--shapes ood``: valid scenes, every family twice in 16, concave T, cross and U, in
     the data's size range, with a goal region that holds them in any orientation."""
-    from robotplan.bench.push import OOD_FAMILIES, family_of
+    from robotplan.bench.push_scenes import OOD_FAMILIES, family_of
     from robotplan.geometry.polygons import is_convex
 
     docs = [draw_scene(i, 5, "ood") for i in range(16)]
@@ -126,3 +121,21 @@ def test_unseen_shape_scenes_cover_eight_families_three_concave():
         for yaw in np.linspace(0, math.pi, 5):
             assert coverage(body, (region.pose[0], region.pose[1], float(yaw)), region) > 0.999
     assert seen == {f: 2 for f in OOD_FAMILIES}
+
+
+def test_pose_scenes_turn_a_box_or_a_t_shape_30_to_90_degrees():
+    """``--shapes pose``: boxes and T-shapes alternate; the goal is the object's own
+    footprint at a pose 0.15–0.3 m away, turned by 30–90°."""
+    from robotplan.bench.push_scenes import family_of
+
+    for i in range(8):
+        doc = draw_scene(i, 2, "pose")
+        scene = parse_scene(doc, f"bench/{i}.yaml")
+        goal, start = scene.goal, scene.objects[0].pose
+        assert goal.type == "pose" and family_of(i, "pose") == ("box", "T")[i % 2]
+        turn = abs((goal.pose[2] - start[2] + math.pi) % (2 * math.pi) - math.pi)
+        assert math.radians(30) - 1e-3 <= turn <= math.radians(90) + 1e-3
+        assert 0.15 - 1e-3 <= math.dist(goal.pose[:2], start[:2]) <= 0.3 + 1e-3
+        region = scene.goal_region  # the object's own footprint at the goal pose
+        assert region.shape == scene.objects[0].shape
+        assert coverage(scene.bodies["object"], goal.pose, region) > 0.999

@@ -10,8 +10,8 @@ from robotplan.execution.execute import REACH_SPEED, execute_push, reach_substep
 from robotplan.scene import parse_scene
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape, Polygon
-from robotplan.viz.viewer import write_playback
-from tests.conftest import DATA, TASKS
+from robotplan.viz.viewer import Layer, write_playback
+from tests.conftest import DATA, TASKS, playback_commands
 
 
 def hand_made_push() -> np.ndarray:
@@ -38,8 +38,10 @@ def test_playback_is_one_self_contained_page(tmp_path):
     q = hand_made_push()
     ex = execute_push(scene, "box", "pusher", q)
     page = tmp_path / "playback.html"
-    write_playback(scene, page, {"pusher": q}, {"box": ex.object_poses,
-                                                "pusher": ex.pusher_positions})
+    write_playback(scene, page, [Layer("plan", ex.times, {"pusher": q}),
+                                 Layer("executed", ex.times, {"box": ex.object_poses,
+                                                              "pusher": ex.pusher_positions},
+                                       ghost=False)])
     html = page.read_text()
     assert html.startswith("<!DOCTYPE html>") or "<html" in html[:200]
     assert "src=\"http" not in html and len(html) > 100_000
@@ -72,10 +74,18 @@ def test_arm_execution_tracks_the_plan_and_pushes_with_its_tip(tmp_path):
     assert ex.coverage is not None and ex.touch_distance is None
     page = tmp_path / "playback.html"
     plain = tmp_path / "plain.html"
-    write_playback(scene, plain, {"box": ex.object_poses}, {"box": ex.object_poses})
-    write_playback(scene, page, {"box": ex.object_poses}, {"box": ex.object_poses},
-                   joints=({"left": Q, "right": q_right}, ex.joints))
+    plain_layers = [Layer("plan", ex.times, {"box": ex.object_poses}),
+                    Layer("executed", ex.times, {"box": ex.object_poses}, ghost=False)]
+    write_playback(scene, plain, plain_layers)
+    write_playback(scene, page, [
+        Layer("plan", ex.times, {"box": ex.object_poses}, {"left": Q, "right": q_right}),
+        Layer("executed", ex.times, {"box": ex.object_poses}, ex.joints, ghost=False)])
     assert page.stat().st_size > plain.stat().st_size + 100_000  # the arm meshes
+    commands = b"".join(playback_commands(page.read_text()))
+    assert b"/plan/left/rod0" in commands and b"/executed/left/tool" in commands
+    # each link mesh once: the planned arm is drawn with rods, not a second set of meshes
+    assert b"/executed/left/lbr_iiwa_link_3/" in commands
+    assert b"/plan/left/lbr_iiwa_link_3/" not in commands
 
 
 def test_obstacles_are_fixed_bodies_and_contact_is_reported():

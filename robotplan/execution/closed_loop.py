@@ -1,0 +1,230 @@
+"""Closed-loop execution: run a plan step by step in pybullet, observe the scene after each
+planned step and re-plan from the observed state when it departs from the plan.
+
+After each planned step t the executor observes every movable object's pose (as a
+perception system delivers it: optionally noisy) and the actors' state. It re-plans the
+phases not yet finished (:func:`robotplan.program.tail.solution_tail`, a shrinking
+horizon, warm started from the current plan's tail) when an object is further than
+``drift`` / ``drift_yaw`` from the plan's state t, or further than the tighter
+``phase_drift`` / ``phase_drift_yaw`` at the end of a phase; when the plan has run out and
+the goal is not met it plans afresh from the observed scene. A re-plan is taken only if its
+plan meets every constraint; otherwise the current plan goes on, and mid-phase drift does
+not trigger another re-plan before the next phase boundary.
+
+Between re-plans a free pusher follows the object (``follow_object``): in push steps its
+planned position is carried by the rigid motion that takes the planned object pose to
+the observed one, so it keeps the planned point of contact on the object.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from robotplan.execution.execute import Execution, outcome, plan_substeps, recorded
+from robotplan.execution.scene_world import Observation, SceneWorld, actuation
+from robotplan.execution.sim import PHYSICS, Physics
+from robotplan.program.solution import Solution
+from robotplan.program.tail import solution_tail
+from robotplan.scene import Scene
+
+__all__ = ["LoopSettings", "Replan", "departure", "execute_closed_loop", "follow_object"]
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    drift: float = 0.02  # m of an object's position off the plan that triggers a re-plan
+    drift_yaw: float = math.radians(8.0)
+    phase_drift: float = 0.005  # the same at the end of a phase
+    phase_drift_yaw: float = math.radians(2.0)
+    goal_coverage: float = 0.995  # below this at the plan's end: plan afresh
+    pose_coverage: float = 0.98  # the same for a pose goal (its success is at 0.95)
+    touch_gap: float = 0.005  # m: a touch goal farther than this at the end: plan afresh
+    max_replans: int = 8
+    follow_object: bool = True
+
+
+@dataclass
+class Replan:
+    """One call of the planner during execution."""
+
+    time: float  # s of simulated time at which it was asked
+    step: int  # executed steps before it
+    reason: str
+    solved: bool
+    violation: float | None
+    seconds: float
+    skeleton: str
+
+    def as_dict(self) -> dict:
+        out = asdict(self)
+        out["time"], out["seconds"] = round(self.time, 4), round(self.seconds, 3)
+        return out
+
+
+# a re-planner: (observed scene, tail of the current plan to start from or None, whether a
+# fresh search may follow when the tail does not solve) → an object with ``best``
+# (Solution | None) and ``solved`` (robotplan.api.Plan)
+Replanner = Callable[[Scene, "Solution | None", bool], object]
+
+
+def _wrap(angle: float) -> float:
+    return (angle + math.pi) % (2 * math.pi) - math.pi
+
+
+def departure(planned: dict[str, np.ndarray], seen: dict[str, np.ndarray], far: float,
+              far_yaw: float) -> str | None:
+    """Why the observed poses ``seen`` (name → x, y, yaw) leave the ``planned`` ones: the
+    first object off by more than ``far`` m or ``far_yaw`` rad, or None."""
+    for name, q in planned.items():
+        gap = float(np.hypot(*(seen[name][:2] - q[:2])))
+        turn = abs(_wrap(float(seen[name][2] - q[2])))
+        if gap > far or turn > far_yaw:
+            return f"{name} {1000 * gap:.1f} mm / {math.degrees(turn):.1f}° off the plan"
+    return None
+
+
+def follow_object(target: np.ndarray, planned_pose: np.ndarray, seen_pose: np.ndarray
+                  ) -> np.ndarray:
+    """The pusher target ``(x, y)`` carried by the rigid motion from the object's
+    ``planned_pose`` to its ``seen_pose``."""
+    turn = float(seen_pose[2] - planned_pose[2])
+    c, s = math.cos(turn), math.sin(turn)
+    rel = np.asarray(target, dtype=float) - planned_pose[:2]
+    return seen_pose[:2] + np.array([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]])
+
+
+def _observed_scene(scene: Scene, seen: Observation) -> Scene:
+    poses = {name: tuple(p) for name, p in seen.poses.items()}
+    if seen.pusher is not None:
+        poses[scene.pushers[0].name] = (*seen.pusher, 0.0)
+    return scene.with_state(poses, {k: tuple(v) for k, v in seen.joints.items()})
+
+
+def _goal_met(scene: Scene, obj: str, seen: Observation, settings: LoopSettings) -> bool:
+    goal_obj = getattr(scene.goal, "object", obj)
+    body = scene.bodies[goal_obj]
+    if scene.goal.type == "touch":
+        tip = seen.tips[scene.goal.actor][:2]
+        _, gap = outcome(scene, body, seen.poses[goal_obj], tip, scene.bodies[
+            scene.goal.actor].shape.radius)
+        return gap <= settings.touch_gap
+    cov, _ = outcome(scene, body, seen.poses[goal_obj], np.zeros(2), 0.0)
+    return cov >= (settings.pose_coverage if scene.goal.type == "pose"
+                   else settings.goal_coverage)
+
+
+class _Loop:
+    """The state of one closed-loop run (see :func:`execute_closed_loop`)."""
+
+    def __init__(self, scene: Scene, obj: str, sol: Solution, physics: Physics) -> None:
+        self.scene, self.obj, self.physics = scene, obj, physics
+        self.replans: list[Replan] = []
+        self.plans: list[tuple[int, Solution]] = []
+        self.executed: list[int] = []  # simulation steps of each executed step
+        self.adopt(sol)
+
+    def adopt(self, sol: Solution) -> None:
+        self.plan, self.t = sol, 0
+        self.drive = actuation(self.scene, sol.q_pusher, sol.q_joints)
+        self.substeps = plan_substeps(self.scene, sol, self.physics)
+        self.T = (len(sol.q_obj) - 1) // len(sol.skeleton.phases)
+        self.calm_until = 0  # no mid-phase re-plan before this state
+        self.plans.append((len(self.executed), sol))
+
+    def planned_poses(self) -> dict[str, np.ndarray]:
+        return {self.obj: self.plan.q_obj[self.t],
+                **{k: v[self.t] for k, v in self.plan.q_others.items()}}
+
+    def pushing(self) -> bool:
+        """Whether the next step is a push step."""
+        return self.plan.skeleton.phases[self.t // self.T].mode == "push"
+
+    def now(self) -> float:
+        return sum(self.executed) * self.physics.timestep
+
+
+def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner,
+                        settings: LoopSettings | None = None, physics: Physics = PHYSICS,
+                        observe: Callable[[Observation], Observation] | None = None,
+                        report: Callable[[str], None] | None = None) -> Execution:
+    """Execute ``sol`` in ``scene`` closing the loop through ``replan`` (see the module
+    docstring). ``observe`` turns the true state into the perceived one (default: exact);
+    ``report`` gets a line per re-plan."""
+    settings = settings or LoopSettings()
+    observe = observe or (lambda seen: seen)
+    loop = _Loop(scene, obj, sol, physics)
+    with SceneWorld(scene, obj, physics) as world:
+        truth = [world.observe()]
+        seen = observe(truth[-1])
+        command = {k: v[0] for k, v in loop.drive.items()}
+        while True:
+            if loop.t == len(loop.substeps):
+                if _goal_met(scene, obj, seen, settings) or not _ask(
+                        loop, scene, seen, _last_push(loop), "goal not met at the plan's end",
+                        replan, settings, report, fresh=True):
+                    break
+                continue
+            target = {k: v[loop.t + 1] for k, v in loop.drive.items()}
+            if settings.follow_object and world.pusher is not None and loop.pushing():
+                name = world.pusher.name
+                target[name] = follow_object(target[name], loop.plan.q_obj[loop.t],
+                                             seen.poses[obj])
+            world.run_step(command, target, loop.substeps[loop.t])
+            loop.executed.append(loop.substeps[loop.t])
+            command, loop.t = target, loop.t + 1
+            truth.append(world.observe())
+            seen = observe(truth[-1])
+            if loop.t == len(loop.substeps):
+                continue
+            at_boundary = loop.t % loop.T == 0
+            if not at_boundary and loop.t < loop.calm_until:
+                continue
+            far, far_yaw = ((settings.phase_drift, settings.phase_drift_yaw) if at_boundary
+                            else (settings.drift, settings.drift_yaw))
+            reason = departure(loop.planned_poses(), seen.poses, far, far_yaw)
+            if reason is not None:
+                where = "at the end of a phase" if at_boundary else "mid-phase"
+                tail = solution_tail(loop.plan, loop.t)
+                if not _ask(loop, scene, seen, tail, f"{reason} {where}", replan, settings,
+                            report):
+                    loop.calm_until = (loop.t // loop.T + 1) * loop.T
+        ex = recorded(scene, obj, truth, world.obstacle_contact, sorted(world.forbidden),
+                      loop.executed, physics)
+    ex.mode, ex.replans, ex.plans = "closed_loop", loop.replans, loop.plans
+    return ex
+
+
+def _last_push(loop: _Loop) -> Solution | None:
+    """The plan's last reach and push, to be done again from where the object is."""
+    phases = loop.plan.skeleton.phases
+    if len(phases) < 2 or [p.mode for p in phases[-2:]] != ["reach", "push"]:
+        return None
+    return solution_tail(loop.plan, (len(phases) - 2) * loop.T)
+
+
+def _ask(loop: _Loop, scene: Scene, seen: Observation, tail: Solution | None, reason: str,
+         replan: Replanner, settings: LoopSettings, report, fresh: bool = False) -> bool:
+    """Re-plan from ``seen`` (a fresh search after ``tail`` only if ``fresh``); adopt the
+    new plan when it is solved. Whether it was."""
+    if len(loop.replans) >= settings.max_replans:
+        return False
+    t0 = time.perf_counter()
+    result = replan(_observed_scene(scene, seen), tail, fresh)
+    best = getattr(result, "best", None)
+    solved = bool(getattr(result, "solved", False)) and best is not None
+    record = Replan(loop.now(), len(loop.executed), reason, solved,
+                    float(best.violation) if best is not None else None,
+                    time.perf_counter() - t0, best.skeleton.describe() if best else "")
+    loop.replans.append(record)
+    if report is not None:
+        outcome_text = "solved" if solved else "not solved: the current plan goes on"
+        report(f"re-plan {len(loop.replans)} at step {record.step} ({record.time:.1f} s): "
+               f"{reason}; {outcome_text} in {record.seconds:.1f} s")
+    if solved:
+        loop.adopt(best)
+    return solved
