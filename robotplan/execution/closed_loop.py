@@ -11,9 +11,9 @@ the goal is not met it plans afresh from the observed scene. A re-plan is taken 
 plan meets every constraint; otherwise the current plan goes on, and mid-phase drift does
 not trigger another re-plan before the next phase boundary.
 
-Between re-plans a free pusher follows the object (``follow_object``): in push steps its
-planned position is carried by the rigid motion that takes the planned object pose to
-the observed one, so it keeps the planned point of contact on the object.
+Between re-plans a free pusher may follow the object (``follow_object``, off by default):
+in push steps its planned position is carried by the rigid motion that takes the planned
+object pose to the observed one, so it keeps the planned point of contact on the object.
 """
 
 from __future__ import annotations
@@ -37,15 +37,20 @@ __all__ = ["LoopSettings", "Replan", "departure", "execute_closed_loop", "follow
 
 @dataclass(frozen=True)
 class LoopSettings:
-    drift: float = 0.02  # m of an object's position off the plan that triggers a re-plan
-    drift_yaw: float = math.radians(8.0)
+    # m and rad of an object off the plan that trigger a re-plan mid-phase: only gross
+    # departures, as the learned model's own error stays below them while a push goes on
+    # (measured: docs/experiments.md#closed-loop)
+    drift: float = 0.05
+    drift_yaw: float = math.radians(20.0)
     phase_drift: float = 0.005  # the same at the end of a phase
     phase_drift_yaw: float = math.radians(2.0)
     goal_coverage: float = 0.995  # below this at the plan's end: plan afresh
     pose_coverage: float = 0.98  # the same for a pose goal (its success is at 0.95)
     touch_gap: float = 0.005  # m: a touch goal farther than this at the end: plan afresh
     max_replans: int = 8
-    follow_object: bool = True
+    # off by default: carrying the pusher with a turned object turns the push with it, which
+    # can drive the object further off (measured: docs/experiments.md#closed-loop)
+    follow_object: bool = False
 
 
 @dataclass

@@ -13,7 +13,9 @@ from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import WARM_USABLE, Solution
 from robotplan.scene import Scene
 
-__all__ = ["program_class", "solve_skeleton", "warm_guess"]
+__all__ = ["TURN_LENGTH", "program_class", "solve_skeleton", "warm_guess"]
+
+TURN_LENGTH = 0.1  # m of travel a radian of turn counts as when a re-anchored plan fades
 
 
 def program_class(scene: Scene, skeleton: Skeleton) -> type[PushProgram]:
@@ -84,11 +86,15 @@ def warm_guess(scene: Scene, sol: Solution) -> dict[str, np.ndarray]:
     ``scene``, whose bodies may have moved since. The rigid motion that takes the earlier
     start of the pushed object to its present pose carries the whole plan (object, actor,
     contact points) at its start and fades out linearly to nothing at its end, so the
-    guess starts at the present state and still ends where the earlier plan did."""
+    guess starts at the present state and still ends where the earlier plan did. The fade
+    follows the object's planned travel (metres, a radian counting ``TURN_LENGTH``), so the
+    object still holds where the plan holds it (reach phases)."""
     first = sol.skeleton.phases[0]
-    N = len(sol.q_obj) - 1
     now = np.asarray(scene.bodies[first.object].pose, dtype=float)
-    fade = 1.0 - np.arange(N + 1) / max(N, 1)
+    moves = np.abs(np.diff(sol.q_obj, axis=0))
+    travel = np.concatenate(([0.0], np.cumsum(np.hypot(moves[:, 0], moves[:, 1])
+                                              + TURN_LENGTH * moves[:, 2])))
+    fade = 1.0 - travel / travel[-1] if travel[-1] > 1e-9 else np.ones(len(travel))
     turn = (now[2] - sol.q_obj[0, 2] + np.pi) % (2 * np.pi) - np.pi
     turns, shifts = fade * turn, fade[:, None] * (now[:2] - sol.q_obj[0, :2])
     centres = sol.q_obj[:, :2]
@@ -96,6 +102,7 @@ def warm_guess(scene: Scene, sol: Solution) -> dict[str, np.ndarray]:
     def carry(points: np.ndarray, at: np.ndarray) -> np.ndarray:
         return _carried(points, centres[at], turns[at], shifts[at])
 
+    N = len(sol.q_obj) - 1
     every = np.arange(N + 1)
     q_obj = sol.q_obj.copy()
     q_obj[:, :2] = centres + shifts
