@@ -23,4 +23,4 @@ if __name__ == "__main__":
         moved = replace(scene, goal=replace(scene.goal, region=replace(
             region, pose=(x + dx, y + dy, yaw))))
         run(moved, out_dir(args, __file__) / f"goal_{i}", args.fast, FAST_SKELETON,
-            label=f"goal at ({x + dx:+.2f}, {y + dy:+.2f})")
+            label=f"goal at ({x + dx:+.2f}, {y + dy:+.2f})", open_loop=args.open_loop)

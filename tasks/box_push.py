@@ -12,4 +12,4 @@ FAST_SKELETON = "push@0"
 if __name__ == "__main__":
     args = arguments(__doc__.splitlines()[0])
     scene = robotplan.load_scene(HERE / "box_push.yaml")
-    run(scene, out_dir(args, __file__), args.fast, FAST_SKELETON)
+    run(scene, out_dir(args, __file__), args.fast, FAST_SKELETON, open_loop=args.open_loop)

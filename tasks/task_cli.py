@@ -21,25 +21,30 @@ def arguments(description: str) -> argparse.Namespace:
                         help="where playback.html goes (default: runs/<script name>)")
     parser.add_argument("--fast", action="store_true",
                         help="plan one given skeleton instead of searching")
+    parser.add_argument("--open-loop", action="store_true",
+                        help="execute the plan as it is (default: closed loop, re-planning "
+                        "from the observed scene)")
     return parser.parse_args()
 
 
 def run(scene: robotplan.Scene, out: Path, fast: bool, fast_skeleton: str,
-        label: str | None = None) -> float | None:
-    """Plan (``fast``: ``fast_skeleton`` only), execute in pybullet, write
-    ``out/playback.html``; print one line and return the coverage (touch goals: None)."""
+        label: str | None = None, open_loop: bool = False) -> float | None:
+    """Plan (``fast``: ``fast_skeleton`` only), execute in pybullet (closed loop unless
+    ``open_loop``), write ``out/playback.html``; print one line and return the coverage
+    (touch goals: None)."""
     planned = robotplan.plan(scene, skeleton=fast_skeleton if fast else None,
                              workers=1 if fast else 2, progress=not fast, quiet=fast)
     name = label or scene.name
     if planned.best is None:
         print(f"{name}: no plan")
         return None
-    executed = robotplan.execute(planned)
+    executed = robotplan.execute(planned, mode="open_loop" if open_loop else "closed_loop")
     out.mkdir(parents=True, exist_ok=True)
     robotplan.write_playback(planned, executed, out / "playback.html")
     print(f"{name}: {'solved' if planned.solved else 'not solved'}, violation "
           f"{planned.best.violation:.3g}, coverage in pybullet {executed.coverage}, touch "
-          f"distance {executed.touch_distance}; {out / 'playback.html'}")
+          f"distance {executed.touch_distance} ({executed.mode.replace('_', ' ')}, "
+          f"{len(executed.replans)} re-plans); {out / 'playback.html'}")
     return executed.coverage
 
 

@@ -117,7 +117,8 @@ def warm_guess(scene: Scene, sol: Solution) -> dict[str, np.ndarray]:
              "p": carry(sol.contact, rows) if len(rows) else sol.contact}
     if sol.touch_point is not None:
         guess["p_touch"] = carry(sol.touch_point, np.array([N]))
-    if sol.q_joints:
+    carried = bool(np.abs(shifts[0]).max() > 1e-3 or abs(turn) > 1e-2)
+    if sol.q_joints and not carried:  # moved: the arm program solves IK along the new tips
         joints = {name: q.copy() for name, q in sol.q_joints.items()}
         for robot in scene.robots:
             if robot.q0 is not None and robot.name in joints:
