@@ -45,3 +45,23 @@ def test_a_scene_at_observed_poses_and_a_warm_start(box_plan):
     assert first.status and "kinematic stage infeasible" not in first.status
     assert np.allclose(first.q_obj[0], observed.bodies["box"].pose)
     assert again.best is not None
+
+
+def test_solve_records_the_mode_every_replan_and_both_executions(tmp_path):
+    import json
+
+    scene = load_scene(TASKS / "box_push.yaml")
+    doc = robotplan.solve(scene, tmp_path, skeleton="push@0", workers=1, progress=False,
+                          quiet=True, compare_open_loop=True)
+    saved = json.loads((tmp_path / "result.json").read_text())
+    assert saved["execution"]["mode"] == "closed_loop" == doc["execution"]["mode"]
+    assert isinstance(saved["execution"]["replans"], list)
+    for r in saved["execution"]["replans"]:
+        assert {"time", "step", "reason", "solved", "violation", "seconds", "skeleton"} <= set(r)
+    executed = saved["executed"]
+    assert len(executed["t"]) == len(executed["objects"]["box"]) == len(executed["pusher"])
+    assert len(saved["trajectory"]["t"]) == len(saved["trajectory"]["objects"]["box"])
+    adopted = sum(r["solved"] for r in saved["execution"]["replans"])
+    assert len(saved["replanned"]) == adopted
+    assert 0.0 <= saved["open_loop"]["coverage"] <= 1.0
+    assert (tmp_path / "playback.html").exists()

@@ -10,7 +10,7 @@ import torch
 import yaml
 
 from robotplan import SceneError, load_scene
-from robotplan.scene import RegionGoal, TouchGoal
+from robotplan.scene import RegionGoal, TouchGoal, parse_scene
 from tests.conftest import TASKS
 
 GOOD = sorted(TASKS.rglob("*.yaml"))  # the task scenes and their variants
@@ -37,6 +37,13 @@ L_POLY = [[0, 0], [1, 1], [1, 0], [0, 1]]
 # (id, scene data, field the message must name)
 BAD_CASES = [
     ("unknown-top-field", mutate(BASE, "colour", "red"), "colour"),
+    ("pose-goal-coverage", mutate(BASE, "goal", {"type": "pose", "object": "box",
+                                                 "pose": [0.3, 0.0, 1.0], "coverage": 1.5}),
+     "goal.coverage"),
+    ("pose-goal-outside", mutate(BASE, "goal", {"type": "pose", "object": "box",
+                                                "pose": [0.69, 0.0, 0.0]}), "goal.pose"),
+    ("pose-goal-short", mutate(BASE, "goal", {"type": "pose", "object": "box",
+                                              "pose": [0.3, 0.0]}), "goal.pose"),
     ("unknown-nested-field", mutate(BASE, "objects.0.colour", "red"), "objects[0].colour"),
     ("missing-pose", mutate(BASE, "objects.0.pose", delete=True), "objects[0].pose"),
     ("missing-goal", mutate(BASE, "goal", delete=True), "goal"),
@@ -189,3 +196,12 @@ def test_message_format(tmp_path):
     assert str(err.value) == f"{f}: objects[0].shape.size[0]: must be positive, got -0.2"
 
 
+
+
+def test_a_pose_goal_is_the_objects_own_footprint_at_the_pose():
+    doc = mutate(BASE, "goal", {"type": "pose", "object": "box", "pose": [0.3, 0.05, 1.2]})
+    scene = parse_scene(doc, "pose.yaml")
+    assert scene.goal.type == "pose" and scene.goal.coverage == 0.95
+    region = scene.goal_region
+    assert region.shape == scene.objects[0].shape and region.pose == (0.3, 0.05, 1.2)
+    assert "box to the pose (0.3, 0.05, 1.2)" in scene.summary()
