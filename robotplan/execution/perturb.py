@@ -52,8 +52,8 @@ class Perturbation:
 
     def describe(self) -> dict:
         ph = self.physics()
-        return {"seed": self.seed, "object_mass": round(ph.object_mass, 4),
-                "object_friction": round(ph.object_friction, 4),
-                "pusher_friction": round(ph.pusher_friction, 4),
+        return {"seed": self.seed, "object_mass": round(float(ph.object_mass), 4),
+                "object_friction": round(float(ph.object_friction), 4),
+                "pusher_friction": round(float(ph.pusher_friction), 4),
                 "position_noise_m": self.position_noise,
                 "yaw_noise_deg": round(math.degrees(self.yaw_noise), 3)}

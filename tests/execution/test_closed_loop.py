@@ -70,3 +70,12 @@ def test_closed_loop_recovers_a_box_that_is_not_where_it_was_planned(box_plan):
     assert len(closed.plans) == 1 + sum(r.solved for r in closed.replans)
     assert closed.times.shape == (len(closed.object_poses),)
     assert np.all(np.diff(closed.times) > 0)
+
+
+def test_closed_loop_reaches_the_goal_in_a_perturbed_world(box_plan):
+    """Mass and frictions off by up to 20 %, observations noisy: the plan is re-planned
+    from what is observed and the box still ends in the goal."""
+    world = Perturbation(1)
+    closed = robotplan.execute(box_plan, perturb=world)
+    assert closed.coverage >= 0.95
+    assert all(isinstance(v, int | float) for v in world.describe().values())
