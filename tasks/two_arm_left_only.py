@@ -7,7 +7,7 @@ from task_cli import HERE, arguments, out_dir, run
 
 import robotplan
 
-FAST_SKELETON = "left:push@0"
+FAST_SKELETON = "left:push@2,left:push@3"
 
 if __name__ == "__main__":
     args = arguments(__doc__.splitlines()[0])

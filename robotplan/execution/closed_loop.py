@@ -4,7 +4,8 @@ planned step and re-plan from the observed state when it departs from the plan.
 After each planned step t the executor observes every movable object's pose (as a
 perception system delivers it: optionally noisy) and the actors' state. It re-plans the
 phases not yet finished (:func:`robotplan.program.tail.solution_tail`, a shrinking
-horizon, warm started from the current plan's tail) when an object is further than
+horizon, warm started from the current plan's tail; with ``fresh_after_miss`` a fresh
+skeleton search when that does not plan) when an object is further than
 ``drift`` / ``drift_yaw`` from the plan's state t, or further than the tighter
 ``phase_drift`` / ``phase_drift_yaw`` at the end of a phase; when the plan has run out and
 the goal is not met it plans afresh from the observed scene. A re-plan is taken only if its
@@ -13,7 +14,9 @@ not trigger another re-plan before the next phase boundary.
 
 Between re-plans a free pusher may follow the object (``follow_object``, off by default):
 in push steps its planned position is carried by the rigid motion that takes the planned
-object pose to the observed one, so it keeps the planned point of contact on the object.
+object pose to the observed one, so it keeps the planned point of contact on the object. Or
+it may steer (``steer_gain``, off by default): keep the planned push direction and move
+sideways with the object and against its turn (:func:`steer_pusher`).
 """
 
 from __future__ import annotations
@@ -32,7 +35,8 @@ from robotplan.program.solution import Solution
 from robotplan.program.tail import solution_tail
 from robotplan.scene import Scene
 
-__all__ = ["LoopSettings", "Replan", "departure", "execute_closed_loop", "follow_object"]
+__all__ = ["LoopSettings", "Replan", "departure", "execute_closed_loop", "follow_object",
+           "steer_pusher"]
 
 
 @dataclass(frozen=True)
@@ -48,9 +52,18 @@ class LoopSettings:
     pose_coverage: float = 0.98  # the same for a pose goal (its success is at 0.95)
     touch_gap: float = 0.005  # m: a touch goal farther than this at the end: plan afresh
     max_replans: int = 8
+    # off by default: searching afresh at once when a departure's re-anchored tail does not
+    # plan finds plans that drift off again, at 30-110 s a search (measured:
+    # docs/experiments.md#closed-loop)
+    fresh_after_miss: bool = False
     # off by default: carrying the pusher with a turned object turns the push with it, which
     # can drive the object further off (measured: docs/experiments.md#closed-loop)
     follow_object: bool = False
+    # m of sideways pusher offset per rad of the object's yaw off the plan in push steps and
+    # the largest offset (steer_pusher); 0, off: no gain helped beyond the scatter between
+    # scenes (measured: docs/experiments.md#closed-loop)
+    steer_gain: float = 0.0
+    steer_limit: float = 0.03
 
 
 @dataclass
@@ -101,6 +114,26 @@ def follow_object(target: np.ndarray, planned_pose: np.ndarray, seen_pose: np.nd
     c, s = math.cos(turn), math.sin(turn)
     rel = np.asarray(target, dtype=float) - planned_pose[:2]
     return seen_pose[:2] + np.array([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]])
+
+
+def steer_pusher(target: np.ndarray, start: np.ndarray, planned_pose: np.ndarray,
+                 seen_pose: np.ndarray, gain: float, limit: float) -> np.ndarray:
+    """A free pusher's step target ``(x, y)`` moved sideways to its planned step from
+    ``start``: by how far the object's centre is off the plan sideways, so that the contact
+    keeps its planned offset from the centre, plus ``gain`` × the object's yaw off the plan
+    (at most ``limit`` m in all), so that the push turns the object back.
+
+    A push along d at a contact left of the centre turns the object clockwise (the torque
+    r × F = −r_⊥ |F|), so a yaw error e > 0 (turned counter-clockwise too far) moves the
+    contact to the left, by ``gain · e``."""
+    step = np.asarray(target, dtype=float) - np.asarray(start, dtype=float)
+    length = float(np.hypot(*step))
+    if length < 1e-6:
+        return np.asarray(target, dtype=float)
+    left = np.array([-step[1], step[0]]) / length
+    yaw_off = _wrap(float(seen_pose[2] - planned_pose[2]))
+    side = float((seen_pose[:2] - planned_pose[:2]) @ left) + gain * yaw_off
+    return np.asarray(target, dtype=float) + float(np.clip(side, -limit, limit)) * left
 
 
 def _observed_scene(scene: Scene, seen: Observation) -> Scene:
@@ -179,6 +212,11 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
                 name = world.pusher.name
                 target[name] = follow_object(target[name], loop.plan.q_obj[loop.t],
                                              seen.poses[obj])
+            elif settings.steer_gain and world.pusher is not None and loop.pushing():
+                name = world.pusher.name
+                target[name] = steer_pusher(target[name], loop.drive[name][loop.t],
+                                            loop.plan.q_obj[loop.t], seen.poses[obj],
+                                            settings.steer_gain, settings.steer_limit)
             world.run_step(command, target, loop.substeps[loop.t])
             loop.executed.append(loop.substeps[loop.t])
             command, loop.t = target, loop.t + 1
@@ -196,7 +234,7 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
                 where = "at the end of a phase" if at_boundary else "mid-phase"
                 tail = solution_tail(loop.plan, loop.t)
                 if not _ask(loop, scene, seen, tail, f"{reason} {where}", replan, settings,
-                            report):
+                            report, fresh=settings.fresh_after_miss):
                     loop.calm_until = (loop.t // loop.T + 1) * loop.T
         ex = recorded(scene, obj, truth, world.obstacle_contact, sorted(world.forbidden),
                       loop.executed, physics)

@@ -8,7 +8,13 @@ import pytest
 
 import robotplan
 from robotplan import load_scene
-from robotplan.execution.closed_loop import departure, follow_object
+from robotplan.execution.closed_loop import (
+    LoopSettings,
+    departure,
+    execute_closed_loop,
+    follow_object,
+    steer_pusher,
+)
 from robotplan.execution.perturb import Perturbation
 from robotplan.execution.scene_world import Observation
 from robotplan.execution.sim import PHYSICS
@@ -30,6 +36,21 @@ def test_follow_object_keeps_the_pusher_where_it_was_on_the_object():
     moved = follow_object(target, planned, seen)
     assert moved == pytest.approx([0.2, 0.0])  # 0.1 m behind along the turned axis
     assert follow_object(target, planned, planned) == pytest.approx(target)
+
+
+def test_steering_moves_the_pusher_sideways_to_the_object_and_against_its_turn():
+    """A push step along +x: the target follows the object 1 cm to the left, and moves a
+    further gain × yaw error to the left for an object turned counter-clockwise too far."""
+    start, target = np.array([0.0, 0.0]), np.array([0.03, 0.0])
+    planned = np.array([0.1, 0.0, 0.0])
+    left_1cm = np.array([0.1, 0.01, 0.0])
+    assert np.allclose(steer_pusher(target, start, planned, left_1cm, 0.05, 0.03),
+                       [0.03, 0.01])
+    turned = np.array([0.1, 0.0, 0.2])
+    assert np.allclose(steer_pusher(target, start, planned, turned, 0.05, 0.03), [0.03, 0.01])
+    far = np.array([0.1, -0.2, -1.0])
+    assert np.allclose(steer_pusher(target, start, planned, far, 0.05, 0.03), [0.03, -0.03])
+    assert np.allclose(steer_pusher(start, start, planned, far, 0.05, 0.03), start)
 
 
 def test_a_perturbed_world_is_seeded_and_within_its_spread():
@@ -79,3 +100,45 @@ def test_closed_loop_reaches_the_goal_in_a_perturbed_world(box_plan):
     closed = robotplan.execute(box_plan, perturb=world)
     assert closed.coverage >= 0.95
     assert all(isinstance(v, int | float) for v in world.describe().values())
+
+
+@pytest.mark.parametrize("fresh_after_miss", [True, False])
+def test_a_departure_whose_tail_does_not_plan_asks_for_a_fresh_search(box_plan,
+                                                                      fresh_after_miss):
+    """The re-planner is asked with the plan's tail first; when that does not plan, a fresh
+    search is asked at once only if ``fresh_after_miss``, and at the plan's end always."""
+    calls = []
+
+    def nothing_plans(observed, tail, fresh):
+        calls.append((tail is not None, fresh))
+        return robotplan.Plan(observed, "box", None, False)
+
+    scene = box_plan.scene
+    x, y, yaw = scene.bodies["box"].pose
+    moved = scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+    settings = LoopSettings(fresh_after_miss=fresh_after_miss, max_replans=3)
+    ex = execute_closed_loop(moved, "box", box_plan.best, nothing_plans, settings)
+    assert calls[0] == (True, fresh_after_miss)
+    assert len(ex.replans) == len(calls) <= 3
+    assert not any(r.solved for r in ex.replans) and len(ex.plans) == 1
+
+
+@pytest.mark.slow
+def test_closed_loop_recovers_an_arm_push_when_the_box_is_not_where_it_was_planned():
+    """The left iiwa's two pushes are planned for the box where the scene puts it; the box
+    stands 6 cm further back. Open loop the arm pushes air; closed loop sees that after the
+    first step, re-plans the arm's joints from there and the box ends in the goal."""
+    scene = load_scene(TASKS / "two_arm_left_only.yaml")
+    planned = robotplan.plan(scene, skeleton="left:push@2,left:push@3", workers=2,
+                             progress=False, quiet=True)
+    assert planned.solved
+    x, y, yaw = scene.bodies["box"].pose
+    moved = scene.with_state({"box": (x, y - 0.06, yaw)})
+    open_loop = robotplan.execute(planned, moved, mode="open_loop")
+    assert open_loop.coverage < 0.5
+    closed = robotplan.execute(planned, moved)
+    assert closed.coverage >= 0.95
+    first = closed.replans[0]
+    assert first.step == 1 and first.solved and "left" in first.skeleton
+    assert set(closed.joints) == {"left", "right"}
+    assert len(closed.joints["left"]) == len(closed.object_poses)
