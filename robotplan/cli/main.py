@@ -122,9 +122,11 @@ def _parser() -> argparse.ArgumentParser:
 
     t = sub.add_parser("train", help="train learned functionals")
     tsub = t.add_subparsers(dest="what", required=True)
-    tp = tsub.add_parser("push", help="train F_flow or F on push data")
+    tp = tsub.add_parser("push", help="train F_flow, F or F_q on push data")
     tp.add_argument("--data", required=True, metavar="DIR")
-    tp.add_argument("--model", choices=["flow", "direct"], default="flow")
+    tp.add_argument("--model", choices=["flow", "direct", "rigid"], default="flow",
+                    help="flow: F_flow (eq. 4); direct: F (eq. 3); rigid: F_q, the "
+                         "object's rigid motion Δq (app. eq. 15)")
     tp.add_argument("--encoder", choices=["shared", "joint"], default="shared",
                     help="shared: the paper's (one encoder per SDF, shared weights); "
                          "joint: one encoder over the three SDFs stacked as channels")
@@ -132,6 +134,8 @@ def _parser() -> argparse.ArgumentParser:
     tp.add_argument("--steps", type=int, default=60_000, help="total optimiser steps")
     tp.add_argument("--batch", type=int, default=32)
     tp.add_argument("--lr", type=float, default=5e-4)
+    tp.add_argument("--warmup", type=int, default=500, help="steps of linear learning-rate "
+                    "warm-up before the cosine decay")
     tp.add_argument("--points", type=int, default=256, help="query points per sample")
     tp.add_argument("--scenes", type=int, default=None, help="use only the first N scenes")
     tp.add_argument("--seed", type=int, default=0)

@@ -57,6 +57,7 @@ def cmd_train_push(args: argparse.Namespace) -> int:
                       batch=args.batch, lr=args.lr, points=args.points, seed=args.seed,
                       scenes=args.scenes, device=device, minutes=args.minutes,
                       val_every=args.val_every, contact_share=args.contact_share,
+                      warmup=args.warmup,
                       near_share=args.near_share, spec={"encoder": args.encoder},
                       init_weights=args.init_weights,
                       command=" ".join(["robotplan", *sys.argv[1:]]))
@@ -68,8 +69,13 @@ def cmd_train_push(args: argparse.Namespace) -> int:
                              "contact_share": args.contact_share
                              if args.contact_share is not None
                              else saved.get("contact_share")})
-    last = train(cfg, resume=args.resume)
-    write_model_card(out)
+    if cfg.kind == "rigid":
+        from robotplan.training.rigid import train_rigid
+
+        last = train_rigid(cfg, resume=args.resume)
+    else:
+        last = train(cfg, resume=args.resume)
+        write_model_card(out)
     print(json.dumps(last))
     return 0
 
@@ -85,6 +91,15 @@ def cmd_eval_push(args: argparse.Namespace) -> int:
         if not Path(path).is_dir():
             print(f"error: {path}: {what}: no such folder", file=sys.stderr)
             return EXIT_BAD_INPUT
+    spec = json.loads((Path(args.model) / "spec.json").read_text()) if (
+        Path(args.model) / "spec.json").is_file() else {}
+    if spec.get("kind") == "rigid":
+        from robotplan.training.rigid import evaluate_rigid
+
+        print_result(evaluate_rigid(args.model, args.data, scenes=args.scenes,
+                                    per_scene=args.per_scene or None, seed=args.seed,
+                                    device=device), args.json)
+        return 0
     result = evaluate_push(args.model, args.data, scenes=args.scenes,
                            per_scene=args.per_scene or None, seed=args.seed, device=device)
     if args.pose_fit > 0:

@@ -23,9 +23,10 @@ def head_matmul_dtype(model_dtype: torch.dtype) -> torch.dtype:
 
 @dataclass(frozen=True)
 class DynamicsSpec:
-    """Constructor arguments of :class:`PushDynamics` (written to ``spec.json``)."""
+    """Constructor arguments of :class:`PushDynamics` and of F_q's :class:`RigidMotion`
+    (written to ``spec.json``)."""
 
-    kind: Literal["flow", "direct"] = "flow"
+    kind: Literal["flow", "direct", "rigid"] = "flow"
     grid: tuple[int, int] = (140, 140)
     workspace_center: tuple[float, float] = (0.0, 0.0)
     workspace_size: tuple[float, float] = (1.4, 1.4)
@@ -38,6 +39,7 @@ class DynamicsSpec:
     encoder: Literal["shared", "joint"] = "shared"  # joint: one encoder sees all 3 SDFs
     sdf_scale: float = 5.0  # input SDF values (m) are multiplied by this
     out_scale: float = 0.01  # the network's output is multiplied by this (m)
+    turn_scale: float = 0.05  # F_q's turn output is multiplied by this (rad)
     extra: dict = field(default_factory=dict)  # free-form notes (not used by the network)
 
     @classmethod

@@ -36,6 +36,10 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
     A given ``guess`` (an earlier plan of the same skeleton) starts the learned program
     directly."""
     program = program_class(scene, skeleton)
+    states = len(skeleton.phases) * space.steps_per_phase + 1
+    if guess is not None and len(guess["q_obj"]) != states:
+        raise ValueError(f"a guess of {len(guess['q_obj'])} states for {skeleton.describe()} "
+                         f"at {space.steps_per_phase} steps per phase ({states} states)")
     warm_seconds = 0.0
     if settings.warm_start and guess is None:
         kin = program(scene, skeleton, None, space, settings)

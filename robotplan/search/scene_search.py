@@ -177,6 +177,27 @@ def settings_for(scene: Scene, solver: str = "snopt") -> ProgramSettings:
     return program_settings(*classes, solver=solver)
 
 
+def _space_of_guesses(space: SkeletonSpace, candidates: list[Skeleton],
+                      guesses: dict[Skeleton, dict] | None) -> SkeletonSpace:
+    """``space`` with the steps per phase of the warm-start guesses among ``candidates``
+    (a plan along a route has more than the default)."""
+    for sk in candidates:
+        guess = (guesses or {}).get(sk)
+        if guess is not None:
+            steps = (len(guess["q_obj"]) - 1) // len(sk.phases)
+            if steps != space.steps_per_phase:
+                return replace(space, steps_per_phase=steps)
+    return space
+
+
+def _settings_of(candidates: list[Skeleton], settings: ProgramSettings) -> ProgramSettings:
+    """The routes' overlay for skeletons along a route (phases with via points), as
+    :func:`_search_routes` planned them."""
+    if any(p.via is not None for sk in candidates for p in sk.phases):
+        return program_settings("routes", base=settings)
+    return settings
+
+
 def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: int = 2,
                  skeleton: str | Skeleton | None = None, max_pushes: int = 2,
                  progress: bool = True,
@@ -193,8 +214,9 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     space = space_for(scene)
     for candidates, space in candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet):
         left = None if time_budget is None else max(0.0, time_budget - result.seconds)
-        more = search_push(scene, model_dir, candidates, settings, workers, progress,
-                           exhaustive, left, space, guesses=guesses)
+        space = _space_of_guesses(space, candidates, guesses)
+        more = search_push(scene, model_dir, candidates, _settings_of(candidates, settings),
+                           workers, progress, exhaustive, left, space, guesses=guesses)
         spaces.update({id(s): space for s in more.candidates})
         result = merge_results(result, more)
         if result.solved or budget_spent(result, time_budget):

@@ -25,7 +25,8 @@ from robotplan.models.dynamics import DynamicsSpec, PushDynamics, save_model
 from robotplan.sdf import Workspace
 from robotplan.training.samples import PushSamples, SampleBatch
 
-__all__ = ["TrainConfig", "grid_rmse", "train"]
+__all__ = ["TrainConfig", "grid_rmse", "hardware", "lr_at", "train", "validation_indices",
+           "write_json"]
 
 
 @dataclass
@@ -72,10 +73,12 @@ def _query_points(batch: SampleBatch, n: int, near_share: float, ws: Workspace,
     pts = torch.stack((x0 + (x1 - x0) * u[..., 0], y0 + (y1 - y0) * u[..., 1]), dim=-1)
     k = round(near_share * n)
     if k:
-        reach = batch.params[:, :2].norm(dim=1) + 0.10  # (B,)
+        # drawn on the CPU whatever the device: the same points for a seed everywhere
+        reach = batch.params[:, :2].norm(dim=1).cpu() + 0.10  # (B,)
         ang = 2 * math.pi * torch.rand(B, k, generator=gen)
         rad = reach[:, None] * torch.rand(B, k, generator=gen).sqrt()
-        near = batch.object_prev[:, None, :2] + torch.stack((rad * ang.cos(), rad * ang.sin()), -1)
+        near = batch.object_prev[:, None, :2].cpu() + torch.stack((rad * ang.cos(),
+                                                                     rad * ang.sin()), -1)
         pts[:, :k] = near
     return pts
 
@@ -108,7 +111,7 @@ def grid_rmse(model: PushDynamics, batch: SampleBatch, ws: Workspace, stride: in
     return torch.cat(model_err).cpu().numpy(), torch.cat(base_err).cpu().numpy()
 
 
-def _validation_indices(samples: PushSamples, val_idx: np.ndarray, n: int, seed: int
+def validation_indices(samples: PushSamples, val_idx: np.ndarray, n: int, seed: int
                         ) -> np.ndarray:
     rng = np.random.default_rng([seed, 99])
     contact = val_idx[samples.contact[val_idx]]
@@ -142,7 +145,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
         step, history, seconds = state["step"], json.loads(state["history"]), state["seconds"]
     samples = PushSamples(cfg.data, cfg.scenes)
     train_idx, val_idx = samples.split_by_scene(cfg.val_fraction, cfg.seed)
-    val_batch = samples.batch(_validation_indices(samples, val_idx, cfg.val_samples, cfg.seed),
+    val_batch = samples.batch(validation_indices(samples, val_idx, cfg.val_samples, cfg.seed),
                               device=device)
     ws = Workspace(spec.workspace_center, spec.workspace_size,
                    spec.workspace_size[0] / spec.grid[1])
@@ -170,10 +173,10 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
                                    "free": round(1e3 * float(base[~c].mean()), 3)}}
         history.append(row)
         save_model(model, out)
-        _write_json(out / "training.json", {"config": asdict(cfg), "history": history,
+        write_json(out / "training.json", {"config": asdict(cfg), "history": history,
                                              "samples": {"train": len(train_idx),
                                                          "val": len(val_idx)},
-                                             "hardware": _hardware(device)})
+                                             "hardware": hardware(device)})
         return row
 
     out.mkdir(parents=True, exist_ok=True)
@@ -232,7 +235,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
     return history[-1]
 
 
-def _hardware(device: torch.device) -> dict:
+def hardware(device: torch.device) -> dict:
     info = {"device": str(device), "cpu": platform.processor() or platform.machine(),
             "cores": os.cpu_count(), "threads": torch.get_num_threads(),
             "torch": torch.__version__}
@@ -241,7 +244,7 @@ def _hardware(device: torch.device) -> dict:
     return info
 
 
-def _write_json(path: Path, data: dict) -> None:
+def write_json(path: Path, data: dict) -> None:
     tmp = path.with_suffix(".json.tmp")
     tmp.write_text(json.dumps(data, indent=1))
     os.replace(tmp, path)

@@ -67,3 +67,4 @@ def test_warm_guess_starts_at_the_moved_object_and_ends_where_the_plan_did():
     before = np.linalg.norm(contact[k] - q_obj[T + 1, :2])
     after = np.linalg.norm(guess["p"][k] - guess["q_obj"][T + 1, :2])
     assert after == pytest.approx(before)
+

@@ -60,3 +60,29 @@ def test_no_further_tier_once_the_budget_is_spent_with_a_plan_in_hand():
     assert not search_module.budget_spent(with_plan, 70.0)  # time left
     assert not search_module.budget_spent(with_plan, None)  # no budget
     assert not search_module.budget_spent(SearchResult(None, [], 60.0), 50.0)  # nothing yet
+
+
+def test_a_warm_start_along_a_route_keeps_its_steps_and_the_routes_settings(monkeypatch):
+    """A re-plan warm started from a plan along a route (more steps per phase than the
+    default, via points) is solved in that plan's space and with the routes' settings."""
+    import numpy as np
+
+    from robotplan.program.skeleton import Phase, Skeleton
+
+    calls = []
+
+    def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
+               time_budget, space, guesses=None):
+        calls.append((settings, space))
+        return SearchResult(None, [], 1.0)
+
+    monkeypatch.setattr(search_module, "search_push", record)
+    scene = load_scene(TASKS / "obstacle_push.yaml")
+    routed = Skeleton((Phase("reach", "pusher", "box", 2),
+                       Phase("push", "pusher", "box", 2, via=(0.1, 0.25))))
+    guess = {"q_obj": np.zeros((2 * 14 + 1, 3))}
+    search_module.search_scene(scene, TASKS.parent / "learned" / "push_flow", skeleton=routed,
+                               quiet=True, progress=False, guesses={routed: guess})
+    settings, space = calls[0]
+    assert space.steps_per_phase == 14
+    assert settings.push_friction == 0.02 and settings.lever_weight == 100.0
