@@ -136,6 +136,9 @@ def _parser() -> argparse.ArgumentParser:
     tp.add_argument("--lr", type=float, default=5e-4)
     tp.add_argument("--warmup", type=int, default=500, help="steps of linear learning-rate "
                     "warm-up before the cosine decay")
+    tp.add_argument("--rigid-loss", choices=["delta", "sdf"], default="delta",
+                    help="F_q's loss: delta, the simulator's Δq; sdf, eq. (5) through the "
+                         "transform on the SDFs alone")
     tp.add_argument("--points", type=int, default=256, help="query points per sample")
     tp.add_argument("--scenes", type=int, default=None, help="use only the first N scenes")
     tp.add_argument("--seed", type=int, default=0)

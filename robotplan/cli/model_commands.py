@@ -57,7 +57,7 @@ def cmd_train_push(args: argparse.Namespace) -> int:
                       batch=args.batch, lr=args.lr, points=args.points, seed=args.seed,
                       scenes=args.scenes, device=device, minutes=args.minutes,
                       val_every=args.val_every, contact_share=args.contact_share,
-                      warmup=args.warmup,
+                      warmup=args.warmup, rigid_loss=args.rigid_loss,
                       near_share=args.near_share, spec={"encoder": args.encoder},
                       init_weights=args.init_weights,
                       command=" ".join(["robotplan", *sys.argv[1:]]))
@@ -95,6 +95,10 @@ def cmd_eval_push(args: argparse.Namespace) -> int:
         Path(args.model) / "spec.json").is_file() else {}
     if spec.get("kind") == "rigid":
         from robotplan.training.rigid import evaluate_rigid
+
+        if args.pose_fit > 0 or args.record:
+            print("note: --pose-fit and --record apply to F_flow and F; F_q predicts Δq "
+                  "itself (delta_q_error, turn_gain)", file=sys.stderr)
 
         print_result(evaluate_rigid(args.model, args.data, scenes=args.scenes,
                                     per_scene=args.per_scene or None, seed=args.seed,

@@ -1,8 +1,11 @@
 """Training and evaluating F_q (:mod:`robotplan.models.rigid`) on push data.
 
-Supervision: the ground-truth Δq of each step, taken from the simulator's poses about the
-pivot the SDF defines (:func:`~robotplan.models.rigid.moved_pivot_delta`); the loss is the
-squared error of Δq in units of the spec's ``out_scale`` (m) and ``turn_scale`` (rad). The
+Two losses (``TrainConfig.rigid_loss``): ``"delta"``, the ground-truth Δq of each step from
+the simulator's poses about the pivot the SDF defines
+(:func:`~robotplan.models.rigid.moved_pivot_delta`), its squared error in units of the
+spec's ``out_scale`` (m) and ``turn_scale`` (rad); ``"sdf"``, the SDFs alone: eq. (5)
+through the transform, φ1_{t−1}(T(Δq)⁻¹x) against φ1_t(x) at query points
+(:func:`sdf_space_loss`), in units of ``out_scale``. The
 run is seeded and resumable as :func:`robotplan.training.train.train` is (batches from a
 permutation per ``(seed, epoch)``, ``checkpoint.pt`` every few minutes and at the end).
 """
@@ -20,22 +23,53 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from robotplan.models.rigid import RigidMotion, load_rigid, moved_pivot_delta, save_rigid, sdf_pivot
+from robotplan.models.rigid import (
+    RigidMotion,
+    load_rigid,
+    moved_pivot_delta,
+    save_rigid,
+    sdf_pivot,
+    transform_points,
+)
 from robotplan.models.spec import DynamicsSpec
 from robotplan.sdf import Workspace
 from robotplan.training.evaluation import pick_samples
 from robotplan.training.samples import PushSamples, SampleBatch
-from robotplan.training.train import TrainConfig, hardware, lr_at, validation_indices, write_json
+from robotplan.training.train import (
+    TrainConfig,
+    hardware,
+    lr_at,
+    query_points,
+    validation_indices,
+    write_json,
+)
 
-__all__ = ["delta_q_errors", "evaluate_rigid", "rigid_targets", "train_rigid", "turn_gain"]
+__all__ = ["delta_q_errors", "evaluate_rigid", "rigid_targets", "sdf_space_loss", "train_rigid",
+           "turn_gain"]
 
 
 def rigid_targets(batch: SampleBatch, grid: Tensor, shape: tuple[int, int]
-                  ) -> tuple[Tensor, Tensor]:
-    """The model inputs ``(B, 3, H, W)`` and the true Δq ``(B, 3)`` of a batch."""
+                  ) -> tuple[Tensor, Tensor, Tensor]:
+    """The model inputs ``(B, 3, H, W)``, the pivots ``(B, 2)`` and the true Δq ``(B, 3)``."""
     inputs = batch.inputs(grid, shape)
     pivot = sdf_pivot(inputs[:, 0].flatten(1), grid)
-    return inputs, moved_pivot_delta(pivot, batch.object_prev, batch.object_now)
+    return inputs, pivot, moved_pivot_delta(pivot, batch.object_prev, batch.object_now)
+
+
+def sdf_space_loss(delta: Tensor, phi_prev_grid: Tensor, pivot: Tensor, phi_now: Tensor,
+                   points: Tensor, bounds: tuple[float, float, float, float]) -> Tensor:
+    """Eq. (5) through the rigid transform: the mean over samples and ``points (B, N, 2)`` of
+    (φ1_{t−1}(T(Δq)⁻¹x) − φ1_t(x))², φ1_{t−1} read from its grid ``(B, H, W)`` on X_h
+    (``bounds``: x_min, x_max, y_min, y_max; cell centres) by bilinear interpolation,
+    ``phi_now (B, N)`` the observed φ1_t at the points."""
+    back = transform_points(points, pivot, delta, inverse=True)
+    x0, x1, y0, y1 = bounds
+    where = torch.stack((2 * (back[..., 0] - x0) / (x1 - x0) - 1,
+                         2 * (back[..., 1] - y0) / (y1 - y0) - 1), -1)
+    phi = torch.nn.functional.grid_sample(phi_prev_grid[:, None], where[:, None],
+                                          mode="bilinear", padding_mode="border",
+                                          align_corners=False)[:, 0, 0]
+    return (phi - phi_now).pow(2).mean()
 
 
 @torch.no_grad()
@@ -47,7 +81,7 @@ def delta_q_errors(model: RigidMotion, batch: SampleBatch, grid: Tensor,
         sub = SampleBatch(*(getattr(batch, f)[i:i + chunk] for f in
                             ("params", "object_prev", "object_now", "radius", "pusher_prev",
                              "pusher_now", "contact")))
-        inputs, true = rigid_targets(sub, grid, shape)
+        inputs, _, true = rigid_targets(sub, grid, shape)
         preds.append(model(inputs))
         trues.append(true)
     return torch.cat(preds).cpu().numpy(), torch.cat(trues).cpu().numpy()
@@ -72,7 +106,10 @@ def _workspace(spec: DynamicsSpec) -> Workspace:
 
 
 def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict:
-    """Run (or resume) F_q training; returns the last validation row."""
+    """Run (or resume) F_q training with ``cfg.rigid_loss``; returns the last validation
+    row (Δq errors against the ground truth, whichever loss trains)."""
+    if cfg.rigid_loss not in ("delta", "sdf"):
+        raise ValueError(f"rigid_loss {cfg.rigid_loss!r}: expected 'delta' or 'sdf'")
     from tqdm import tqdm
 
     out, device = Path(cfg.out), torch.device(cfg.device)
@@ -138,8 +175,14 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
                 perm = np.random.default_rng([cfg.seed, epoch]).permutation(train_idx)
                 perm_epoch = epoch
             batch = samples.batch(perm[b * cfg.batch:(b + 1) * cfg.batch], device=device)
-            inputs, true = rigid_targets(batch, grid, ws.shape)
-            loss = ((model(inputs) - true) / model.scale).pow(2).mean()
+            inputs, pivot, true = rigid_targets(batch, grid, ws.shape)
+            if cfg.rigid_loss == "sdf":
+                gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
+                pts = query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)
+                loss = sdf_space_loss(model(inputs), inputs[:, 0], pivot, batch.phi1_now(pts),
+                                      pts, ws.bounds) / spec.out_scale**2
+            else:
+                loss = ((model(inputs) - true) / model.scale).pow(2).mean()
             for g in opt.param_groups:
                 g["lr"] = lr_at(cfg, step)
             opt.zero_grad(set_to_none=True)

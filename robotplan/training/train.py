@@ -25,8 +25,8 @@ from robotplan.models.dynamics import DynamicsSpec, PushDynamics, save_model
 from robotplan.sdf import Workspace
 from robotplan.training.samples import PushSamples, SampleBatch
 
-__all__ = ["TrainConfig", "grid_rmse", "hardware", "lr_at", "train", "validation_indices",
-           "write_json"]
+__all__ = ["TrainConfig", "grid_rmse", "hardware", "lr_at", "query_points", "train",
+           "validation_indices", "write_json"]
 
 
 @dataclass
@@ -53,6 +53,8 @@ class TrainConfig:
     checkpoint_minutes: float = 5.0
     command: str = ""
     spec: dict = field(default_factory=dict)  # DynamicsSpec overrides
+    # F_q's loss: "delta", the ground-truth Δq; "sdf", eq. (5) through T(Δq) on SDFs alone
+    rigid_loss: str = "delta"
 
 
 def lr_at(cfg: TrainConfig, step: int) -> float:
@@ -63,7 +65,7 @@ def lr_at(cfg: TrainConfig, step: int) -> float:
     return cfg.lr_min + 0.5 * (cfg.lr - cfg.lr_min) * (1 + math.cos(math.pi * frac))
 
 
-def _query_points(batch: SampleBatch, n: int, near_share: float, ws: Workspace,
+def query_points(batch: SampleBatch, n: int, near_share: float, ws: Workspace,
                   gen: torch.Generator) -> torch.Tensor:
     """``(B, n, 2)`` points: uniform on the table, plus a share within 10 cm of the object's
     bounding circle at t−1."""
@@ -203,7 +205,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
                                          rng.choice(train_free, cfg.batch - n_contact)])
             batch = samples.batch(chosen, device=device)
             gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
-            pts = _query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)
+            pts = query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)
             inputs = batch.inputs(grid, ws.shape)
             loss = (model(inputs, pts) - _target(model, batch, pts)).pow(2).mean()
             for g in opt.param_groups:
