@@ -73,6 +73,7 @@ class Plan:
                 "skeleton_space": ({"steps_per_phase": self.space.steps_per_phase,
                                     "init_frame": self.space.init_frame}
                                    if best and self.space else None),
+                "model": str(self.options.get("model", "")),
                 "plan_seconds": round(self.seconds, 2),
                 "programs_solved": len(self.candidates),
                 "violation": float(best.violation) if best else None,

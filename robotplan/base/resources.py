@@ -10,7 +10,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-__all__ = ["data_root", "learned_dir", "robots_dir", "skeletons_dir", "tasks_dir"]
+__all__ = ["DYNAMICS_FOLDERS", "data_root", "learned_dir", "robots_dir", "skeletons_dir",
+           "tasks_dir"]
 
 _PACKAGE = Path(__file__).resolve().parents[1]
 
@@ -30,6 +31,10 @@ def robots_dir() -> Path:
 
 def skeletons_dir() -> Path:
     return data_root() / "skeletons"
+
+
+# the shipped model of each kind of learned dynamics (``--dynamics``), under learned/
+DYNAMICS_FOLDERS = {"flow": "push_flow", "rigid": "push_rigid", "direct": "push_direct"}
 
 
 def learned_dir(model: str = "push_flow") -> Path:

@@ -6,7 +6,10 @@ import json
 import sys
 from pathlib import Path
 
-__all__ = ["EXIT_BAD_INPUT", "device_name", "not_a_model", "print_result"]
+from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
+
+__all__ = ["EXIT_BAD_INPUT", "add_dynamics_options", "device_name", "model_folder",
+           "not_a_model", "print_result"]
 
 
 EXIT_BAD_INPUT = 2
@@ -28,6 +31,20 @@ def not_a_model(folder: str) -> bool:
         return False
     print(f"error: {folder}: --model: not a model folder (no spec.json)", file=sys.stderr)
     return True
+
+
+def add_dynamics_options(parser) -> None:
+    """Which learned dynamics a plan uses: a shipped kind, or a model folder."""
+    parser.add_argument("--dynamics", choices=sorted(DYNAMICS_FOLDERS), default="flow",
+                        help="the shipped learned dynamics to plan with: flow (F_flow, "
+                        "H_F), rigid (F_q, its rigid step), direct (F, H_F); default flow")
+    parser.add_argument("--model", default=None, metavar="DIR",
+                        help="a model folder of any kind instead (overrides --dynamics)")
+
+
+def model_folder(args) -> str:
+    """The folder of ``--model``, else of the shipped ``--dynamics`` kind."""
+    return args.model or str(learned_dir(DYNAMICS_FOLDERS[args.dynamics]))
 
 
 def device_name(name: str) -> str:

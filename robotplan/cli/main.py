@@ -12,7 +12,7 @@ import sys
 
 from robotplan.base.memory import keep_freed_memory
 from robotplan.base.resources import learned_dir, tasks_dir
-from robotplan.cli.common import EXIT_BAD_INPUT, add_execution_options
+from robotplan.cli.common import EXIT_BAD_INPUT, add_dynamics_options, add_execution_options
 from robotplan.cli.model_commands import (
     cmd_bench,
     cmd_bench_functional,
@@ -64,7 +64,7 @@ def _parser() -> argparse.ArgumentParser:
     bp.add_argument("--seed", type=int, default=0)
     bp.add_argument("--out", required=True, metavar="DIR",
                     help="scenes, per-scene results, CSV, box plot (continues a partial run)")
-    bp.add_argument("--model", default=str(learned_dir("push_flow")), metavar="DIR")
+    add_dynamics_options(bp)
     bp.add_argument("--shapes", default="box,lshape",
                     help="comma-separated: box, lshape, ood (unseen footprints: triangle, "
                     "pentagon, hexagon, circle, T, cross, U, trapezoid), pose (a box or a "
@@ -84,7 +84,7 @@ def _parser() -> argparse.ArgumentParser:
     so = sub.add_parser("solve", help="plan a scene, execute it in pybullet, write the result")
     so.add_argument("scene", metavar="SCENE")
     so.add_argument("--out", required=True, metavar="DIR")
-    so.add_argument("--model", default=default_model, metavar="DIR")
+    add_dynamics_options(so)
     so.add_argument("--solver", choices=["snopt", "ipopt"], default="snopt")
     so.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     so.add_argument("--skeleton", default=None, help='one skeleton, e.g. "push@2,push@0"')

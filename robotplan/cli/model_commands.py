@@ -8,7 +8,13 @@ import sys
 import time
 from pathlib import Path
 
-from robotplan.cli.common import EXIT_BAD_INPUT, device_name, not_a_model, print_result
+from robotplan.cli.common import (
+    EXIT_BAD_INPUT,
+    device_name,
+    model_folder,
+    not_a_model,
+    print_result,
+)
 from robotplan.scene import load_scene
 
 __all__ = ["cmd_bench", "cmd_bench_functional", "cmd_bench_push", "cmd_data_push", "cmd_eval_push",
@@ -122,6 +128,7 @@ def cmd_eval_push(args: argparse.Namespace) -> int:
 def cmd_bench_push(args: argparse.Namespace) -> int:
     from robotplan.bench.push import run_bench_push
 
+    args.model = model_folder(args)
     if not_a_model(args.model):
         return EXIT_BAD_INPUT
     if args.scenes < 1:

@@ -7,7 +7,13 @@ import json
 import sys
 from pathlib import Path
 
-from robotplan.cli.common import EXIT_BAD_INPUT, not_a_model, perturbation, print_result
+from robotplan.cli.common import (
+    EXIT_BAD_INPUT,
+    model_folder,
+    not_a_model,
+    perturbation,
+    print_result,
+)
 from robotplan.scene import SceneError, load_scene
 
 __all__ = ["cmd_check", "cmd_diagnose", "cmd_render", "cmd_solve", "cmd_view"]
@@ -53,6 +59,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         print(f"error: {out}: --out: the folder is not empty; pass --overwrite to replace "
               "its result", file=sys.stderr)
         return EXIT_BAD_INPUT
+    args.model = model_folder(args)
     if not_a_model(args.model):
         return EXIT_BAD_INPUT
     out.mkdir(parents=True, exist_ok=True)

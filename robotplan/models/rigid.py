@@ -20,6 +20,7 @@ import torch
 from torch import Tensor, nn
 
 from robotplan.models.encoder import SDFEncoder
+from robotplan.models.encoder_passes import EncoderPasses
 from robotplan.models.spec import DynamicsSpec
 
 __all__ = ["RigidMotion", "load_rigid", "moved_pivot_delta", "save_rigid", "sdf_pivot",
@@ -60,7 +61,7 @@ def transform_points(points: Tensor, pivot: Tensor, delta: Tensor, inverse: bool
     return p + rot if inverse else p + rot + shift
 
 
-class RigidMotion(nn.Module):
+class RigidMotion(EncoderPasses, nn.Module):
     """F_q: ``inputs (B, 3, H, W)`` → Δq ``(B, 3)`` in m, m, rad (see the module docstring).
 
     ``spec.out_scale`` (m) and ``spec.turn_scale`` (rad) scale the network's outputs, so that

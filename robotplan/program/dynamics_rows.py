@@ -1,5 +1,11 @@
 """H_F (eq. 5) as a row of a push program: the learned dynamics of an object pushed by an
-actor (a disc or another object), a cost on its mean squared residual or a bound on it."""
+actor (a disc or another object), a cost on its mean squared residual or a bound on it.
+
+The model decides the functional: F_flow or F give H_F, the SDF residual over the table
+(:class:`~robotplan.functionals.dynamics.LearnedDynamics`); F_q gives H_q, the footprint's
+displacement from the predicted rigid step
+(:class:`~robotplan.functionals.rigid_dynamics.RigidDynamics`). Both enter the program as
+mean squares in mm² per step."""
 
 from __future__ import annotations
 
@@ -7,12 +13,24 @@ import numpy as np
 import torch
 
 from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
+from robotplan.functionals.rigid_dynamics import RigidDynamics
 from robotplan.models.dynamics import PushDynamics
+from robotplan.models.rigid import RigidMotion
 from robotplan.program.bridge import bridge
 from robotplan.program.row_table import RowSpec
 from robotplan.program.rows import ProgramRows
 
-__all__ = ["DynamicsRows"]
+__all__ = ["DynamicsRows", "mm2_per_unit"]
+
+Dynamics = LearnedDynamics | RigidDynamics
+
+
+def mm2_per_unit(dynamics: Dynamics, scene) -> float:
+    """What turns the functional's value per step into a mean square in mm²: H_F (m⁴, an
+    integral over the table) is divided by the scene's table area; H_q is in m²."""
+    if not getattr(dynamics, "integral", True):
+        return 1e6
+    return 1e6 / float(scene.workspace.size[0] * scene.workspace.size[1])
 
 
 class DynamicsRows(ProgramRows):
@@ -24,19 +42,21 @@ class DynamicsRows(ProgramRows):
         self.dynamics = self._add_dynamics(self.model, self.obj, self.Q1, self.pusher, self.Q2,
                                            self.guess["q_obj"], spec.row)
 
-    def _add_dynamics(self, model: PushDynamics, obj, Q_obj: np.ndarray, actor,
-                      Q_actor: np.ndarray, path: np.ndarray, name: str) -> LearnedDynamics:
+    def _add_dynamics(self, model: PushDynamics | RigidMotion, obj, Q_obj: np.ndarray, actor,
+                      Q_actor: np.ndarray, path: np.ndarray, name: str) -> Dynamics:
         """H_F of ``obj`` (poses ``Q_obj (N+1, 3)``) pushed by ``actor`` (``Q_actor (N+1, 2)``
         positions of a disc, or ``(N+1, 3)`` poses of an object) in every step, integrated
         around ``path (N+1, ≥2)``, the object's guessed centres."""
         s = self.settings
-        quad = phase_quadrature(torch.as_tensor(path[:, :2], dtype=torch.float32),
-                                obj.shape.bound_radius, self.scene.workspace,
-                                coarse=s.quad_coarse)
-        dynamics = LearnedDynamics(model, obj, actor, quad)
+        if isinstance(model, RigidMotion):
+            dynamics: Dynamics = RigidDynamics(model, obj, actor)
+        else:
+            quad = phase_quadrature(torch.as_tensor(path[:, :2], dtype=torch.float32),
+                                    obj.shape.bound_radius, self.scene.workspace,
+                                    coarse=s.quad_coarse)
+            dynamics = LearnedDynamics(model, obj, actor, quad)
         N, d = self.N, Q_actor.shape[1]
-        area = float(self.scene.workspace.size[0] * self.scene.workspace.size[1])
-        scale = 1e6 / area  # H (m²) → mean squared residual in mm²
+        scale = mm2_per_unit(dynamics, self.scene)
 
         def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
             X1 = torch.from_numpy(x[:3 * (N + 1)].reshape(N + 1, 3))

@@ -31,8 +31,8 @@ import numpy as np
 import torch
 from pydrake.solvers import IpoptSolver, MathematicalProgram, SnoptSolver, SolverOptions
 
-from robotplan.functionals.dynamics import LearnedDynamics
 from robotplan.models.dynamics import PushDynamics
+from robotplan.program.dynamics_rows import Dynamics, mm2_per_unit
 from robotplan.program.guess import initial_guess
 from robotplan.program.push_rows import PushRows
 from robotplan.program.row_table import rows_for_stage
@@ -205,13 +205,12 @@ class PushProgram(PushRows):
             return np.zeros(0)
         return self._residual_mm2(self.dynamics, q_obj, q_pusher)
 
-    def _residual_mm2(self, dynamics: LearnedDynamics, q_obj: np.ndarray, q_actor: np.ndarray
+    def _residual_mm2(self, dynamics: Dynamics, q_obj: np.ndarray, q_actor: np.ndarray
                       ) -> np.ndarray:
         """``dynamics``' H_F per step as the mean squared SDF residual over the table (mm²)."""
         H, _, _ = dynamics.evaluate(torch.from_numpy(q_obj), torch.from_numpy(q_actor),
                                     jacobian=False)
-        area = float(self.scene.workspace.size[0] * self.scene.workspace.size[1])
-        return H.double().numpy() * 1e6 / area
+        return H.double().numpy() * mm2_per_unit(dynamics, self.scene)
 
     def evaluate(self, x: np.ndarray) -> tuple[dict[str, float], float]:
         """At the full decision vector ``x``: the largest violation of each named constraint

@@ -57,10 +57,10 @@ class SearchResult:
 
 def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings,
                  space: SkeletonSpace, guesses: dict[Skeleton, dict] | None = None) -> None:
-    from robotplan.models.dynamics import load_model
+    from robotplan.models.loading import load_dynamics
 
     torch.set_num_threads(1)  # one thread per process (docs/experiments.md#torch-threads)
-    _worker.update(scene=scene, model=load_model(model_dir), settings=settings,
+    _worker.update(scene=scene, model=load_dynamics(model_dir), settings=settings,
                    space=space, guesses=guesses or {})
 
 

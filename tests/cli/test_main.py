@@ -164,3 +164,15 @@ def test_check_reads_exponents_and_check_and_solve_refuse_oversized_scenes(tmp_p
         res = run("solve", f, "--out", str(out))
         assert res.returncode == 2 and "Traceback" not in res.stderr
         assert res.stderr.count("\n") == 1 and not out.exists()
+
+
+def test_dynamics_picks_a_shipped_model_and_a_model_folder_overrides_it(tmp_path):
+    from argparse import Namespace
+
+    from robotplan.cli.common import model_folder
+
+    assert Path(model_folder(Namespace(dynamics="rigid", model=None))).name == "push_rigid"
+    assert model_folder(Namespace(dynamics="rigid", model=str(tmp_path))) == str(tmp_path)
+    res = run("solve", str(TASKS / "box_push.yaml"), "--out", str(tmp_path / "a"),
+              "--dynamics", "quadratic")
+    assert res.returncode == 2 and "--dynamics" in res.stderr and "Traceback" not in res.stderr

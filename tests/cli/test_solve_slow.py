@@ -102,3 +102,16 @@ def test_arm_search_falls_back_to_init_points_seen_from_the_goal(tmp_path):
     assert doc["status"] == "solved"
     assert doc["skeleton_space"]["init_frame"] == "goal"
     assert {row["actor"] for row in doc["skeleton"] if row["mode"] == "push"} == {"left"}
+
+
+@pytest.mark.slow
+def test_solve_lshape_with_the_rigid_motion_model(tmp_path):
+    """Planning with F_q (``--dynamics rigid``): the L-shape reaches its goal in pybullet."""
+    out = tmp_path / "out"
+    res = subprocess.run([sys.executable, "-m", "robotplan.cli", "solve",
+                          str(TASKS / "lshape_push.yaml"), "--out", str(out), "--dynamics",
+                          "rigid"], cwd=ROOT, capture_output=True, text=True, timeout=1800)
+    assert res.returncode == 0, res.stderr
+    doc = json.loads((out / "result.json").read_text())
+    assert doc["status"] == "solved" and doc["model"].endswith("push_rigid")
+    assert doc["execution"]["coverage"] >= 0.95

@@ -10,6 +10,7 @@ from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoD
 
 from robotplan import load_scene
 from robotplan.models.dynamics import DynamicsSpec, PushDynamics
+from robotplan.models.rigid import RigidMotion
 from robotplan.program.push_program import PushProgram
 from robotplan.program.settings import ProgramSettings
 from robotplan.program.skeleton import load_skeleton_space, parse_skeleton
@@ -18,11 +19,14 @@ from tests.conftest import DATA, TASKS
 TINY = {"channels": (2, 2, 2), "sdf_features": 8, "point_features": 8, "hidden": (16, 16)}
 
 
-def build(text="push@2", kinematic=False, scene_file=TASKS / "box_push.yaml", **settings):
+def build(text="push@2", kinematic=False, scene_file=TASKS / "box_push.yaml", rigid=False,
+          **settings):
     torch.manual_seed(0)
     scene = load_scene(scene_file)
     space = replace(load_skeleton_space(), init_frame="table")  # init 2: west of the box
     model = None if kinematic else PushDynamics(DynamicsSpec(**TINY)).double()  # float64
+    if rigid:
+        model = RigidMotion(DynamicsSpec(kind="rigid", encoder="joint", **TINY)).double()
     return PushProgram(scene, parse_skeleton(text, "pusher", "box"), model, space,
                        ProgramSettings(**settings))
 
@@ -92,10 +96,13 @@ def test_step_limits_hold_for_the_initial_guess():
     assert len(limited.prog.linear_constraints()) == len(prog.prog.linear_constraints()) + 2
 
 
-@pytest.mark.parametrize("weight", [0.01, 0.0, None],
-                         ids=["H_F-cost", "H_F-constraint", "kinematic"])
-def test_constraint_gradients_match_finite_differences(weight):
-    prog = build(kinematic=True) if weight is None else build(dynamics_weight=weight)
+@pytest.mark.parametrize("weight,rigid", [(0.01, False), (0.0, False), (None, False),
+                                          (0.01, True), (0.0, True)],
+                         ids=["H_F-cost", "H_F-constraint", "kinematic", "H_q-cost",
+                              "H_q-constraint"])
+def test_constraint_gradients_match_finite_differences(weight, rigid):
+    prog = (build(kinematic=True) if weight is None
+            else build(dynamics_weight=weight, rigid=rigid))
     guess = prog.guess
     values = {}
     for v, x in ((prog.Q1, guess["q_obj"]), (prog.Q2, guess["q_pusher"]), (prog.P, guess["p"])):

@@ -1,0 +1,127 @@
+"""H_q, the learned rigid-motion functional: how far a planned step of an object departs
+from the step F_q predicts (paper app., eqs. 15, 17), evaluated for whole trajectories.
+
+F_q reads φ1_{t−1}, φ2_{t−1}, φ2_t on X_h and predicts Δq_t = (Δx, Δy, Δα): a turn by Δα
+about the pivot (the centroid of the object's footprint), then a shift of the pivot by
+(Δx, Δy). With c_t the pivot of the planned pose q1_t (x, y, yaw), the residual of step t is
+
+    r_t = (c_t − c_{t−1} − (Δx, Δy),  α_t − α_{t−1} − Δα),
+    H_q,t = |r_t,xy|² + ρ² r_t,α²                                       (m²),
+
+with ρ the footprint's radius of gyration about the pivot: H_q,t is then the mean squared
+displacement between the footprint where the plan puts it and where F_q puts it (to first
+order in the angle). The row is the same kind of number as H_F's mean squared SDF residual,
+and plays the same part in a program (:mod:`robotplan.program.dynamics_rows`).
+
+Gradients without autograd through the grids: the three grids of a step are rendered with
+their tangents (:class:`~robotplan.functionals.grid_render.GridTangents`), the small head is
+differentiated by autograd, the encoder in reverse mode by hand
+(:class:`~robotplan.models.encoder_passes.EncoderPasses`): one pass back per step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import torch
+from torch import Tensor
+
+from robotplan.functionals.grid_render import render_on_grid
+from robotplan.models.rigid import RigidMotion
+from robotplan.scene.bodies import Body
+from robotplan.sdf import Workspace
+
+__all__ = ["RigidDynamics", "footprint_moments"]
+
+MOMENT_CELL = 5e-4  # m: cell of the sampling that finds a footprint's centroid and ρ
+
+
+def footprint_moments(body: Body, dtype: torch.dtype = torch.float64) -> tuple[Tensor, float]:
+    """The body-frame centroid ``(2,)`` of ``body``'s footprint (φ < 0) and its radius of
+    gyration ρ about it (m), from the SDF sampled on 0.5 mm cells."""
+    r = body.shape.bound_radius
+    n = max(8, math.ceil(2 * r / MOMENT_CELL))
+    axis = (torch.arange(n, dtype=dtype) + 0.5) * (2 * r / n) - r
+    points = torch.stack(torch.meshgrid(axis, axis, indexing="xy"), -1).reshape(-1, 2)
+    inside = points[body.shape.sdf(points) < 0]
+    if len(inside) == 0:
+        return torch.zeros(2, dtype=dtype), r
+    centre = inside.mean(0)
+    rho = float(((inside - centre) ** 2).sum(1).mean().sqrt())
+    return centre, rho
+
+
+def _rotate(yaw: Tensor, v: Tensor) -> tuple[Tensor, Tensor]:
+    """R(yaw) v and dR/dyaw v for ``yaw (S,)`` and a body-frame vector ``v (2,)``."""
+    c, s = torch.cos(yaw), torch.sin(yaw)
+    rotated = torch.stack((c * v[0] - s * v[1], s * v[0] + c * v[1]), 1)
+    turned = torch.stack((-s * v[0] - c * v[1], c * v[0] - s * v[1]), 1)
+    return rotated, turned
+
+
+class RigidDynamics:
+    """H_q between an object (φ1, planar pose) and a pusher (φ2: a disc's position or an
+    object's pose) for T steps, with the interface of
+    :class:`~robotplan.functionals.dynamics.LearnedDynamics`:
+
+    ``evaluate(X1 (T+1, 3), X2 (T+1, d))`` → ``H (T,)`` (m²), ``J1 (T, 2, 3)`` and
+    ``J2 (T, 2, d)``: row t holds ∂H_t/∂(state t−1) in ``[:, 0]`` and ∂H_t/∂(state t) in
+    ``[:, 1]``.
+    """
+
+    integral = False  # H is a mean squared displacement, not an integral over the table
+
+    def __init__(self, model: RigidMotion, obj: Body, pusher: Body) -> None:
+        if model.spec.encoder != "joint":
+            raise ValueError("H_q needs an F_q with the joint encoder (spec.encoder 'joint')")
+        self.model, self.obj, self.pusher = model.eval(), obj, pusher
+        for p in model.parameters():
+            p.requires_grad_(False)
+        spec = model.spec
+        self.workspace = Workspace(spec.workspace_center, spec.workspace_size,
+                                   spec.workspace_size[0] / spec.grid[1])
+        self.dtype = next(model.parameters()).dtype
+        self.centre, self.rho = footprint_moments(obj, self.dtype)
+        self.layers = model.head
+
+    def predict(self, X1: Tensor, X2: Tensor) -> Tensor:
+        """F_q's Δq ``(T, 3)`` for every step of the trajectories (no gradients)."""
+        return self._forward(X1.to(self.dtype), X2.to(self.dtype), False)[0]
+
+    def _forward(self, X1: Tensor, X2: Tensor, tangents: bool):
+        T = X1.shape[0] - 1
+        phi1, dphi1 = render_on_grid(self.obj, X1[:-1], self.workspace, tangents)
+        phi2, dphi2 = render_on_grid(self.pusher, X2, self.workspace, tangents)
+        images = torch.stack((phi1, phi2[:-1], phi2[1:]), 1).reshape(T, 3,
+                                                                        *self.workspace.shape)
+        features, acts = self.model.encode_with_activations(images)
+        with torch.no_grad():
+            delta = self.layers(features) * self.model.scale
+        return delta, features, acts, dphi1, dphi2
+
+    def evaluate(self, X1: Tensor, X2: Tensor, jacobian: bool = True
+                 ) -> tuple[Tensor, Tensor | None, Tensor | None]:
+        X1, X2 = X1.to(self.dtype), X2.to(self.dtype)
+        delta, features, acts, dphi1, dphi2 = self._forward(X1, X2, jacobian)
+        pivot_offset, turned = _rotate(X1[:, 2], self.centre)  # R c and dR/dα c, (T+1, 2)
+        pivots = X1[:, :2] + pivot_offset
+        r_xy = pivots[1:] - pivots[:-1] - delta[:, :2]  # (T, 2)
+        r_a = X1[1:, 2] - X1[:-1, 2] - delta[:, 2]  # (T,)
+        rho2 = self.rho ** 2
+        H = (r_xy * r_xy).sum(1) + rho2 * r_a * r_a
+        if not jacobian:
+            return H, None, None
+        g_xy, g_a = 2.0 * r_xy, 2.0 * rho2 * r_a  # ∂H/∂r
+        # explicit terms: the pivots and angles of states t (+) and t − 1 (−)
+        now = torch.cat((g_xy, ((g_xy * turned[1:]).sum(1) + g_a)[:, None]), 1)
+        prev = -torch.cat((g_xy, ((g_xy * turned[:-1]).sum(1) + g_a)[:, None]), 1)
+        # through F_q: ∂H/∂Δq = −(g_xy, g_a), back through the head, then the encoder
+        g_delta = -torch.cat((g_xy, g_a[:, None]), 1) * self.model.scale
+        with torch.enable_grad():
+            f = features.detach().requires_grad_(True)
+            (g_features,) = torch.autograd.grad(self.layers(f), f, g_delta)
+        G = self.model.encoder_input_grad(acts, g_features).flatten(2)  # (T, 3, H·W)
+        prev = prev + dphi1.contract(G[:, 0])
+        J1 = torch.stack((prev, now), 1)
+        J2 = torch.stack((dphi2[:-1].contract(G[:, 1]), dphi2[1:].contract(G[:, 2])), 1)
+        return H, J1, J2

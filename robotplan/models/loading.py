@@ -1,0 +1,25 @@
+"""Load any learned pushing-dynamics folder by the kind its ``spec.json`` names."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import torch
+
+from robotplan.models.dynamics import PushDynamics, load_model
+from robotplan.models.rigid import RigidMotion, load_rigid
+
+__all__ = ["load_dynamics"]
+
+
+def load_dynamics(folder: str | Path, device: str | torch.device = "cpu"
+                  ) -> PushDynamics | RigidMotion:
+    """F_flow or F (:class:`PushDynamics`) or F_q (:class:`RigidMotion`), as ``spec.json``
+    says (weights read with ``weights_only=True``)."""
+    spec = Path(folder) / "spec.json"
+    if not spec.is_file():
+        raise FileNotFoundError(f"{folder}: no spec.json; not a robotplan model folder")
+    if json.loads(spec.read_text()).get("kind") == "rigid":
+        return load_rigid(folder, device)
+    return load_model(folder, device)

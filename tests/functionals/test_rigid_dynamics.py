@@ -1,0 +1,109 @@
+"""H_q: the F_q row's value is the footprint's displacement from the predicted step, and its
+Jacobians are exact (float64 against central differences)."""
+
+import math
+
+import pytest
+import torch
+
+from robotplan.functionals.rigid_dynamics import RigidDynamics, footprint_moments
+from robotplan.models.dynamics import DynamicsSpec
+from robotplan.models.rigid import RigidMotion
+from robotplan.scene.bodies import Body
+from robotplan.sdf import Box, Circle, LShape
+from tests.functionals.conftest import F64
+
+SPEC = {"channels": (2, 3, 3), "sdf_features": 16, "hidden": (24, 24)}
+PUSHER = Body("pusher", "pusher", Circle(0.03), (0, 0, 0), 0.0, 0.06)
+# off the grid's cell centres, so that no grid point sits on the SDF's medial axis
+OFFSET = torch.tensor([0.0013, 0.0021, 0.013], dtype=F64)
+
+
+@pytest.fixture
+def model() -> RigidMotion:
+    torch.manual_seed(5)
+    return RigidMotion(DynamicsSpec(kind="rigid", encoder="joint", **SPEC)).double()
+
+
+@pytest.fixture(params=[Box((0.2, 0.12)), LShape((0.24, 0.18), 0.07)], ids=["box", "lshape"])
+def obj(request) -> Body:
+    return Body("obj", "object", request.param, (0, 0, 0), 0.0, 0.06)
+
+
+def trajectory(T: int = 3) -> tuple[torch.Tensor, torch.Tensor]:
+    X1 = torch.zeros(T + 1, 3, dtype=F64)
+    X1[:, 0] = torch.linspace(0.0, 0.03, T + 1)
+    X1[:, 2] = torch.linspace(0.1, 0.2, T + 1)
+    X2 = torch.zeros(T + 1, 2, dtype=F64)
+    X2[:, 0] = torch.linspace(-0.16, -0.12, T + 1)
+    X2[:, 1] = 0.013
+    return X1 + OFFSET, X2
+
+
+def test_footprint_moments_of_a_box_and_an_l_shape():
+    box = Body("b", "object", Box((0.2, 0.12)), (0, 0, 0), 0.0, 0.06)
+    centre, rho = footprint_moments(box)
+    assert centre.abs().max() < 1e-4
+    assert rho == pytest.approx(math.sqrt((0.2 ** 2 + 0.12 ** 2) / 12), rel=5e-3)
+    ell = Body("l", "object", LShape((0.24, 0.18), 0.07), (0, 0, 0), 0.0, 0.06)
+    centre, _ = footprint_moments(ell)
+    # two strips: bottom 0.24 × 0.07, left 0.07 × 0.11 above it
+    a1, a2 = 0.24 * 0.07, 0.07 * 0.11
+    expected = torch.tensor([(a1 * 0.0 + a2 * (-0.12 + 0.035)) / (a1 + a2),
+                             (a1 * (-0.09 + 0.035) + a2 * (-0.09 + 0.07 + 0.055)) / (a1 + a2)],
+                            dtype=F64)
+    assert (centre - expected).abs().max() < 2e-4
+
+
+def _pivot(q: torch.Tensor, centre: torch.Tensor) -> torch.Tensor:
+    c, s = torch.cos(q[2]), torch.sin(q[2])
+    return q[:2] + torch.stack((c * centre[0] - s * centre[1], s * centre[0] + c * centre[1]))
+
+
+def test_the_predicted_step_has_no_residual(model, obj):
+    """The first step's F_q input is the first pose only: a plan that puts the second pose
+    where F_q predicts has H_q,1 = 0; turned by a further θ about the same pivot,
+    H_q,1 = ρ² θ²."""
+    X1, X2 = trajectory()
+    H = RigidDynamics(model, obj, PUSHER)
+    delta = H.predict(X1, X2)[0]
+    assert delta.abs().max() > 0
+    X = X1.clone()
+    pivot = _pivot(X[0], H.centre) + delta[:2]
+    for theta, expected in ((0.0, 0.0), (0.05, H.rho ** 2 * 0.05 ** 2)):
+        X[1, 2] = X[0, 2] + delta[2] + theta
+        X[1, :2] = pivot - (_pivot(X[1], H.centre) - X[1, :2])
+        first = H.evaluate(X, X2, jacobian=False)[0][0]
+        assert first == pytest.approx(expected, rel=1e-9, abs=1e-20)
+
+
+def test_jacobian_matches_finite_differences(model, obj):
+    X1, X2 = trajectory()
+    H = RigidDynamics(model, obj, PUSHER)
+    values, j1, j2 = H.evaluate(X1, X2)
+    assert j1.shape == (3, 2, 3) and j2.shape == (3, 2, 2) and (values > 0).all()
+    assert (j2.abs() > 0).any() and (j1[:, 0].abs() > 0).any()
+    h = 1e-6
+    for X, J, d in ((X1, j1, 3), (X2, j2, 2)):
+        for s in range(X.shape[0]):
+            for k in range(d):
+                plus, minus = X.clone(), X.clone()
+                plus[s, k] += h
+                minus[s, k] -= h
+                args_p = (plus, X2) if X is X1 else (X1, plus)
+                args_m = (minus, X2) if X is X1 else (X1, minus)
+                fd = (H.evaluate(*args_p, jacobian=False)[0]
+                      - H.evaluate(*args_m, jacobian=False)[0]) / (2 * h)
+                expected = torch.zeros_like(fd)
+                if s >= 1:
+                    expected[s - 1] = J[s - 1, 1, k]
+                if s + 1 <= X.shape[0] - 1:
+                    expected[s] = J[s, 0, k]
+                scale = fd.abs().max().clamp_min(1e-12)
+                assert ((fd - expected).abs().max() / scale) < 1e-5, (s, k)
+
+
+def test_the_shared_encoder_is_refused(obj):
+    shared = RigidMotion(DynamicsSpec(kind="rigid", encoder="shared", **SPEC))
+    with pytest.raises(ValueError, match="joint"):
+        RigidDynamics(shared, obj, PUSHER)
