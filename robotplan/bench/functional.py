@@ -22,12 +22,15 @@ from robotplan.functionals.dynamics import (
     LearnedDynamics,
     phase_quadrature,
 )
+from robotplan.functionals.rigid_dynamics import RigidDynamics
 from robotplan.models.dynamics import load_model
+from robotplan.models.loading import dynamics_kind
+from robotplan.models.rigid import load_rigid
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, Workspace
 from robotplan.training.push_data import simulate_scene
 
-__all__ = ["bench_analytic", "bench_functional", "realistic_pushes"]
+__all__ = ["bench_analytic", "bench_functional", "bench_rigid", "realistic_pushes"]
 
 DEFAULT_MODEL = learned_dir("push_flow")
 
@@ -110,8 +113,23 @@ def bench_analytic(repeats: int = 30) -> dict:
             "goal_ms": round(_time(lambda: goal.jacobians(X1[-1:]), repeats), 2)}
 
 
+def bench_rigid(model_dir: str | Path, repeats: int = 20) -> dict:
+    """H_q (F_q's row) of a 10-step phase of a real push: value + Jacobian, value only."""
+    obj, pusher, X1, X2 = realistic_pushes(1)[0]
+    H = RigidDynamics(load_rigid(model_dir), obj, pusher)
+    return {"model": str(model_dir), "threads": torch.get_num_threads(),
+            "native_kernels": kernels() is not None, "steps": X1.shape[0] - 1,
+            "hq_phase_ms": round(_time(lambda: H.evaluate(X1, X2), repeats), 2),
+            "hq_value_only_ms": round(_time(lambda: H.evaluate(X1, X2, jacobian=False),
+                                            repeats), 2)}
+
+
 def bench_functional(model_dir: str | Path = DEFAULT_MODEL, configurations: int = 24,
                      repeats: int = 20, naive: bool = True) -> dict:
+    """H_F's speed and its quadrature's accuracy (or H_q's speed for an F_q folder), and
+    the analytic functionals' speed."""
+    if dynamics_kind(model_dir) == "rigid":
+        return {**bench_rigid(model_dir, repeats), **bench_analytic(repeats)}
     model = load_model(model_dir)
     ws = Workspace(model.spec.workspace_center, model.spec.workspace_size,
                    model.spec.workspace_size[0] / model.spec.grid[1])

@@ -82,7 +82,14 @@ class RigidDynamics:
                                    spec.workspace_size[0] / spec.grid[1])
         self.dtype = next(model.parameters()).dtype
         self.centre, self.rho = footprint_moments(obj, self.dtype)
-        self.layers = model.head
+        # the encoder's linear layer and the head's first layer folded into one
+        # (C'·h·w → H1) map: half the products and half the weights to read, both ways
+        linear, first = model.encoder.linear, model.head[0]
+        with torch.no_grad():
+            self.folded = (first.weight @ linear.weight).T.contiguous()  # (C'·h·w, H1)
+            self.folded_bias = first(linear.bias)
+        self.rest = model.head[1:]  # ReLU, then the remaining layers
+        self.last_channels = model.spec.channels[-1]
 
     def predict(self, X1: Tensor, X2: Tensor) -> Tensor:
         """F_q's Δq ``(T, 3)`` for every step of the trajectories (no gradients)."""
@@ -94,15 +101,19 @@ class RigidDynamics:
         phi2, dphi2 = render_on_grid(self.pusher, X2, self.workspace, tangents)
         images = torch.stack((phi1, phi2[:-1], phi2[1:]), 1).reshape(T, 3,
                                                                         *self.workspace.shape)
-        features, acts = self.model.encode_with_activations(images)
+        # the last convolution's live channels, flattened, and their rows of the folded map
+        y, acts = self.model.encode_with_activations(images, linear=False)
+        rows = self.folded.view(self.last_channels, -1, self.folded.shape[1])[acts.live[-1]]
+        rows = rows.reshape(-1, self.folded.shape[1])
+        hidden = torch.addmm(self.folded_bias, y, rows)  # (T, H1) before the first ReLU
         with torch.no_grad():
-            delta = self.layers(features) * self.model.scale
-        return delta, features, acts, dphi1, dphi2
+            delta = self.rest(hidden) * self.model.scale
+        return delta, (hidden, rows), acts, dphi1, dphi2
 
     def evaluate(self, X1: Tensor, X2: Tensor, jacobian: bool = True
                  ) -> tuple[Tensor, Tensor | None, Tensor | None]:
         X1, X2 = X1.to(self.dtype), X2.to(self.dtype)
-        delta, features, acts, dphi1, dphi2 = self._forward(X1, X2, jacobian)
+        delta, features, acts, dphi1, dphi2 = self._forward(X1, X2, jacobian)  # (T, 3)
         pivot_offset, turned = _rotate(X1[:, 2], self.centre)  # R c and dR/dα c, (T+1, 2)
         pivots = X1[:, :2] + pivot_offset
         r_xy = pivots[1:] - pivots[:-1] - delta[:, :2]  # (T, 2)
@@ -117,10 +128,11 @@ class RigidDynamics:
         prev = -torch.cat((g_xy, ((g_xy * turned[:-1]).sum(1) + g_a)[:, None]), 1)
         # through F_q: ∂H/∂Δq = −(g_xy, g_a), back through the head, then the encoder
         g_delta = -torch.cat((g_xy, g_a[:, None]), 1) * self.model.scale
+        hidden, rows = features
         with torch.enable_grad():
-            f = features.detach().requires_grad_(True)
-            (g_features,) = torch.autograd.grad(self.layers(f), f, g_delta)
-        G = self.model.encoder_input_grad(acts, g_features).flatten(2)  # (T, 3, H·W)
+            h = hidden.detach().requires_grad_(True)
+            (g_hidden,) = torch.autograd.grad(self.rest(h), h, g_delta)
+        G = self.model.encoder_input_grad(acts, g_hidden @ rows.T, linear=False).flatten(2)
         prev = prev + dphi1.contract(G[:, 0])
         J1 = torch.stack((prev, now), 1)
         J2 = torch.stack((dphi2[:-1].contract(G[:, 1]), dphi2[1:].contract(G[:, 2])), 1)

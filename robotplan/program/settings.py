@@ -121,7 +121,7 @@ class ProgramSettings:
 
 
 DEFAULT_SETTINGS = ProgramSettings()  # the free pushers' settings
-SCENE_CLASSES = ("arms", "routes", "pose")
+SCENE_CLASSES = ("arms", "routes", "pose", "rigid")
 
 
 @cache

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from robotplan.functionals.clearance import OBSTACLE_MARGIN
+from robotplan.models.loading import dynamics_kind
 from robotplan.program.arm_program import reach_check
 from robotplan.program.chain_program import objects_touch
 from robotplan.program.settings import ProgramSettings
@@ -169,11 +170,13 @@ def candidate_table(result: SearchResult) -> str:
     return "\n".join(lines)
 
 
-def settings_for(scene: Scene, solver: str = "snopt") -> ProgramSettings:
-    """The program settings of a scene's actors (the arms' overlay, or the free pusher's)
-    and goal (the pose goals' overlay)."""
+def settings_for(scene: Scene, solver: str = "snopt", dynamics: str = "flow"
+                 ) -> ProgramSettings:
+    """The program settings of a scene's actors (the arms' overlay, or the free pusher's),
+    goal (the pose goals' overlay) and learned dynamics (F_q's overlay, ``rigid``)."""
     classes = (("arms",) if scene.robots else ()) + (
-        ("pose",) if scene.goal.type == "pose" else ())
+        ("pose",) if scene.goal.type == "pose" else ()) + (
+        ("rigid",) if dynamics == "rigid" else ())
     return program_settings(*classes, solver=solver)
 
 
@@ -209,7 +212,7 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     plans; the result and each candidate's skeleton space (by ``id`` of its solution).
     ``guesses``: initial guesses of the learned program by skeleton (warm starts)."""
     obj, actors = check_supported(scene)
-    settings = settings_for(scene, solver)
+    settings = settings_for(scene, solver, dynamics_kind(model_dir))
     result, spaces = SearchResult(None), {}  # spaces: a skeleton may recur in two tiers
     space = space_for(scene)
     for candidates, space in candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet):

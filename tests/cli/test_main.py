@@ -94,6 +94,15 @@ def test_bench_functional_json_runs_small():
     assert isinstance(out["native_kernels"], bool)  # whether robotplan/base/kernels.c ran
 
 
+def test_bench_functional_times_h_q_for_an_f_q_folder():
+    res = run("bench", "functional", "--json", "--model", str(ROOT / "learned" / "push_rigid"),
+              "--repeats", "1")
+    assert res.returncode == 0, res.stderr
+    out = json.loads(res.stdout)
+    assert out["steps"] == 10 and out["hq_phase_ms"] > out["hq_value_only_ms"] > 0
+    assert "hf_phase_ms" not in out and out["coll_phase_ms"] > 0
+
+
 def test_bench_functional_refuses_a_non_model(tmp_path):
     res = run("bench", "functional", "--model", str(tmp_path))
     assert res.returncode == 2 and "--model" in res.stderr and "Traceback" not in res.stderr
