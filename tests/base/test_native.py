@@ -13,7 +13,7 @@ from robotplan.base import native
 from robotplan.functionals import dynamics as fd
 from robotplan.functionals import grid_render
 from robotplan.functionals.dynamics import render_on_grid
-from robotplan.models import dynamics as dyn
+from robotplan.models import encoder_passes as passes
 from robotplan.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape, Polygon, Workspace
@@ -122,8 +122,8 @@ def test_encoder_pass_equals_the_pytorch_path(monkeypatch):
 
     f, acts, G = run()
     assert acts.live[0].tolist() == [0, 2]
-    monkeypatch.setattr(dyn, "conv_relu_forward", lambda *a, **k: None)
-    monkeypatch.setattr(dyn, "conv_relu_input_grad", lambda *a, **k: None)
+    monkeypatch.setattr(passes, "conv_relu_forward", lambda *a, **k: None)
+    monkeypatch.setattr(passes, "conv_relu_input_grad", lambda *a, **k: None)
     f_ref, acts_ref, G_ref = run()
     assert [a.tolist() for a in acts.live] == [a.tolist() for a in acts_ref.live]
     assert (f - f_ref).abs().max() < 1e-5 * f_ref.abs().max()
@@ -208,7 +208,7 @@ def test_h_f_in_float32_equals_the_pytorch_path(shape, monkeypatch):
     X2 = torch.stack((torch.linspace(-0.16, -0.11, T + 1), torch.full((T + 1,), 0.013)), 1)
     H = fd.LearnedDynamics(model, obj, pusher, fd.Quadrature.grid(Workspace()))
     h, j1, j2 = H.evaluate(X1, X2)
-    for module, name in ((dyn, "conv_relu_forward"), (dyn, "conv_relu_input_grad"),
+    for module, name in ((passes, "conv_relu_forward"), (passes, "conv_relu_input_grad"),
                          (grid_render, "render_planes"), (native, "shape_planes")):
         monkeypatch.setattr(module, name, lambda *a, **k: None)
     h_ref, j1_ref, j2_ref = H.evaluate(X1, X2)
