@@ -90,6 +90,8 @@ class LearnedDynamics:
     against the 19,600-point grid: docs/experiments.md#hf-evaluation.
     """
 
+    integral = True  # H is an integral over the table (m⁴), see ``mm2_per_unit``
+
     def __init__(self, model: PushDynamics, obj: Body, pusher: Body,
                  quadrature: Quadrature, matmul_dtype: torch.dtype | None = None) -> None:
         self.model, self.obj, self.pusher = model.eval(), obj, pusher

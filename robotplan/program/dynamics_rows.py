@@ -28,7 +28,7 @@ Dynamics = LearnedDynamics | RigidDynamics
 def mm2_per_unit(dynamics: Dynamics, scene) -> float:
     """What turns the functional's value per step into a mean square in mm²: H_F (m⁴, an
     integral over the table) is divided by the scene's table area; H_q is in m²."""
-    if not getattr(dynamics, "integral", True):
+    if not dynamics.integral:
         return 1e6
     return 1e6 / float(scene.workspace.size[0] * scene.workspace.size[1])
 

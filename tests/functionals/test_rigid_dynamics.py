@@ -11,7 +11,7 @@ from robotplan.models.dynamics import DynamicsSpec
 from robotplan.models.rigid import RigidMotion
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape
-from tests.functionals.conftest import F64
+from tests.functionals.conftest import F64, assert_step_jacobians
 
 SPEC = {"channels": (2, 3, 3), "sdf_features": 16, "hidden": (24, 24)}
 PUSHER = Body("pusher", "pusher", Circle(0.03), (0, 0, 0), 0.0, 0.06)
@@ -92,24 +92,7 @@ def test_jacobian_matches_finite_differences(model, obj, actor):
     assert j1.shape == (3, 2, 3) and j2.shape == (3, 2, d2) and (values > 0).all()
     assert (j2.abs() > 0).any() and (j1[:, 0].abs() > 0).any()
     # small steps: a ReLU kink or an SDF medial axis within h makes FD accurate to O(h)
-    h = 1e-7
-    for X, J, d in ((X1, j1, 3), (X2, j2, d2)):
-        for s in range(X.shape[0]):
-            for k in range(d):
-                plus, minus = X.clone(), X.clone()
-                plus[s, k] += h
-                minus[s, k] -= h
-                args_p = (plus, X2) if X is X1 else (X1, plus)
-                args_m = (minus, X2) if X is X1 else (X1, minus)
-                fd = (H.evaluate(*args_p, jacobian=False)[0]
-                      - H.evaluate(*args_m, jacobian=False)[0]) / (2 * h)
-                expected = torch.zeros_like(fd)
-                if s >= 1:
-                    expected[s - 1] = J[s - 1, 1, k]
-                if s + 1 <= X.shape[0] - 1:
-                    expected[s] = J[s, 0, k]
-                scale = max(float(fd.abs().max()), float(J.abs().max()))
-                assert ((fd - expected).abs().max() / scale) < 1e-5, (s, k)
+    assert_step_jacobians(H, X1, X2, j1, j2, h=1e-7, tol=1e-5, scale_with_jacobian=True)
 
 
 def test_the_shared_encoder_is_refused(obj):
