@@ -66,15 +66,13 @@ from robotplan.functionals.base import Quadrature
 from robotplan.functionals.grid_render import GridTangents, grid_with_tangents, render_on_grid
 from robotplan.functionals.quadrature import QUADRATURE_COARSE, QUADRATURE_LEVELS, phase_quadrature
 from robotplan.models.dynamics import PushDynamics, head_matmul_dtype
+from robotplan.models.folded_layer import FoldedLayer
 from robotplan.models.tiled_head import TiledHead, tile_points
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Workspace
 
 __all__ = ["QUADRATURE_COARSE", "QUADRATURE_LEVELS", "GridTangents", "LearnedDynamics",
            "grid_with_tangents", "phase_quadrature", "render_on_grid"]
-
-
-LIVE_ROW_SETS = 4  # sets of live channels whose rows of the folded map are kept
 
 
 class LearnedDynamics:
@@ -117,28 +115,10 @@ class LearnedDynamics:
             # the dense head's point part (the tiled head keeps its own, tile by tile)
             self.point_term = (None if self.tiled_head is not None
                                else model.point_term(self.quadrature.points[None]))  # (1, N, H1)
-            # joint encoder: its linear layer and the head's SDF part folded into one map,
-            # stored as (C'·h·w, H1) (both products read it row by row); half the products
-            # and half the weights to read per call
-            first, linear = model.first_sdf, model.encoder.linear
-            self.conv_to_hidden = (((first.weight @ linear.weight).T.contiguous(),
-                                    first(linear.bias))
-                                   if model.spec.encoder == "joint" else None)
-        self.last_channels = model.spec.channels[-1]
-        self._rows: dict[tuple[int, ...], Tensor] = {}
-
-    def _live_rows(self, live: Tensor) -> Tensor:
-        """The rows of the folded (C'·h·w, H1) map that read the last convolution's ``live``
-        channels, kept per set of live channels (it rarely changes between calls; the
-        last ``LIVE_ROW_SETS`` sets are kept, each up to the map's 4.9 MB)."""
-        key = tuple(live.tolist())
-        if key not in self._rows:
-            if len(self._rows) >= LIVE_ROW_SETS:
-                del self._rows[next(iter(self._rows))]  # the oldest
-            full = self.conv_to_hidden[0]
-            by_channel = full.view(self.last_channels, -1, full.shape[1])
-            self._rows[key] = by_channel[live].reshape(-1, full.shape[1]).contiguous()
-        return self._rows[key]
+        # joint encoder: its linear layer and the head's SDF part folded into one map
+        self.conv_to_hidden = (FoldedLayer(model.encoder.linear, model.first_sdf,
+                                           model.spec.channels[-1])
+                               if model.spec.encoder == "joint" else None)
 
     # ---------------------------------------------------------------- fast path
     def evaluate(self, X1: Tensor, X2: Tensor, jacobian: bool = True
@@ -156,8 +136,7 @@ class LearnedDynamics:
             images = torch.cat((phi1, phi2)).reshape(2 * T + 1, 1, *shape)
         f, acts = m.encode_with_activations(images, linear=not joint)
         if joint:
-            rows = self._live_rows(acts.live[-1])  # only the live channels' rows
-            S = torch.addmm(self.conv_to_hidden[1], f, rows)  # (T, H1)
+            S, rows = self.conv_to_hidden(f, acts.live[-1])  # (T, H1)
         else:
             f = torch.cat((f[:T], f[T:2 * T], f[T + 1:]), dim=1)  # (T, 3F) per step
             S = m.sdf_term(f)

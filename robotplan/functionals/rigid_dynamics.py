@@ -27,6 +27,7 @@ import torch
 from torch import Tensor
 
 from robotplan.functionals.grid_render import render_on_grid
+from robotplan.models.folded_layer import FoldedLayer
 from robotplan.models.rigid import RigidMotion
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Workspace
@@ -82,14 +83,9 @@ class RigidDynamics:
                                    spec.workspace_size[0] / spec.grid[1])
         self.dtype = next(model.parameters()).dtype
         self.centre, self.rho = footprint_moments(obj, self.dtype)
-        # the encoder's linear layer and the head's first layer folded into one
-        # (C'·h·w → H1) map: half the products and half the weights to read, both ways
-        linear, first = model.encoder.linear, model.head[0]
-        with torch.no_grad():
-            self.folded = (first.weight @ linear.weight).T.contiguous()  # (C'·h·w, H1)
-            self.folded_bias = first(linear.bias)
+        # the encoder's linear layer and the head's first layer folded into one map
+        self.folded = FoldedLayer(model.encoder.linear, model.head[0], model.spec.channels[-1])
         self.rest = model.head[1:]  # ReLU, then the remaining layers
-        self.last_channels = model.spec.channels[-1]
 
     def predict(self, X1: Tensor, X2: Tensor) -> Tensor:
         """F_q's Δq ``(T, 3)`` for every step of the trajectories (no gradients)."""
@@ -101,11 +97,9 @@ class RigidDynamics:
         phi2, dphi2 = render_on_grid(self.pusher, X2, self.workspace, tangents)
         images = torch.stack((phi1, phi2[:-1], phi2[1:]), 1).reshape(T, 3,
                                                                         *self.workspace.shape)
-        # the last convolution's live channels, flattened, and their rows of the folded map
+        # the last convolution's live channels, flattened, through the folded map
         y, acts = self.model.encode_with_activations(images, linear=False)
-        rows = self.folded.view(self.last_channels, -1, self.folded.shape[1])[acts.live[-1]]
-        rows = rows.reshape(-1, self.folded.shape[1])
-        hidden = torch.addmm(self.folded_bias, y, rows)  # (T, H1) before the first ReLU
+        hidden, rows = self.folded(y, acts.live[-1])  # (T, H1) before the first ReLU
         with torch.no_grad():
             delta = self.rest(hidden) * self.model.scale
         return delta, (hidden, rows), acts, dphi1, dphi2

@@ -156,19 +156,3 @@ def test_bfloat16_head_products_only_where_opted_in_and_the_cpu_multiplies_them(
         assert LearnedDynamics(model32.double(), obj, pusher,
                                quad).matmul_dtype == torch.float64
         model32.float()
-
-
-def test_the_folded_map_keeps_rows_for_a_few_live_channel_sets_only():
-    from robotplan.functionals.dynamics import LIVE_ROW_SETS
-
-    torch.manual_seed(7)
-    model = PushDynamics(DynamicsSpec(encoder="joint", **SPEC)).double()
-    obj = Body("obj", "object", Box((0.2, 0.12)), (0, 0, 0), 0.0, 0.06)
-    H = LearnedDynamics(model, obj, PUSHER, Quadrature.grid(Workspace()))
-    full = H.conv_to_hidden[0].view(3, -1, H.conv_to_hidden[0].shape[1])  # (C, h·w, H1)
-    sets = [torch.tensor(s) for s in ([0], [1], [2], [0, 1], [0, 2], [1, 2], [0, 1, 2])]
-    for live in sets:
-        rows = H._live_rows(live)
-        assert torch.equal(rows, full[live].reshape(-1, full.shape[2]))
-        assert len(H._rows) <= LIVE_ROW_SETS
-    assert list(H._rows)[-1] == (0, 1, 2)  # the newest kept, the oldest dropped
