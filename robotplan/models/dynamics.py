@@ -15,8 +15,6 @@ the point part once per quadrature point.
 
 from __future__ import annotations
 
-import json
-from dataclasses import asdict
 from pathlib import Path
 
 import torch
@@ -24,7 +22,12 @@ from torch import Tensor, nn
 
 from robotplan.models.encoder import EncoderPass, SDFEncoder, live_columns, relu_backward
 from robotplan.models.encoder_passes import EncoderPasses
-from robotplan.models.spec import DynamicsSpec, head_matmul_dtype
+from robotplan.models.spec import (
+    DynamicsSpec,
+    head_matmul_dtype,
+    read_model_folder,
+    write_model_folder,
+)
 
 __all__ = ["DynamicsSpec", "EncoderPass", "PushDynamics", "head_matmul_dtype", "load_model",
            "relu_backward", "save_model"]
@@ -144,26 +147,14 @@ class PushDynamics(EncoderPasses, nn.Module):
 
 
 def save_model(model: PushDynamics, folder: Path) -> None:
-    """Write ``weights.pt`` (state_dict) and ``spec.json`` into ``folder``."""
-    import os
-
-    folder.mkdir(parents=True, exist_ok=True)
-    tmp = folder / ".weights.pt.tmp"
-    torch.save(model.state_dict(), tmp)
-    os.replace(tmp, folder / "weights.pt")
-    tmp = folder / ".spec.json.tmp"
-    tmp.write_text(json.dumps(asdict(model.spec), indent=1))
-    os.replace(tmp, folder / "spec.json")
+    """Write ``weights.pt`` (state_dict) and ``spec.json`` into ``folder``, each whole."""
+    write_model_folder(model, model.spec, folder)
 
 
 def load_model(folder: str | Path, device: str | torch.device = "cpu") -> PushDynamics:
-    """Load a model folder (``spec.json`` + ``weights.pt``, read with ``weights_only=True``)."""
-    folder = Path(folder)
-    for name in ("spec.json", "weights.pt"):
-        if not (folder / name).is_file():
-            raise FileNotFoundError(f"{folder}: no {name}; not a robotplan model folder")
-    spec = DynamicsSpec.from_json(json.loads((folder / "spec.json").read_text()))
+    """Load an F_flow or F model folder (``spec.json`` + ``weights.pt``, read with
+    ``weights_only=True``)."""
+    spec, state = read_model_folder(folder, ("flow", "direct"), device)
     model = PushDynamics(spec)
-    state = torch.load(folder / "weights.pt", map_location=device, weights_only=True)
     model.load_state_dict(state)
     return model.to(device).eval()

@@ -2,23 +2,20 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import torch
 
 from robotplan.models.dynamics import PushDynamics, load_model
 from robotplan.models.rigid import RigidMotion, load_rigid
+from robotplan.models.spec import read_spec
 
 __all__ = ["dynamics_kind", "load_dynamics"]
 
 
 def dynamics_kind(folder: str | Path) -> str:
     """The kind a model folder's ``spec.json`` names: ``flow``, ``direct`` or ``rigid``."""
-    spec = Path(folder) / "spec.json"
-    if not spec.is_file():
-        raise FileNotFoundError(f"{folder}: no spec.json; not a robotplan model folder")
-    return json.loads(spec.read_text()).get("kind", "flow")
+    return read_spec(folder).kind
 
 
 def load_dynamics(folder: str | Path, device: str | torch.device = "cpu"

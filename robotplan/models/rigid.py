@@ -10,10 +10,7 @@ next SDF is φ1_t = T(Δq)[φ1_{t−1}], φ1_t(x) = φ1_{t−1}(T(Δq)⁻¹ x).
 
 from __future__ import annotations
 
-import json
 import math
-import os
-from dataclasses import asdict
 from pathlib import Path
 
 import torch
@@ -21,7 +18,7 @@ from torch import Tensor, nn
 
 from robotplan.models.encoder import SDFEncoder
 from robotplan.models.encoder_passes import EncoderPasses
-from robotplan.models.spec import DynamicsSpec
+from robotplan.models.spec import DynamicsSpec, read_model_folder, write_model_folder
 
 __all__ = ["RigidMotion", "load_rigid", "moved_pivot_delta", "save_rigid", "sdf_pivot",
            "transform_points"]
@@ -92,25 +89,12 @@ class RigidMotion(EncoderPasses, nn.Module):
 
 def save_rigid(model: RigidMotion, folder: Path) -> None:
     """``weights.pt`` (state_dict) and ``spec.json`` into ``folder``, each written whole."""
-    folder.mkdir(parents=True, exist_ok=True)
-    tmp = folder / ".weights.pt.tmp"
-    torch.save(model.state_dict(), tmp)
-    os.replace(tmp, folder / "weights.pt")
-    tmp = folder / ".spec.json.tmp"
-    tmp.write_text(json.dumps(asdict(model.spec), indent=1))
-    os.replace(tmp, folder / "spec.json")
+    write_model_folder(model, model.spec, folder)
 
 
 def load_rigid(folder: str | Path, device: str | torch.device = "cpu") -> RigidMotion:
     """An F_q model folder (``spec.json`` + ``weights.pt``, read with ``weights_only=True``)."""
-    folder = Path(folder)
-    for name in ("spec.json", "weights.pt"):
-        if not (folder / name).is_file():
-            raise FileNotFoundError(f"{folder}: no {name}; not a robotplan model folder")
-    spec = DynamicsSpec.from_json(json.loads((folder / "spec.json").read_text()))
-    if spec.kind != "rigid":
-        raise ValueError(f"{folder}: spec.json kind {spec.kind!r}, expected 'rigid'")
+    spec, state = read_model_folder(folder, ("rigid",), device)
     model = RigidMotion(spec)
-    model.load_state_dict(torch.load(folder / "weights.pt", map_location=device,
-                                     weights_only=True))
+    model.load_state_dict(state)
     return model.to(device).eval()

@@ -3,14 +3,19 @@ dtype its head multiplies in."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import json
+import os
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Literal
 
 import torch
+from torch import nn
 
 from robotplan.base.arith import bfloat16_head
 
-__all__ = ["DynamicsSpec", "head_matmul_dtype"]
+__all__ = ["DynamicsSpec", "head_matmul_dtype", "read_model_folder", "read_spec",
+           "write_model_folder"]
 
 
 def head_matmul_dtype(model_dtype: torch.dtype) -> torch.dtype:
@@ -50,3 +55,36 @@ class DynamicsSpec:
             if k in kw:
                 kw[k] = tuple(kw[k])
         return cls(**kw)
+
+
+def read_spec(folder: str | Path) -> DynamicsSpec:
+    """The ``spec.json`` of a model folder."""
+    path = Path(folder) / "spec.json"
+    if not path.is_file():
+        raise FileNotFoundError(f"{folder}: no spec.json; not a robotplan model folder")
+    return DynamicsSpec.from_json(json.loads(path.read_text()))
+
+
+def read_model_folder(folder: str | Path, kinds: tuple[str, ...],
+                      device: str | torch.device = "cpu") -> tuple[DynamicsSpec, dict]:
+    """A model folder's spec, whose kind must be one of ``kinds``, and its state_dict
+    (``weights.pt``, read with ``weights_only=True``)."""
+    spec = read_spec(folder)
+    if spec.kind not in kinds:
+        raise ValueError(f"{folder}: spec.json kind {spec.kind!r}, expected "
+                         + " or ".join(repr(k) for k in kinds))
+    weights = Path(folder) / "weights.pt"
+    if not weights.is_file():
+        raise FileNotFoundError(f"{folder}: no weights.pt; not a robotplan model folder")
+    return spec, torch.load(weights, map_location=device, weights_only=True)
+
+
+def write_model_folder(model: nn.Module, spec: DynamicsSpec, folder: Path) -> None:
+    """``weights.pt`` (state_dict) and ``spec.json`` into ``folder``, each written whole."""
+    folder.mkdir(parents=True, exist_ok=True)
+    tmp = folder / ".weights.pt.tmp"
+    torch.save(model.state_dict(), tmp)
+    os.replace(tmp, folder / "weights.pt")
+    tmp = folder / ".spec.json.tmp"
+    tmp.write_text(json.dumps(asdict(spec), indent=1))
+    os.replace(tmp, folder / "spec.json")
