@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from robotplan.base.files import write_atomically
-from robotplan.base.resources import learned_dir
+from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
 from robotplan.execution.closed_loop import LoopSettings, execute_closed_loop
 from robotplan.execution.execute import Execution, plan_substeps, run_open_loop
 from robotplan.execution.perturb import Perturbation
@@ -34,6 +34,7 @@ from robotplan.search.scene_search import (
     UnsupportedScene,
     candidate_table,
     check_supported,
+    default_dynamics,
     metres,
     search_scene,
 )
@@ -44,7 +45,6 @@ __all__ = ["Execution", "Plan", "UnsupportedScene", "execute", "plan", "solve",
            "write_playback"]
 
 MODES = ("closed_loop", "open_loop")
-DEFAULT_LOOP = LoopSettings()
 # s of search per re-plan before it settles for the plans in hand (a fresh search goes on
 # until it has one)
 REPLAN_BUDGET = 20.0
@@ -89,13 +89,15 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
          fallback: bool = True) -> Plan:
     """Search the scene's skeletons and solve their programs; no simulator runs.
 
-    ``model``: the learned dynamics' folder (default: the shipped F_flow). ``skeleton``: one
+    ``model``: the learned dynamics' folder (default: the shipped model of the scene's class,
+    :func:`~robotplan.search.scene_search.default_dynamics`). ``skeleton``: one
     skeleton (in the CLI's notation, or a ``Skeleton``) instead of the search.
     ``warm_start``: an earlier plan of this scene (at other poses): its skeleton is tried
     first, from its trajectories; a fresh search follows when that does not solve (unless
     ``fallback`` is False).
     """
-    model_dir = Path(model) if model is not None else learned_dir("push_flow")
+    model_dir = (Path(model) if model is not None
+                 else learned_dir(DYNAMICS_FOLDERS[default_dynamics(scene)]))
     guesses = None
     if warm_start is not None and warm_start.best is not None and skeleton is None:
         skeleton = warm_start.best.skeleton
@@ -117,7 +119,7 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
 
 
 def execute(planned: Plan, scene: Scene | None = None, *, mode: str = "closed_loop",
-            perturb: Perturbation | None = None, loop: LoopSettings = DEFAULT_LOOP,
+            perturb: Perturbation | None = None, loop: LoopSettings | None = None,
             quiet: bool = True) -> Execution:
     """Run the best plan in pybullet in ``scene`` (default: the plan's).
 
@@ -126,7 +128,8 @@ def execute(planned: Plan, scene: Scene | None = None, *, mode: str = "closed_lo
     (:mod:`robotplan.execution.closed_loop`); ``"open_loop"`` runs the plan as it is, the
     paper's protocol (§7.2.3). Reaches run slower than the data's pushes (see
     ``plan_substeps``). ``perturb``: friction, mass and observation noise of a perturbed
-    world. ``quiet=False`` prints a line per re-plan."""
+    world. ``loop``: the closed loop's settings (default: those of the plan's scene class,
+    ``skeletons/loop.yaml``). ``quiet=False`` prints a line per re-plan."""
     if planned.best is None:
         raise ValueError("nothing to execute: the plan has no solution")
     if mode not in MODES:

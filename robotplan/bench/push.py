@@ -134,10 +134,12 @@ def _box_plot(rows: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
-def run_bench_push(scenes: int, seed: int, out: Path, model_dir: Path, workers: int = 2,
+def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | None,
+                   workers: int = 2,
                    shapes: tuple[str, ...] = ("box", "lshape"), exhaustive: bool = False,
                    time_budget: float | None = None, perturb: int | None = None) -> dict:
     """Solve and execute ``scenes`` scenes per shape type; returns the summary.
+    ``model_dir``: the learned dynamics' folder, None for each scene's default.
     ``perturb``: the seed of the perturbed worlds (one per scene), None for the nominal."""
     from robotplan.api import solve
     from robotplan.execution.perturb import Perturbation
@@ -169,6 +171,7 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: Path, workers: 
         ex = result.get("execution") or {}
         open_loop = result.get("open_loop") or {}
         row = {"scene": name, "shape": kind, "family": family_of(i, kind),
+               "model": Path(result["model"]).name,
                "status": result["status"],
                "coverage": float(ex.get("coverage") or 0.0),
                "open_loop_coverage": float(open_loop.get("coverage") or 0.0),
@@ -190,7 +193,8 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: Path, workers: 
               f"{row['programs']} programs, {row['skeleton']}", flush=True)
     rows = [done[draw_scene(i, seed, kind)["name"]] for i, kind in todo]
     summary = summarize(rows)
-    summary.update({"seed": seed, "model": str(model_dir), "exhaustive": exhaustive,
+    summary.update({"seed": seed, "model": str(model_dir) if model_dir else "auto",
+                    "exhaustive": exhaustive,
                     "time_budget_s": time_budget, "perturb": perturb})
     buf = io.StringIO()
     flat = [{**{k: v for k, v in r.items() if k not in ("timings", "replans")},

@@ -25,9 +25,9 @@ def print_result(result: dict, as_json: bool) -> None:
         print(f"{k:>{width}}: {v}")
 
 
-def not_a_model(folder: str) -> bool:
+def not_a_model(folder: str | None) -> bool:
     """True (after the one-line error) when ``--model`` is not a model folder."""
-    if (Path(folder) / "spec.json").is_file():
+    if folder is None or (Path(folder) / "spec.json").is_file():
         return False
     print(f"error: {folder}: --model: not a model folder (no spec.json)", file=sys.stderr)
     return True
@@ -35,16 +35,22 @@ def not_a_model(folder: str) -> bool:
 
 def add_dynamics_options(parser) -> None:
     """Which learned dynamics a plan uses: a shipped kind, or a model folder."""
-    parser.add_argument("--dynamics", choices=sorted(DYNAMICS_FOLDERS), default="flow",
+    parser.add_argument("--dynamics", choices=["auto", *sorted(DYNAMICS_FOLDERS)],
+                        default="auto",
                         help="the shipped learned dynamics to plan with: flow (F_flow, "
-                        "H_F), rigid (F_q, its rigid step), direct (F, H_F); default flow")
+                        "H_F), rigid (F_q, its rigid step), direct (F, H_F); default auto: "
+                        "the one measured best for the scene's class "
+                        "(skeletons/dynamics.yaml)")
     parser.add_argument("--model", default=None, metavar="DIR",
                         help="a model folder of any kind instead (overrides --dynamics)")
 
 
-def model_folder(args) -> str:
-    """The folder of ``--model``, else of the shipped ``--dynamics`` kind."""
-    return args.model or str(learned_dir(DYNAMICS_FOLDERS[args.dynamics]))
+def model_folder(args) -> str | None:
+    """The folder of ``--model``, else of the shipped ``--dynamics`` kind; None for
+    ``auto`` (each scene's default)."""
+    if args.model:
+        return args.model
+    return None if args.dynamics == "auto" else str(learned_dir(DYNAMICS_FOLDERS[args.dynamics]))
 
 
 def device_name(name: str) -> str:

@@ -149,7 +149,7 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
     if args.overwrite and out.exists():
         for name in ("summary.json", "rows.jsonl", "results.csv", "coverage.png"):
             (out / name).unlink(missing_ok=True)
-    summary = run_bench_push(args.scenes, args.seed, out, Path(args.model), args.workers,
+    summary = run_bench_push(args.scenes, args.seed, out, args.model, args.workers,
                              tuple(args.shapes.split(",")), args.exhaustive, args.time_budget,
                              args.perturb)
     if args.json:

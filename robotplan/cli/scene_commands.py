@@ -64,7 +64,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     out.mkdir(parents=True, exist_ok=True)
     try:
-        doc = solve(scene, out, Path(args.model), solver=args.solver, workers=args.workers,
+        doc = solve(scene, out, args.model, solver=args.solver, workers=args.workers,
                     skeleton=args.skeleton, max_pushes=args.max_pushes,
                     exhaustive=args.exhaustive, time_budget=args.time_budget,
                     mode="open_loop" if args.open_loop else "closed_loop",

@@ -25,18 +25,23 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from functools import cache
+from pathlib import Path
 
 import numpy as np
 
+from robotplan.base.overlays import apply_overlays, read_overlays
+from robotplan.base.resources import skeletons_dir
 from robotplan.execution.execute import Execution, outcome, plan_substeps, recorded
 from robotplan.execution.scene_world import Observation, SceneWorld, actuation
 from robotplan.execution.sim import PHYSICS, Physics
+from robotplan.program.skeleton import Skeleton
 from robotplan.program.solution import Solution
 from robotplan.program.tail import solution_tail
 from robotplan.scene import Scene
 
-__all__ = ["LoopSettings", "Replan", "departure", "execute_closed_loop", "follow_object",
-           "steer_pusher"]
+__all__ = ["LOOP_CLASSES", "LoopSettings", "Replan", "departure", "execute_closed_loop",
+           "follow_object", "load_loop_overlays", "loop_settings_for", "steer_pusher"]
 
 
 @dataclass(frozen=True)
@@ -64,6 +69,25 @@ class LoopSettings:
     # scenes (measured: docs/experiments.md#closed-loop)
     steer_gain: float = 0.0
     steer_limit: float = 0.03
+
+
+LOOP_CLASSES = ("chains",)
+"""Scene classes with their own closed-loop settings: ``chains``, plans in which an object
+pushes another."""
+
+
+@cache
+def load_loop_overlays(path: Path | None = None) -> dict[str, dict]:
+    """The overlays of ``skeletons/loop.yaml``, checked against :class:`LoopSettings`."""
+    return read_overlays(path or skeletons_dir() / "loop.yaml", LoopSettings(), LOOP_CLASSES,
+                         "closed-loop setting")
+
+
+def loop_settings_for(skeleton: Skeleton, base: LoopSettings | None = None) -> LoopSettings:
+    """``base`` (default :class:`LoopSettings`) with the overlays of the classes
+    ``skeleton`` belongs to (``chains`` when an object pushes another in it)."""
+    classes = ("chains",) if skeleton.chained else ()
+    return apply_overlays(base or LoopSettings(), load_loop_overlays(), classes)
 
 
 @dataclass
@@ -192,8 +216,9 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
                         report: Callable[[str], None] | None = None) -> Execution:
     """Execute ``sol`` in ``scene`` closing the loop through ``replan`` (see the module
     docstring). ``observe`` turns the true state into the perceived one (default: exact);
-    ``report`` gets a line per re-plan."""
-    settings = settings or LoopSettings()
+    ``report`` gets a line per re-plan. ``settings``: default those of ``sol``'s scene
+    class (:func:`loop_settings_for`)."""
+    settings = settings or loop_settings_for(sol.skeleton)
     observe = observe or (lambda seen: seen)
     loop = _Loop(scene, obj, sol, physics)
     with SceneWorld(scene, obj, physics) as world:

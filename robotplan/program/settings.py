@@ -4,12 +4,11 @@ are in docs/experiments.md."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
 
-import yaml
-
+from robotplan.base.overlays import apply_overlays, read_overlays
 from robotplan.base.resources import skeletons_dir
 from robotplan.functionals.dynamics import QUADRATURE_COARSE
 
@@ -127,30 +126,15 @@ SCENE_CLASSES = ("arms", "routes", "pose", "rigid")
 @cache
 def load_overlays(path: Path | None = None) -> dict[str, dict]:
     """The overlays of ``skeletons/settings.yaml``, checked against the fields."""
-    path = path or skeletons_dir() / "settings.yaml"
-    data = yaml.safe_load(path.read_text()) or {}
-    types = {f.name: f.type for f in fields(ProgramSettings)}
-    for name, overlay in data.items():
-        if name not in SCENE_CLASSES:
-            raise ValueError(f"{path}: {name}: not a scene class; one of {SCENE_CLASSES}")
-        for key, value in overlay.items():
-            if key not in types:
-                raise ValueError(f"{path}: {name}.{key}: not a program setting")
-            default = getattr(DEFAULT_SETTINGS, key)
-            if default is not None and type(value) is not type(default) and not (
-                    isinstance(default, float) and type(value) is int):
-                raise ValueError(f"{path}: {name}.{key}: must be a {type(default).__name__}")
-    return data
+    return read_overlays(path or skeletons_dir() / "settings.yaml", DEFAULT_SETTINGS,
+                         SCENE_CLASSES, "program setting")
 
 
 def settings_for(*classes: str, base: ProgramSettings = DEFAULT_SETTINGS,
                  **changes: object) -> ProgramSettings:
     """``base`` with the overlays of the scene ``classes`` (``arms``, ``routes``) from
     ``skeletons/settings.yaml`` in order, then ``changes``."""
-    out = base
-    for name in classes:
-        out = replace(out, **load_overlays().get(name, {}))
-    return replace(out, **changes)
+    return replace(apply_overlays(base, load_overlays(), classes), **changes)
 
 
 ARM_PROGRAM_SETTINGS = settings_for("arms")

@@ -7,10 +7,13 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import replace
+from functools import cache
 from pathlib import Path
 
 import numpy as np
+import yaml
 
+from robotplan.base.resources import DYNAMICS_FOLDERS, skeletons_dir
 from robotplan.functionals.clearance import OBSTACLE_MARGIN
 from robotplan.models.loading import dynamics_kind
 from robotplan.program.arm_program import reach_check
@@ -30,8 +33,9 @@ from robotplan.scene import Scene
 from robotplan.search.planner import FEASIBLE, SearchResult, merge_results, search_push
 from robotplan.search.route import routed_candidates
 
-__all__ = ["UnsupportedScene", "budget_spent", "candidate_table", "candidate_tiers",
-           "check_supported", "metres", "search_scene", "settings_for"]
+__all__ = ["DYNAMICS_CLASSES", "UnsupportedScene", "budget_spent", "candidate_table",
+           "candidate_tiers", "check_supported", "default_dynamics", "load_default_dynamics",
+           "metres", "scene_classes", "search_scene", "settings_for"]
 
 
 class UnsupportedScene(ValueError):
@@ -49,6 +53,40 @@ def _chain_target(scene: Scene) -> tuple[str, str] | None:
     if allowed is None or goal_obj in allowed or others[0] not in allowed:
         return None
     return others[0], goal_obj
+
+
+DYNAMICS_CLASSES = ("arms", "chains", "obstacles", "pose")
+"""Scene classes with their own default learned dynamics (``skeletons/dynamics.yaml``)."""
+
+
+def scene_classes(scene: Scene) -> tuple[str, ...]:
+    """The classes of ``DYNAMICS_CLASSES`` a scene belongs to."""
+    return tuple(name for name, member in (
+        ("arms", bool(scene.robots)), ("chains", _chain_target(scene) is not None),
+        ("obstacles", bool(scene.obstacles)), ("pose", scene.goal.type == "pose")) if member)
+
+
+@cache
+def load_default_dynamics(path: Path | None = None) -> dict[str, str]:
+    """``skeletons/dynamics.yaml``: scene class (or ``default``) → dynamics kind."""
+    path = path or skeletons_dir() / "dynamics.yaml"
+    data = yaml.safe_load(path.read_text()) or {}
+    if not isinstance(data, dict) or "default" not in data:
+        raise ValueError(f"{path}: must map scene classes and 'default' to dynamics kinds")
+    for name, kind in data.items():
+        if name != "default" and name not in DYNAMICS_CLASSES:
+            raise ValueError(f"{path}: {name}: not a scene class; one of {DYNAMICS_CLASSES}")
+        if kind not in DYNAMICS_FOLDERS:
+            raise ValueError(f"{path}: {name}: {kind!r} is not a dynamics kind; one of "
+                             f"{tuple(DYNAMICS_FOLDERS)}")
+    return data
+
+
+def default_dynamics(scene: Scene) -> str:
+    """The dynamics kind (``flow``, ``rigid``, ``direct``) ``scene`` plans with when none is
+    named: that of its first class listed in ``skeletons/dynamics.yaml``, else ``default``."""
+    table = load_default_dynamics()
+    return next((table[c] for c in scene_classes(scene) if c in table), table["default"])
 
 
 def check_supported(scene: Scene) -> tuple[str, list[str]]:

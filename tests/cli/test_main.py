@@ -181,6 +181,7 @@ def test_dynamics_picks_a_shipped_model_and_a_model_folder_overrides_it(tmp_path
     from robotplan.cli.common import model_folder
 
     assert Path(model_folder(Namespace(dynamics="rigid", model=None))).name == "push_rigid"
+    assert model_folder(Namespace(dynamics="auto", model=None)) is None  # the scene's own
     assert model_folder(Namespace(dynamics="rigid", model=str(tmp_path))) == str(tmp_path)
     res = run("solve", str(TASKS / "box_push.yaml"), "--out", str(tmp_path / "a"),
               "--dynamics", "quadratic")

@@ -13,11 +13,14 @@ from robotplan.execution.closed_loop import (
     departure,
     execute_closed_loop,
     follow_object,
+    load_loop_overlays,
+    loop_settings_for,
     steer_pusher,
 )
 from robotplan.execution.perturb import Perturbation
 from robotplan.execution.scene_world import Observation
 from robotplan.execution.sim import PHYSICS
+from robotplan.program.skeleton import Phase, Skeleton
 from tests.conftest import TASKS
 
 
@@ -51,6 +54,26 @@ def test_steering_moves_the_pusher_sideways_to_the_object_and_against_its_turn()
     far = np.array([0.1, -0.2, -1.0])
     assert np.allclose(steer_pusher(target, start, planned, far, 0.05, 0.03), [0.03, -0.03])
     assert np.allclose(steer_pusher(start, start, planned, far, 0.05, 0.03), start)
+
+
+def test_chains_re_plan_from_their_own_phase_end_departures(tmp_path):
+    """A skeleton in which an object pushes another takes the ``chains`` overlay of
+    skeletons/loop.yaml; a single object's keeps the defaults; a bad overlay names its file
+    and field."""
+    single = Skeleton((Phase("reach", "pusher", "red", 0), Phase("push", "pusher", "red", 0)))
+    chain = Skeleton((*single.phases, Phase("push", "pusher", "red", 0, chain="blue")))
+    overlay = load_loop_overlays()["chains"]
+    assert loop_settings_for(single) == LoopSettings()
+    chained = loop_settings_for(chain)
+    assert chained != LoopSettings()
+    assert all(getattr(chained, k) == v for k, v in overlay.items())
+    bad = tmp_path / "loop.yaml"
+    for text, why in (("chains: {no_such: 1}", "loop.yaml: chains.no_such: not a closed-loop"),
+                      ("pets: {}", "pets: not a scene class"),
+                      ("chains: {phase_drift: yes}", "chains.phase_drift: must be a float")):
+        bad.write_text(text)
+        with pytest.raises(ValueError, match=why):
+            load_loop_overlays.__wrapped__(bad)
 
 
 def test_a_perturbed_world_is_seeded_and_within_its_spread():

@@ -1,6 +1,8 @@
 """robotplan.search.scene_search: the search logic around the programs (the programs
 themselves: test_planner and the slow end-to-end tests)."""
 
+import pytest
+
 import robotplan.search.scene_search as search_module
 from robotplan.api import solve
 from robotplan.scene import load_scene
@@ -86,3 +88,23 @@ def test_a_warm_start_along_a_route_keeps_its_steps_and_the_routes_settings(monk
     settings, space = calls[0]
     assert space.steps_per_phase == 14
     assert settings.push_friction == 0.02 and settings.lever_weight == 100.0
+
+
+def test_each_scene_class_plans_with_its_own_default_dynamics(tmp_path):
+    """skeletons/dynamics.yaml: a single free object takes ``default``; arms, chains,
+    obstacles take their own rows; a bad table names its file and field."""
+    table = search_module.load_default_dynamics()
+    expected = {"box_push": table["default"], "lshape_push": table["default"],
+                "three_objects": table["chains"], "two_arm_left_only": table["arms"],
+                "obstacle_push": table["obstacles"]}
+    for task, kind in expected.items():
+        assert search_module.default_dynamics(load_scene(TASKS / f"{task}.yaml")) == kind, task
+    assert search_module.scene_classes(load_scene(TASKS / "three_objects.yaml")) == ("chains",)
+    assert search_module.scene_classes(load_scene(TASKS / "box_push.yaml")) == ()
+    bad = tmp_path / "dynamics.yaml"
+    for text, why in (("arms: flow", "'default'"),
+                      ("default: flow\npets: flow", "pets: not a scene class"),
+                      ("default: quadratic", "default: 'quadratic' is not a dynamics kind")):
+        bad.write_text(text)
+        with pytest.raises(ValueError, match=why):
+            search_module.load_default_dynamics.__wrapped__(bad)
