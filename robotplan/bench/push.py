@@ -101,7 +101,12 @@ def summarize(rows: list[dict]) -> dict:
     return out
 
 
-def _box_plot(rows: list[dict], path: Path) -> None:
+MODEL_NAMES = {"push_flow": "F_flow", "push_rigid": "F_q", "push_direct": "F"}
+
+
+def _box_plot(rows: list[dict], path: Path, model: str) -> None:
+    """Coverage per shape type, open and closed loop side by side; ``model`` names the
+    learned dynamics in the title (``auto``: the models the rows used)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -123,7 +128,12 @@ def _box_plot(rows: list[dict], path: Path) -> None:
     ax.set_ylabel("coverage of the object inside the goal")
     ax.set_ylim(-0.02, 1.02)
     ax.legend(loc="lower left", fontsize=8)
-    ax.set_title("execution in pybullet: open vs closed loop (F_flow)")
+    if model == "auto":
+        used = sorted({r["model"] for r in rows if r.get("model")})
+        model = ", ".join(MODEL_NAMES.get(m, m) for m in used) or "auto"
+    else:
+        model = MODEL_NAMES.get(Path(model).name, Path(model).name)
+    ax.set_title(f"execution in pybullet: open vs closed loop ({model})")
     ax.grid(axis="y", alpha=0.3)
     fig.tight_layout()
 
@@ -204,7 +214,7 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
     writer.writeheader()
     writer.writerows(flat)
     write_atomically(out / "results.csv", lambda tmp: tmp.write_text(buf.getvalue()))
-    _box_plot(rows, out / "coverage.png")
+    _box_plot(rows, out / "coverage.png", summary["model"])
     write_atomically(out / "summary.json",
                      lambda tmp: tmp.write_text(json.dumps(summary, indent=1)))
     return summary
