@@ -44,6 +44,17 @@ def tiny_push_data(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.fixture(scope="session")
+def tiny_ood_push_data(tmp_path_factory) -> Path:
+    """8 real pybullet scenes of the unseen footprints (seed 5), one of each family."""
+    from robotplan.training.push_data import PushDataSpec, generate
+
+    out = tmp_path_factory.mktemp("push_ood") / "data"
+    generate(out, scenes=8, seed=5, workers=1, shard_size=4, progress=False,
+             spec=PushDataSpec(shapes="ood"))
+    return out
+
+
 TINY_SPEC = {"channels": (2, 2, 2), "sdf_features": 8, "point_features": 8, "hidden": (16, 16)}
 
 

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from robotplan.training.footprints import OOD_FAMILIES, draw_ood_shape
 from robotplan.training.push_data import PushDataSpec, draw_shape
 
 __all__ = ["OOD_FAMILIES", "POSE_FAMILIES", "draw_ood_shape", "draw_scene", "family_of"]
@@ -18,49 +19,6 @@ __all__ = ["OOD_FAMILIES", "POSE_FAMILIES", "draw_ood_shape", "draw_scene", "fam
 GOAL_DISTANCE = 0.35  # m from the object to the goal centre
 GOAL_NOISE = 0.02  # m, standard deviation per axis
 CENTER_NOISE = 0.03  # m
-
-
-OOD_FAMILIES = ("triangle", "pentagon", "hexagon", "circle", "T", "cross", "U", "trapezoid")
-"""Footprints never seen in training (``--shapes ood``, paper Figs. 2 and 7); T, cross and
-U are concave. Scene ``i`` draws family ``i mod 8``, so 16 scenes hold each twice."""
-
-
-def draw_ood_shape(rng: np.random.Generator, family: str):
-    """A random footprint of ``family`` with bounding sides of 0.10–0.26 m (the push
-    data's range), centred near its frame's origin."""
-    from robotplan.sdf import Circle, Polygon
-
-    u = rng.uniform
-    if family == "circle":
-        return Circle(round(float(u(0.05, 0.10)), 4))
-    if family in ("pentagon", "hexagon"):
-        n, r = (5 if family == "pentagon" else 6), u(0.07, 0.12)
-        a = np.arange(n) * 2 * math.pi / n + math.pi / 2
-        pts = r * np.stack((np.cos(a), np.sin(a)), 1)
-    elif family == "triangle":
-        b, h = u(0.14, 0.24), u(0.12, 0.22)
-        pts = np.array([[-b / 2, -h / 3], [b / 2, -h / 3], [0.0, 2 * h / 3]])
-    elif family == "trapezoid":
-        b, h = u(0.16, 0.26), u(0.10, 0.18)
-        top = b * u(0.4, 0.8)
-        pts = np.array([[-b / 2, -h / 2], [b / 2, -h / 2], [top / 2, h / 2], [-top / 2, h / 2]])
-    elif family == "T":
-        w, h, t = u(0.16, 0.26), u(0.14, 0.24), u(0.05, 0.08)
-        pts = np.array([[-t / 2, -h / 2], [t / 2, -h / 2], [t / 2, h / 2 - t], [w / 2, h / 2 - t],
-                        [w / 2, h / 2], [-w / 2, h / 2], [-w / 2, h / 2 - t],
-                        [-t / 2, h / 2 - t]])
-    elif family == "cross":
-        a, t = u(0.16, 0.26) / 2, u(0.05, 0.08) / 2
-        pts = np.array([[t, -a], [t, -t], [a, -t], [a, t], [t, t], [t, a], [-t, a], [-t, t],
-                        [-a, t], [-a, -t], [-t, -t], [-t, -a]])
-    elif family == "U":
-        w, h, t = u(0.16, 0.26), u(0.12, 0.20), u(0.04, 0.07)
-        pts = np.array([[-w / 2, -h / 2], [w / 2, -h / 2], [w / 2, h / 2], [w / 2 - t, h / 2],
-                        [w / 2 - t, -h / 2 + t], [-w / 2 + t, -h / 2 + t], [-w / 2 + t, h / 2],
-                        [-w / 2, h / 2]])
-    else:
-        raise ValueError(f"unknown footprint family {family!r}")
-    return Polygon(tuple((round(float(x), 4), round(float(y), 4)) for x, y in pts))
 
 
 def _shape_doc(shape) -> dict:

@@ -112,12 +112,18 @@ def _parser() -> argparse.ArgumentParser:
 
     d = sub.add_parser("data", help="generate training data")
     dsub = d.add_subparsers(dest="what", required=True)
-    dp = dsub.add_parser("push", help="push data from pybullet (boxes and L-shapes)")
+    dp = dsub.add_parser("push", help="push data from pybullet (boxes and L-shapes, or "
+                         "unseen footprints)")
     dp.add_argument("--scenes", type=int, required=True)
     dp.add_argument("--seed", type=int, required=True)
     dp.add_argument("--out", required=True, metavar="DIR")
     dp.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     dp.add_argument("--shard-size", type=int, default=50)
+    dp.add_argument("--shapes", choices=["train", "ood"], default="train",
+                    help="train: boxes and L-shapes (the training distribution); ood: "
+                    "footprints never trained on (triangle, pentagon, hexagon, circle, T, "
+                    "cross, U, trapezoid; scene i draws family i mod 8), for held-out tests "
+                    "as the paper's Tab. 6")
     dp.set_defaults(run=cmd_data_push)
 
     t = sub.add_parser("train", help="train learned functionals")

@@ -22,12 +22,12 @@ __all__ = ["cmd_bench", "cmd_bench_functional", "cmd_bench_push", "cmd_data_push
 
 
 def cmd_data_push(args: argparse.Namespace) -> int:
-    from robotplan.training.push_data import generate
+    from robotplan.training.push_data import PushDataSpec, generate
 
     t0 = time.time()
     try:
         summary = generate(Path(args.out), args.scenes, args.seed, workers=args.workers,
-                           shard_size=args.shard_size)
+                           shard_size=args.shard_size, spec=PushDataSpec(shapes=args.shapes))
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT

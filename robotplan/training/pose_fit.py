@@ -27,8 +27,9 @@ from robotplan.functionals.dynamics import LearnedDynamics
 from robotplan.geometry.transforms import wrap_angle
 from robotplan.models.dynamics import PushDynamics, load_model
 from robotplan.scene.bodies import Body
-from robotplan.sdf import Box, Circle, LShape
-from robotplan.training.push_data import LSHAPE
+from robotplan.sdf import Circle
+from robotplan.training.footprints import BOX, LSHAPE
+from robotplan.training.push_data import scene_footprint
 from robotplan.training.samples import PushSamples
 
 __all__ = ["evaluate_pose_fit", "fit_step"]
@@ -82,10 +83,8 @@ def evaluate_pose_fit(model_dir: str | Path, data_dir: str | Path, samples: int 
     rows = []
     for i in tqdm(picked, desc="pose fit", unit="sample", disable=not progress):
         s, now = data.scene[i], data.now[i]
-        half_w, half_h, thick = data.params[s]
-        lshape = bool(d["shape_type"][s] == LSHAPE)
-        shape = (LShape((2 * half_w, 2 * half_h), float(thick)) if lshape
-                 else Box((2 * half_w, 2 * half_h)))
+        shape = scene_footprint(d, s)
+        kind = int(d["shape_type"][s])
         q1p, q1n = d["object_pose"][now - 1].astype(float), d["object_pose"][now].astype(float)
         q2p, q2n = d["pusher_xy"][now - 1].astype(float), d["pusher_xy"][now].astype(float)
         obj = Body("object", "object", shape, tuple(q1p), 0.0, 0.06)
@@ -94,10 +93,11 @@ def evaluate_pose_fit(model_dir: str | Path, data_dir: str | Path, samples: int 
         fit = fit_step(model, obj, tool, q1p, q2p, q2n)
         true, pred = q1n - q1p, fit - q1p
         true[2], pred[2] = wrap_angle(true[2]), wrap_angle(pred[2])
-        rows.append((lshape, *true, *pred))
+        rows.append((kind, *true, *pred))
     R = np.array(rows, dtype=float).reshape(-1, 7)
     out: dict = {"model": str(model_dir), "data": str(data_dir), "samples": len(R)}
-    for name, mask in (("box", R[:, 0] == 0), ("lshape", R[:, 0] == 1), ("all", R[:, 0] >= 0)):
+    for name, mask in (("box", R[:, 0] == BOX), ("lshape", R[:, 0] == LSHAPE),
+                       ("other", R[:, 0] > LSHAPE), ("all", R[:, 0] >= 0)):
         if not mask.any():
             continue
         t, p = R[mask, 1:4], R[mask, 4:7]

@@ -1,12 +1,14 @@
-"""Push data from pybullet (paper §7.2, appendix I): random pushes of boxes and L-shapes.
+"""Push data from pybullet (paper §7.2, appendix I): random pushes of boxes and L-shapes, or
+(``shapes="ood"``) of footprints never seen in training (paper Tab. 6).
 
-Each scene draws an object (a box, or an L-shape in its bounding box), a pusher radius and a
-start on a circle around the object, then drives the pusher along random straight segments
-whose headings are biased towards the object's centre, until the object starts to leave the
-table or ``max_states`` states are kept. Every ``keep_every``-th simulation step the state is
-kept; two consecutive kept states form one sample (t−1, t).
+Each scene draws an object (a box, or an L-shape in its bounding box; with ``ood`` scene
+``i`` a footprint of family ``i mod 8``), a pusher radius and a start on a circle around
+the object, then drives the pusher along random straight segments whose headings are biased
+towards the object's centre, until the object starts to leave the table or ``max_states``
+states are kept. Every ``keep_every``-th simulation step the state is kept; two consecutive
+kept states form one sample (t−1, t).
 
-Storage is compact (shape parameters + poses, no grids): shards ``shard_NNNNN.npz`` of
+Storage is compact (footprint parameters + poses, no grids): shards ``shard_NNNNN.npz`` of
 ``shard_size`` scenes, each written atomically, plus ``meta.json`` with the settings. Scene
 ``i`` is drawn from ``numpy.random.default_rng([seed, i])``, so the data is the same for a
 seed whatever the number of workers, and a re-run on a partial folder only makes the
@@ -27,11 +29,19 @@ import numpy as np
 from robotplan.execution.sim import PHYSICS, PushWorld
 from robotplan.sdf import Box, LShape, Shape2D
 from robotplan.sdf.footprint import footprint_centroid
+from robotplan.training.footprints import (
+    MAX_VERTICES,
+    OOD_FAMILIES,
+    decode_footprint,
+    draw_ood_shape,
+    encode_footprint,
+)
 
-__all__ = ["PushDataSpec", "SceneRecord", "generate", "load_shards", "simulate_scene"]
+__all__ = ["PushDataSpec", "SceneRecord", "generate", "load_shards", "scene_footprint",
+           "simulate_scene"]
 
-BOX, LSHAPE = 0, 1
 FORMAT = 1
+PER_SCENE = ("scene_index", "shape_type", "size", "thickness", "vertices", "pusher_radius")
 
 
 @dataclass(frozen=True)
@@ -51,25 +61,18 @@ class PushDataSpec:
     heading_noise: float = 0.5  # rad, std of the heading around the object direction
     max_states: int = 100
     table_margin: float = 0.0  # the scene ends when the footprint crosses the edge
+    shapes: str = "train"  # "train": boxes and L-shapes; "ood": the unseen footprint families
 
 
 @dataclass
 class SceneRecord:
-    """One simulated scene: shape parameters and ``K`` kept states."""
+    """One simulated scene: its footprint and ``K`` kept states."""
 
-    shape_type: int
-    size: tuple[float, float]
-    thickness: float
+    shape: Shape2D
     pusher_radius: float
     object_pose: np.ndarray  # (K, 3) x, y, yaw of the shape frame
     pusher_xy: np.ndarray  # (K, 2)
     contact: np.ndarray  # (K,) bool: pusher touched the object during the step into k
-
-    @property
-    def shape(self) -> Shape2D:
-        if self.shape_type == BOX:
-            return Box(self.size)
-        return LShape(self.size, self.thickness)
 
 
 def draw_shape(rng: np.random.Generator, spec: PushDataSpec, kind: str | None = None
@@ -99,7 +102,10 @@ def simulate_scene(index: int, seed: int, spec: PushDataSpec = PushDataSpec(),
                    world: PushWorld | None = None) -> SceneRecord:
     """Draw scene ``index`` of ``seed`` and simulate it (deterministic)."""
     rng = np.random.default_rng([seed, index])
-    shape = draw_shape(rng, spec)
+    if spec.shapes == "ood":
+        shape = draw_ood_shape(rng, OOD_FAMILIES[index % len(OOD_FAMILIES)])
+    else:
+        shape = draw_shape(rng, spec)
     radius = float(rng.uniform(*spec.pusher_radius))
     while True:
         pose = np.array([*rng.uniform(-spec.object_region, spec.object_region, 2),
@@ -160,10 +166,8 @@ def _rollout(world: PushWorld, shape: Shape2D, radius: float, rng: np.random.Gen
         pushers.append(pusher)
         contacts.append(touched)
         touched = False
-    size = shape.size
-    thickness = shape.thickness if isinstance(shape, LShape) else size[1]
-    return SceneRecord(LSHAPE if isinstance(shape, LShape) else BOX, size, thickness, radius,
-                       np.array(poses), np.array(pushers), np.array(contacts, dtype=bool))
+    return SceneRecord(shape, radius, np.array(poses), np.array(pushers),
+                       np.array(contacts, dtype=bool))
 
 
 def _shard_path(out: Path, k: int) -> Path:
@@ -184,11 +188,13 @@ def _make_shard(args: tuple[Path, int, int, int, int, PushDataSpec]) -> tuple[in
     finally:
         world.close()
     offsets = np.cumsum([0] + [len(r.object_pose) for r in records])
+    codes = [encode_footprint(r.shape) for r in records]
     arrays = dict(
         scene_index=np.arange(first, last),
-        shape_type=np.array([r.shape_type for r in records], dtype=np.int8),
-        size=np.array([r.size for r in records], dtype=np.float32),
-        thickness=np.array([r.thickness for r in records], dtype=np.float32),
+        shape_type=np.array([c[0] for c in codes], dtype=np.int8),
+        size=np.array([c[1] for c in codes], dtype=np.float32),
+        thickness=np.array([c[2] for c in codes], dtype=np.float32),
+        vertices=np.array([c[3] for c in codes], dtype=np.float32),
         pusher_radius=np.array([r.pusher_radius for r in records], dtype=np.float32),
         offsets=offsets.astype(np.int64),
         object_pose=np.concatenate([r.object_pose for r in records]).astype(np.float32),
@@ -213,7 +219,10 @@ def generate(out: Path, scenes: int, seed: int, workers: int = 2, shard_size: in
     if meta_path.exists():
         old = json.loads(meta_path.read_text())
         for key in meta:
-            if _jsonable(old.get(key)) != _jsonable(meta[key]):
+            before = _jsonable(old.get(key))
+            if key == "spec" and isinstance(before, dict):  # folders made before ``shapes``
+                before.setdefault("shapes", "train")
+            if before != _jsonable(meta[key]):
                 raise ValueError(f"{meta_path}: {key}: the folder holds data made with other "
                                  f"settings ({old.get(key)!r}); use another --out")
     meta["scenes"] = max(scenes, json.loads(meta_path.read_text()).get("scenes", 0)
@@ -247,15 +256,19 @@ def _jsonable(x: object) -> object:
 def load_shards(folder: Path, scenes: int | None = None) -> dict[str, np.ndarray]:
     """All shards of ``folder`` concatenated (first ``scenes`` scenes if given).
 
-    Returns arrays per scene (``shape_type, size, thickness, pusher_radius, scene_index``,
-    ``offsets (S+1,)``) and per state (``object_pose, pusher_xy, contact``).
+    Returns arrays per scene (``shape_type, size, thickness, vertices, pusher_radius,
+    scene_index``, ``offsets (S+1,)``; see :mod:`robotplan.training.footprints`) and per
+    state (``object_pose, pusher_xy, contact``).
     """
     paths = sorted(Path(folder).glob("shard_*.npz"))
     if not paths:
         raise FileNotFoundError(f"{folder}: no push data shards (shard_*.npz) here")
     parts = [dict(np.load(p)) for p in paths]
+    for p in parts:  # shards of boxes and L-shapes only may hold no vertices
+        p.setdefault("vertices", np.full((len(p["scene_index"]), MAX_VERTICES, 2), np.nan,
+                                         dtype=np.float32))
     out: dict[str, np.ndarray] = {}
-    for key in ("scene_index", "shape_type", "size", "thickness", "pusher_radius"):
+    for key in PER_SCENE:
         out[key] = np.concatenate([p[key] for p in parts])
     for key in ("object_pose", "pusher_xy", "contact"):
         out[key] = np.concatenate([p[key] for p in parts])
@@ -263,9 +276,15 @@ def load_shards(folder: Path, scenes: int | None = None) -> dict[str, np.ndarray
     out["offsets"] = np.concatenate([[0], np.cumsum(lengths)])
     if scenes is not None and scenes < len(out["scene_index"]):
         end = out["offsets"][scenes]
-        for key in ("scene_index", "shape_type", "size", "thickness", "pusher_radius"):
+        for key in PER_SCENE:
             out[key] = out[key][:scenes]
         for key in ("object_pose", "pusher_xy", "contact"):
             out[key] = out[key][:end]
         out["offsets"] = out["offsets"][: scenes + 1]
     return out
+
+
+def scene_footprint(data: dict[str, np.ndarray], scene: int) -> Shape2D:
+    """The footprint of ``scene`` (a row of :func:`load_shards`' per-scene arrays)."""
+    return decode_footprint(int(data["shape_type"][scene]), data["size"][scene],
+                            float(data["thickness"][scene]), data["vertices"][scene])

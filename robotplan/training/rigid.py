@@ -34,6 +34,7 @@ from robotplan.models.rigid import (
 from robotplan.models.spec import DynamicsSpec
 from robotplan.sdf import Workspace
 from robotplan.training.evaluation import pick_samples
+from robotplan.training.footprints import BOX, LSHAPE
 from robotplan.training.samples import PushSamples, SampleBatch
 from robotplan.training.train import (
     TrainConfig,
@@ -78,9 +79,7 @@ def delta_q_errors(model: RigidMotion, batch: SampleBatch, grid: Tensor,
     """Predicted and true Δq, each ``(B, 3)`` in m, m, rad."""
     preds, trues = [], []
     for i in range(0, len(batch.radius), chunk):
-        sub = SampleBatch(*(getattr(batch, f)[i:i + chunk] for f in
-                            ("params", "object_prev", "object_now", "radius", "pusher_prev",
-                             "pusher_now", "contact")))
+        sub = batch.slice(i, i + chunk)
         inputs, _, true = rigid_targets(sub, grid, shape)
         preds.append(model(inputs))
         trues.append(true)
@@ -224,8 +223,9 @@ def evaluate_rigid(model_dir: str | Path, data_dir: str | Path, scenes: int | No
     idx = pick_samples(samples, per_scene, seed)
     pred, true = delta_q_errors(model, samples.batch(idx, device=device), grid, ws.shape)
     contact = samples.contact[idx]
-    lshape = samples.data["shape_type"][samples.scene[idx]] != 0
+    code = samples.data["shape_type"][samples.scene[idx]]
     c = contact
+    kinds = {"box": code == BOX, "lshape": code == LSHAPE, "other": code > LSHAPE}
     return {
         "model": str(model_dir), "kind": "rigid", "data": str(data_dir),
         "scenes": samples.num_scenes,
@@ -233,7 +233,7 @@ def evaluate_rigid(model_dir: str | Path, data_dir: str | Path, scenes: int | No
         "delta_q_error": _table5(pred[c], true[c]),
         "delta_q_error_free": _table5(pred[~c], true[~c]),
         "baseline_delta_q_error": _table5(np.zeros_like(true[c]), true[c]),
-        "turn_gain": {"box": round(turn_gain(pred[c & ~lshape], true[c & ~lshape]), 3),
-                      "lshape": round(turn_gain(pred[c & lshape], true[c & lshape]), 3)},
+        "turn_gain": {k: round(turn_gain(pred[c & m], true[c & m]), 3)
+                      for k, m in kinds.items() if (c & m).any()},
         "seconds": round(time.time() - t0, 1), "device": str(device),
     }

@@ -1,13 +1,14 @@
 """Push samples (t−1, t) from a data folder, with their SDFs rendered on the fly in torch.
 
-Objects are boxes or L-shapes; both are drawn by the exact L-shape SDF with per-sample
-parameters (a box is the L whose thickness is its full height), so a whole batch of mixed
-shapes renders in one vectorised call.
+Boxes and L-shapes are drawn by the exact L-shape SDF with per-sample parameters (a box is
+the L whose thickness is its full height), so a whole batch of mixed shapes renders in one
+vectorised call. Other footprints (the unseen families of Tab. 6) render sample by sample
+through their own exact SDFs.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
@@ -15,8 +16,10 @@ import torch
 from torch import Tensor
 
 from robotplan.geometry.transforms import planar_to_body
+from robotplan.sdf import Shape2D
 from robotplan.sdf.closed_form import lshape_sdf, safe_hypot
-from robotplan.training.push_data import load_shards
+from robotplan.training.footprints import LSHAPE
+from robotplan.training.push_data import load_shards, scene_footprint
 
 __all__ = ["PushSamples", "SampleBatch", "object_sdf", "pusher_sdf"]
 
@@ -39,19 +42,33 @@ def pusher_sdf(radius: Tensor, xy: Tensor, points_W: Tensor) -> Tensor:
 class SampleBatch:
     """B samples: object parameters, poses and pusher positions at t−1 and t."""
 
-    params: Tensor  # (B, 3)
+    params: Tensor  # (B, 3) (w/2, h/2, thickness); for other footprints their bounding box
     object_prev: Tensor  # (B, 3)
     object_now: Tensor  # (B, 3)
     radius: Tensor  # (B,)
     pusher_prev: Tensor  # (B, 2)
     pusher_now: Tensor  # (B, 2)
     contact: Tensor  # (B,) bool
+    shapes: tuple[Shape2D, ...] | None = None  # per sample, where not all are boxes and Ls
+
+    def _phi1(self, X_WB: Tensor, points: Tensor) -> Tensor:
+        if self.shapes is None:
+            return object_sdf(self.params, X_WB, points)
+        p = planar_to_body(points, X_WB)  # (B, N, 2)
+        return torch.stack([shape.sdf(p[b]) for b, shape in enumerate(self.shapes)])
 
     def phi1_prev(self, points: Tensor) -> Tensor:
-        return object_sdf(self.params, self.object_prev, points)
+        """φ1_{t−1} at ``points (B or 1, N, 2)`` → ``(B, N)``."""
+        return self._phi1(self.object_prev, points)
 
     def phi1_now(self, points: Tensor) -> Tensor:
-        return object_sdf(self.params, self.object_now, points)
+        """φ1_t at ``points (B or 1, N, 2)`` → ``(B, N)``."""
+        return self._phi1(self.object_now, points)
+
+    def slice(self, start: int, stop: int) -> SampleBatch:
+        """Samples ``start`` to ``stop`` of the batch."""
+        return SampleBatch(**{f.name: None if getattr(self, f.name) is None
+                              else getattr(self, f.name)[start:stop] for f in fields(self)})
 
     def inputs(self, grid_points: Tensor, shape: tuple[int, int]) -> Tensor:
         """The model inputs φ1_{t−1}, φ2_{t−1}, φ2_t on X_h: ``(B, 3, H, W)``."""
@@ -78,6 +95,10 @@ class PushSamples:
         self.contact = d["contact"][self.now]
         half = d["size"] / 2
         self.params = np.stack([half[:, 0], half[:, 1], d["thickness"]], axis=1)
+        # footprints other than boxes and L-shapes, each rendered by its own SDF
+        self.footprints: list[Shape2D] | None = (
+            [scene_footprint(d, k) for k in range(len(lengths))]
+            if (d["shape_type"] > LSHAPE).any() else None)
 
     @property
     def num_scenes(self) -> int:
@@ -108,4 +129,6 @@ class PushSamples:
             radius=t(d["pusher_radius"][self.scene[idx]]),
             pusher_prev=t(d["pusher_xy"][now - 1]), pusher_now=t(d["pusher_xy"][now]),
             contact=torch.as_tensor(self.contact[idx], device=device),
+            shapes=(None if self.footprints is None
+                    else tuple(self.footprints[k] for k in self.scene[idx])),
         )

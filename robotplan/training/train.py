@@ -102,9 +102,7 @@ def grid_rmse(model: PushDynamics, batch: SampleBatch, ws: Workspace, stride: in
     full = grid.reshape(-1, 2)
     model_err, base_err = [], []
     for i in range(0, len(batch.radius), chunk):
-        sub = SampleBatch(*(getattr(batch, f)[i:i + chunk] for f in
-                            ("params", "object_prev", "object_now", "radius", "pusher_prev",
-                             "pusher_now", "contact")))
+        sub = batch.slice(i, i + chunk)
         inputs = sub.inputs(full, ws.shape)
         prev, now = sub.phi1_prev(pts), sub.phi1_now(pts)
         pred = model.predict_next(inputs, pts, prev)
