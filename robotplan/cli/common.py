@@ -33,14 +33,17 @@ def not_a_model(folder: str | None) -> bool:
     return True
 
 
-def add_dynamics_options(parser) -> None:
-    """Which learned dynamics a plan uses: a shipped kind, or a model folder."""
-    parser.add_argument("--dynamics", choices=["auto", *sorted(DYNAMICS_FOLDERS)],
-                        default="auto",
+def add_dynamics_options(parser, several: bool = False) -> None:
+    """Which learned dynamics a plan uses: a shipped kind, or a model folder; ``several``:
+    a comma-separated list of kinds may be given (checked by the command)."""
+    kinds = ["auto", *sorted(DYNAMICS_FOLDERS)]
+    parser.add_argument("--dynamics", choices=None if several else kinds, default="auto",
                         help="the shipped learned dynamics to plan with: flow (F_flow, "
                         "H_F), rigid (F_q, its rigid step), direct (F, H_F); default auto: "
                         "the one measured best for the scene's class "
-                        "(skeletons/dynamics.yaml)")
+                        "(skeletons/dynamics.yaml)"
+                        + ("; several, e.g. flow,rigid,direct: each on the same scenes, "
+                           "side by side" if several else ""))
     parser.add_argument("--model", default=None, metavar="DIR",
                         help="a model folder of any kind instead (overrides --dynamics)")
 

@@ -64,7 +64,7 @@ def _parser() -> argparse.ArgumentParser:
     bp.add_argument("--seed", type=int, default=0)
     bp.add_argument("--out", required=True, metavar="DIR",
                     help="scenes, per-scene results, CSV, box plot (continues a partial run)")
-    add_dynamics_options(bp)
+    add_dynamics_options(bp, several=True)
     bp.add_argument("--shapes", default="box,lshape",
                     help="comma-separated: box, lshape, ood (unseen footprints: triangle, "
                     "pentagon, hexagon, circle, T, cross, U, trapezoid), pose (a box or a "

@@ -8,6 +8,7 @@ import sys
 import time
 from pathlib import Path
 
+from robotplan.base.resources import DYNAMICS_FOLDERS
 from robotplan.cli.common import (
     EXIT_BAD_INPUT,
     device_name,
@@ -128,7 +129,16 @@ def cmd_eval_push(args: argparse.Namespace) -> int:
 def cmd_bench_push(args: argparse.Namespace) -> int:
     from robotplan.bench.push import run_bench_push
 
-    args.model = model_folder(args)
+    kinds = args.dynamics.split(",")
+    known = ["auto", *sorted(DYNAMICS_FOLDERS)]
+    bad_kind = next((k for k in kinds if k not in known), None)
+    if bad_kind is not None or (len(kinds) > 1 and ("auto" in kinds or args.model)):
+        print(f"error: --dynamics: {bad_kind!r} is not one of {', '.join(known)}"
+              if bad_kind is not None else "error: --dynamics: a list names shipped kinds "
+              "only (flow, rigid, direct), without auto or --model", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if len(kinds) == 1:
+        args.model = model_folder(args)
     if not_a_model(args.model):
         return EXIT_BAD_INPUT
     if args.scenes < 1:
@@ -141,6 +151,8 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return EXIT_BAD_INPUT
     out = Path(args.out)
+    if len(kinds) > 1:
+        return _bench_compare(args, kinds, out)
     summary_path = out / "summary.json"
     if summary_path.exists() and not args.overwrite:
         print(f"error: {out}: --out: holds a finished benchmark; pass --overwrite to redo it",
@@ -172,6 +184,35 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
             print(f"time: {prof['programs']} programs, {prof['candidate_seconds']:.0f} s in "
                   f"their callbacks and solver: {top}")
         print(f"wrote {out / 'results.csv'}, {out / 'coverage.png'}, {summary_path}")
+    return 0
+
+
+def _bench_compare(args: argparse.Namespace, kinds: list[str], out: Path) -> int:
+    """``bench push --dynamics A,B,…``: one benchmark per kind, then the comparison."""
+    from robotplan.bench.compare import run_bench_compare
+
+    if (out / "compare.json").exists() and not args.overwrite:
+        print(f"error: {out}: --out: holds a finished comparison; pass --overwrite to redo it",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.overwrite:
+        for kind in kinds:
+            for name in ("summary.json", "rows.jsonl", "results.csv", "coverage.png"):
+                (out / kind / name).unlink(missing_ok=True)
+    result = run_bench_compare(kinds, args.scenes, args.seed, out, args.workers,
+                               tuple(args.shapes.split(",")), args.exhaustive,
+                               args.time_budget, args.perturb)
+    if args.json:
+        print(json.dumps(result))
+        return 0
+    for kind, shapes in result["models"].items():
+        for shape, v in shapes.items():
+            c, o, t = v["closed_loop"], v["open_loop"], v["plan_seconds"]
+            print(f"{kind:>7} {shape:>7}: closed loop {c['median']:.3f} (q1 {c['q1']:.3f}), "
+                  f"open loop {o['median']:.3f} (q1 {o['q1']:.3f}); below 0.9 "
+                  f"{v['below_0_9']['closed_loop']} / {v['below_0_9']['open_loop']}; "
+                  f"unsolved {v['unsolved']} of {c['n']}; plan time median {t['median']:.1f} s")
+    print(f"wrote {out / 'compare.json'}, {out / 'compare.png'}")
     return 0
 
 
