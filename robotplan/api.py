@@ -25,6 +25,7 @@ from robotplan.execution.perturb import Perturbation
 from robotplan.execution.scene_world import actuation
 from robotplan.execution.sim import PHYSICS
 from robotplan.functionals.clearance import OBSTACLE_MARGIN
+from robotplan.models.loading import dynamics_kind
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import Solution
 from robotplan.program.solve import warm_guess
@@ -110,7 +111,10 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
                                    progress, exhaustive, quiet, time_budget)
         result, spaces = merge_results(result, again), {**spaces, **more}
     if not quiet:
-        print(candidate_table(result))
+        kind = dynamics_kind(model_dir)
+        named = ", the default for this scene's class" if model is None else ""
+        print(f"learned dynamics: {kind} from {model_dir}{named}")
+        print(candidate_table(result, kind))
     best = result.best
     return Plan(scene, obj, best, result.solved, result.candidates, result.seconds,
                 spaces.get(id(best)) if best is not None else None,

@@ -197,8 +197,11 @@ def metres(value: float) -> float | None:
     return round(value, 4) if math.isfinite(value) else None
 
 
-def candidate_table(result: SearchResult) -> str:
-    lines = [f"{'#':>2}  {'skeleton':<40} {'violation':>10} {'cost':>9} {'H_F rms mm':>10} "
+def candidate_table(result: SearchResult, dynamics: str = "flow") -> str:
+    """One line per solved candidate; ``dynamics``: the kind of the learned row (its RMS
+    column is H_q's for ``rigid``, else H_F's)."""
+    rms = "H_q rms mm" if dynamics == "rigid" else "H_F rms mm"
+    lines = [f"{'#':>2}  {'skeleton':<40} {'violation':>10} {'cost':>9} {rms:>10} "
              f"{'seconds':>8}  status"]
     for i, s in enumerate(result.candidates):
         mark = " <- best" if s is result.best else ""

@@ -7,6 +7,8 @@ import sys
 
 import pytest
 
+from robotplan.base.resources import DYNAMICS_FOLDERS
+from robotplan.search.scene_search import load_default_dynamics
 from tests.conftest import ROOT, TASKS
 
 
@@ -26,6 +28,9 @@ def test_solve_box_push(tmp_path):
     out = tmp_path / "out"
     doc = solve("box_push", out)
     assert "<- best" in doc["stdout"]  # the table of candidates
+    kind = load_default_dynamics()["default"]  # one free pusher, one object
+    assert f"learned dynamics: {kind} from" in doc["stdout"]
+    assert doc["model"].endswith(DYNAMICS_FOLDERS[kind])
     assert doc["status"] == "solved"
     assert doc["execution"]["simulator"] == "pybullet"
     assert doc["execution"]["coverage"] >= 0.95
@@ -69,6 +74,7 @@ def test_solve_three_objects(tmp_path):
     executes it with blue in the goal (coverage ≥ 0.95) and the pusher never on blue."""
     out = tmp_path / "out"
     doc = solve("three_objects", out)
+    assert doc["model"].endswith(DYNAMICS_FOLDERS[load_default_dynamics()["chains"]])
     assert doc["status"] == "solved"
     assert any(row.get("pushes") == "blue" for row in doc["skeleton"])
     assert doc["execution"]["coverage"] >= 0.95
