@@ -116,8 +116,14 @@ def cmd_eval_push(args: argparse.Namespace) -> int:
     if args.pose_fit > 0:
         from robotplan.training.pose_fit import evaluate_pose_fit
 
-        result["pose_fit"] = evaluate_pose_fit(args.model, args.data, samples=args.pose_fit,
-                                               seed=args.seed, scenes=args.scenes)
+        fit = evaluate_pose_fit(args.model, args.data, samples=args.pose_fit, seed=args.seed,
+                                scenes=args.scenes)
+        result["pose_fit"] = fit
+        # the Tab. 5 columns and turn gains as F_q reports them, read through the fit
+        if "delta_q_error" in fit:
+            result["delta_q_error"] = fit["delta_q_error"]
+        result["turn_gain"] = {k: v["turn_gain"] for k, v in fit.items()
+                               if isinstance(v, dict) and "turn_gain" in v and k != "all"}
     if args.record:
         from robotplan.training.model_card import record_heldout
 

@@ -10,7 +10,9 @@ compares q̂1_t − q1_{t−1} with the simulator's step. The field RMSE of
 :func:`~robotplan.training.evaluation.evaluate_push` can be small while the turning is wrong:
 a 2° turn of a 20 cm object moves its SDF by at most ~3.5 mm, about the model's field error.
 The ``turn_gain`` (least-squares slope of the fitted turn against the true one, through 0)
-says how much of the object's turning the model predicts: 1 is all of it, 0 none.
+says how much of the object's turning the model predicts: 1 is all of it, 0 none. The fitted
+and the true step are also read as F_q's Δq (a turn about the footprint's centroid, then a
+shift) for the paper's Tab. 5 columns (``delta_q_error``).
 """
 
 from __future__ import annotations
@@ -26,10 +28,13 @@ from robotplan.functionals.base import Quadrature
 from robotplan.functionals.dynamics import LearnedDynamics
 from robotplan.geometry.transforms import wrap_angle
 from robotplan.models.dynamics import PushDynamics, load_model
+from robotplan.models.rigid import moved_pivot_delta
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Circle
+from robotplan.sdf.footprint import footprint_centroid
 from robotplan.training.footprints import BOX, LSHAPE
 from robotplan.training.push_data import scene_footprint
+from robotplan.training.rigid import table5_errors
 from robotplan.training.samples import PushSamples
 
 __all__ = ["evaluate_pose_fit", "fit_step"]
@@ -80,7 +85,7 @@ def evaluate_pose_fit(model_dir: str | Path, data_dir: str | Path, samples: int 
     contact = np.flatnonzero(data.contact)
     rng = np.random.default_rng(seed)
     picked = np.sort(rng.choice(contact, min(samples, len(contact)), replace=False))
-    rows = []
+    rows, deltas = [], []
     for i in tqdm(picked, desc="pose fit", unit="sample", disable=not progress):
         s, now = data.scene[i], data.now[i]
         shape = scene_footprint(d, s)
@@ -94,6 +99,12 @@ def evaluate_pose_fit(model_dir: str | Path, data_dir: str | Path, samples: int 
         true, pred = q1n - q1p, fit - q1p
         true[2], pred[2] = wrap_angle(true[2]), wrap_angle(pred[2])
         rows.append((kind, *true, *pred))
+        c, s_ = np.cos(q1p[2]), np.sin(q1p[2])
+        cx, cy = footprint_centroid(shape)
+        pivot = torch.tensor([[q1p[0] + c * cx - s_ * cy, q1p[1] + s_ * cx + c * cy]])
+        poses = torch.tensor(np.stack([q1p, q1p, q1n, fit]))
+        steps = moved_pivot_delta(pivot.repeat(2, 1), poses[:2], poses[2:]).numpy()
+        deltas.append(steps)  # (2, 3): the true Δq, the fitted one
     R = np.array(rows, dtype=float).reshape(-1, 7)
     out: dict = {"model": str(model_dir), "data": str(data_dir), "samples": len(R)}
     for name, mask in (("box", R[:, 0] == BOX), ("lshape", R[:, 0] == LSHAPE),
@@ -109,5 +120,8 @@ def evaluate_pose_fit(model_dir: str | Path, data_dir: str | Path, samples: int 
             "true_turn_deg": round(float(np.degrees(np.median(np.abs(t[:, 2])))), 2),
             "turn_gain": round(float(t[:, 2] @ p[:, 2] / max(t[:, 2] @ t[:, 2], 1e-12)), 3),
         }
+    if deltas:
+        D = np.array(deltas)
+        out["delta_q_error"] = table5_errors(D[:, 1], D[:, 0])
     out["seconds"] = round(time.time() - t0, 1)
     return out

@@ -45,8 +45,8 @@ from robotplan.training.train import (
     write_json,
 )
 
-__all__ = ["delta_q_errors", "evaluate_rigid", "rigid_targets", "sdf_space_loss", "train_rigid",
-           "turn_gain"]
+__all__ = ["delta_q_errors", "evaluate_rigid", "rigid_targets", "sdf_space_loss",
+           "table5_errors", "train_rigid", "turn_gain"]
 
 
 def rigid_targets(batch: SampleBatch, grid: Tensor, shape: tuple[int, int]
@@ -92,7 +92,7 @@ def turn_gain(pred: np.ndarray, true: np.ndarray) -> float:
     return float(pred[:, 2] @ t / max(float(t @ t), 1e-12))
 
 
-def _table5(pred: np.ndarray, true: np.ndarray) -> dict:
+def table5_errors(pred: np.ndarray, true: np.ndarray) -> dict:
     """Paper Tab. 5 columns: |error| of x, y in mm and α in degrees, [mean, std]."""
     err = np.abs(pred - true) * np.array([1e3, 1e3, 180 / math.pi])
     return {key: [round(float(err[:, k].mean()), 3), round(float(err[:, k].std()), 3)]
@@ -148,8 +148,8 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
         c = val_batch.contact.cpu().numpy()
         row = {"step": step, "epoch": round(step / per_epoch, 3),
                "minutes": round(seconds / 60, 1),
-               "val_delta_q_error": {"contact": _table5(pred[c], true[c]),
-                                     "free": _table5(pred[~c], true[~c])},
+               "val_delta_q_error": {"contact": table5_errors(pred[c], true[c]),
+                                     "free": table5_errors(pred[~c], true[~c])},
                "val_turn_gain": round(turn_gain(pred[c], true[c]), 3)}
         history.append(row)
         save_rigid(model, out)
@@ -230,9 +230,9 @@ def evaluate_rigid(model_dir: str | Path, data_dir: str | Path, scenes: int | No
         "model": str(model_dir), "kind": "rigid", "data": str(data_dir),
         "scenes": samples.num_scenes,
         "samples": {"contact": int(c.sum()), "free": int((~c).sum())},
-        "delta_q_error": _table5(pred[c], true[c]),
-        "delta_q_error_free": _table5(pred[~c], true[~c]),
-        "baseline_delta_q_error": _table5(np.zeros_like(true[c]), true[c]),
+        "delta_q_error": table5_errors(pred[c], true[c]),
+        "delta_q_error_free": table5_errors(pred[~c], true[~c]),
+        "baseline_delta_q_error": table5_errors(np.zeros_like(true[c]), true[c]),
         "turn_gain": {k: round(turn_gain(pred[c & m], true[c & m]), 3)
                       for k, m in kinds.items() if (c & m).any()},
         "seconds": round(time.time() - t0, 1), "device": str(device),

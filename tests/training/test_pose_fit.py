@@ -60,3 +60,8 @@ def test_evaluate_pose_fit_reports_both_shapes():
         if k in out:
             assert 0 <= out[k]["translation_error_mm"] < 30
             assert np.isfinite(out[k]["turn_gain"])
+    # the fitted steps read as F_q's Δq about the footprint's centroid (paper Tab. 5)
+    table = out["delta_q_error"]
+    assert set(table) == {"x_mm", "y_mm", "alpha_deg"}
+    for mean, std in table.values():
+        assert 0 <= mean < 30 and std >= 0
