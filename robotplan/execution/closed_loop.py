@@ -12,6 +12,10 @@ the goal is not met it plans afresh from the observed scene. A re-plan is taken 
 plan meets every constraint; otherwise the current plan goes on, and mid-phase drift does
 not trigger another re-plan before the next phase boundary.
 
+The thresholds are :class:`LoopSettings`, with overlays per scene class in
+``skeletons/loop.yaml`` (:func:`loop_settings_for`: a chain re-plans from larger departures
+at a phase's end).
+
 Between re-plans a free pusher may follow the object (``follow_object``, off by default):
 in push steps its planned position is carried by the rigid motion that takes the planned
 object pose to the observed one, so it keeps the planned point of contact on the object. Or
