@@ -1,0 +1,62 @@
+"""The closed loop's settings (:class:`LoopSettings`): when the executor re-plans and what it
+does between re-plans, each with its reason (measurements: docs/experiments.md#closed-loop),
+and their overlays per scene class in ``skeletons/loop.yaml``."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+from robotplan.base.overlays import apply_overlays, read_overlays
+from robotplan.base.resources import skeletons_dir
+from robotplan.program.skeleton import Skeleton
+
+__all__ = ["LOOP_CLASSES", "LoopSettings", "load_loop_overlays", "loop_settings_for"]
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    # m and rad of an object off the plan that trigger a re-plan mid-phase: only gross
+    # departures, as the learned model's own error stays below them while a push goes on
+    # (measured: docs/experiments.md#closed-loop)
+    drift: float = 0.05
+    drift_yaw: float = math.radians(20.0)
+    phase_drift: float = 0.005  # the same at the end of a phase
+    phase_drift_yaw: float = math.radians(2.0)
+    goal_coverage: float = 0.995  # below this at the plan's end: plan afresh
+    pose_coverage: float = 0.98  # the same for a pose goal (its success is at 0.95)
+    touch_gap: float = 0.005  # m: a touch goal farther than this at the end: plan afresh
+    max_replans: int = 8
+    # off by default: searching afresh at once when a departure's re-anchored tail does not
+    # plan finds plans that drift off again, at 30-110 s a search (measured:
+    # docs/experiments.md#closed-loop)
+    fresh_after_miss: bool = False
+    # off by default: carrying the pusher with a turned object turns the push with it, which
+    # can drive the object further off (measured: docs/experiments.md#closed-loop)
+    follow_object: bool = False
+    # m of sideways pusher offset per rad of the object's yaw off the plan in push steps and
+    # the largest offset (steer_pusher); 0, off: no gain helped beyond the scatter between
+    # scenes (measured: docs/experiments.md#closed-loop)
+    steer_gain: float = 0.0
+    steer_limit: float = 0.03
+
+
+LOOP_CLASSES = ("chains",)
+"""Scene classes with their own closed-loop settings: ``chains``, plans in which an object
+pushes another."""
+
+
+@cache
+def load_loop_overlays(path: Path | None = None) -> dict[str, dict]:
+    """The overlays of ``skeletons/loop.yaml``, checked against :class:`LoopSettings`."""
+    return read_overlays(path or skeletons_dir() / "loop.yaml", LoopSettings(), LOOP_CLASSES,
+                         "closed-loop setting")
+
+
+def loop_settings_for(skeleton: Skeleton, base: LoopSettings | None = None) -> LoopSettings:
+    """``base`` (default :class:`LoopSettings`) with the overlays of the classes
+    ``skeleton`` belongs to (``chains`` when an object pushes another in it)."""
+    classes = ("chains",) if skeleton.chained else ()
+    return apply_overlays(base or LoopSettings(), load_loop_overlays(), classes)
