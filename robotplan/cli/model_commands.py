@@ -132,16 +132,24 @@ def cmd_eval_push(args: argparse.Namespace) -> int:
     return 0
 
 
+def dynamics_list_problem(kinds: list[str], model: str | None) -> str | None:
+    """What is wrong with ``--dynamics`` given as ``kinds`` (None: nothing)."""
+    known = ["auto", *sorted(DYNAMICS_FOLDERS)]
+    bad = next((k for k in kinds if k not in known), None)
+    if bad is not None:
+        return f"{bad!r} is not one of {', '.join(known)}"
+    if len(kinds) > 1 and ("auto" in kinds or model):
+        return "a list names shipped kinds only (flow, rigid, direct), without auto or --model"
+    return None
+
+
 def cmd_bench_push(args: argparse.Namespace) -> int:
     from robotplan.bench.push import run_bench_push
 
     kinds = args.dynamics.split(",")
-    known = ["auto", *sorted(DYNAMICS_FOLDERS)]
-    bad_kind = next((k for k in kinds if k not in known), None)
-    if bad_kind is not None or (len(kinds) > 1 and ("auto" in kinds or args.model)):
-        print(f"error: --dynamics: {bad_kind!r} is not one of {', '.join(known)}"
-              if bad_kind is not None else "error: --dynamics: a list names shipped kinds "
-              "only (flow, rigid, direct), without auto or --model", file=sys.stderr)
+    problem = dynamics_list_problem(kinds, args.model)
+    if problem:
+        print(f"error: --dynamics: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
     if len(kinds) == 1:
         args.model = model_folder(args)

@@ -5,6 +5,7 @@ import json
 import pytest
 
 from robotplan.bench.compare import compare_rows
+from robotplan.cli.model_commands import dynamics_list_problem
 from tests.cli.test_main import run
 
 
@@ -26,13 +27,16 @@ def test_comparison_counts_each_models_scenes_apart():
 
 
 def test_a_list_of_dynamics_names_shipped_kinds_only(tmp_path):
-    for value, why in (("flow,quadratic", "'quadratic'"), ("flow,auto", "shipped kinds"),
-                       ("rigid,flow --model learned/push_flow", "shipped kinds")):
-        words = value.split()
-        res = run("bench", "push", "--scenes", "1", "--dynamics", words[0], *words[1:],
-                  "--out", str(tmp_path / "b"))
-        assert res.returncode == 2 and res.stderr.count("\n") == 1, res.stderr
-        assert "--dynamics" in res.stderr and why in res.stderr
+    assert dynamics_list_problem(["flow", "rigid", "direct"], None) is None
+    assert dynamics_list_problem(["auto"], "learned/push_flow") is None
+    for kinds, model, why in ((["flow", "quadratic"], None, "'quadratic'"),
+                              (["flow", "auto"], None, "shipped kinds"),
+                              (["rigid", "flow"], "learned/push_flow", "shipped kinds")):
+        assert why in dynamics_list_problem(kinds, model)
+    res = run("bench", "push", "--scenes", "1", "--dynamics", "flow,quadratic",
+              "--out", str(tmp_path / "b"))
+    assert res.returncode == 2 and res.stderr.count("\n") == 1, res.stderr
+    assert "--dynamics" in res.stderr and "'quadratic'" in res.stderr
 
 
 @pytest.mark.slow
