@@ -44,12 +44,14 @@ class DynamicsRows(ProgramRows):
 
     def _add_dynamics(self, model: PushDynamics | RigidMotion, obj, Q_obj: np.ndarray, actor,
                       Q_actor: np.ndarray, path: np.ndarray, name: str) -> Dynamics:
-        """H_F of ``obj`` (poses ``Q_obj (N+1, 3)``) pushed by ``actor`` (``Q_actor (N+1, 2)``
-        positions of a disc, or ``(N+1, 3)`` poses of an object) in every step, integrated
-        around ``path (N+1, ≥2)``, the object's guessed centres."""
+        """H_F (or H_q for F_q) of ``obj`` (poses ``Q_obj (N+1, 3)``) pushed by ``actor``
+        (``Q_actor (N+1, 2)`` positions of a disc, or ``(N+1, 3)`` poses of an object) in every
+        step, integrated around ``path (N+1, ≥2)``, the object's guessed centres."""
         s = self.settings
         if isinstance(model, RigidMotion):
             dynamics: Dynamics = RigidDynamics(model, obj, actor)
+            # the row (and its time in the profile) is named after its functional
+            name = name.replace("H_F", "H_q", 1)
         else:
             quad = phase_quadrature(torch.as_tensor(path[:, :2], dtype=torch.float32),
                                     obj.shape.bound_radius, self.scene.workspace,
