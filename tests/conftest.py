@@ -55,6 +55,15 @@ def tiny_ood_push_data(tmp_path_factory) -> Path:
     return out
 
 
+def assert_each_refused(load, path: Path, cases) -> None:
+    """Each ``(text, why)`` of ``cases`` written to ``path`` makes ``load(path)`` raise a
+    ValueError whose message matches ``why``."""
+    for text, why in cases:
+        path.write_text(text)
+        with pytest.raises(ValueError, match=why):
+            load(path)
+
+
 TINY_SPEC = {"channels": (2, 2, 2), "sdf_features": 8, "point_features": 8, "hidden": (16, 16)}
 
 

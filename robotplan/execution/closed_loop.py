@@ -175,9 +175,9 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
                         report: Callable[[str], None] | None = None) -> Execution:
     """Execute ``sol`` in ``scene`` closing the loop through ``replan`` (see the module
     docstring). ``observe`` turns the true state into the perceived one (default: exact);
-    ``report`` gets a line per re-plan. ``settings``: default those of ``sol``'s scene
-    class (:func:`loop_settings_for`)."""
-    settings = settings or loop_settings_for(sol.skeleton)
+    ``report`` gets a line per re-plan. ``settings``: default those of the scene's
+    classes (:func:`loop_settings_for`)."""
+    settings = settings or loop_settings_for(scene)
     observe = observe or (lambda seen: seen)
     loop = _Loop(scene, obj, sol, physics)
     with SceneWorld(scene, obj, physics) as world:

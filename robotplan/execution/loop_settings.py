@@ -11,7 +11,8 @@ from pathlib import Path
 
 from robotplan.base.overlays import apply_overlays, read_overlays
 from robotplan.base.resources import skeletons_dir
-from robotplan.program.skeleton import Skeleton
+from robotplan.scene import Scene
+from robotplan.search.scene_search import scene_classes
 
 __all__ = ["LOOP_CLASSES", "LoopSettings", "load_loop_overlays", "loop_settings_for"]
 
@@ -44,8 +45,8 @@ class LoopSettings:
 
 
 LOOP_CLASSES = ("chains",)
-"""Scene classes with their own closed-loop settings: ``chains``, plans in which an object
-pushes another."""
+"""Scene classes with their own closed-loop settings: ``chains``, scenes in which the pusher
+pushes one object into another."""
 
 
 @cache
@@ -55,8 +56,8 @@ def load_loop_overlays(path: Path | None = None) -> dict[str, dict]:
                          "closed-loop setting")
 
 
-def loop_settings_for(skeleton: Skeleton, base: LoopSettings | None = None) -> LoopSettings:
-    """``base`` (default :class:`LoopSettings`) with the overlays of the classes
-    ``skeleton`` belongs to (``chains`` when an object pushes another in it)."""
-    classes = ("chains",) if skeleton.chained else ()
+def loop_settings_for(scene: Scene, base: LoopSettings | None = None) -> LoopSettings:
+    """``base`` (default :class:`LoopSettings`) with the overlays of the classes ``scene``
+    belongs to (:func:`~robotplan.search.scene_search.scene_classes`)."""
+    classes = tuple(c for c in scene_classes(scene) if c in LOOP_CLASSES)
     return apply_overlays(base or LoopSettings(), load_loop_overlays(), classes)

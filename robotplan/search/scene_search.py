@@ -56,11 +56,15 @@ def _chain_target(scene: Scene) -> tuple[str, str] | None:
 
 
 DYNAMICS_CLASSES = ("arms", "chains", "obstacles", "pose")
-"""Scene classes with their own default learned dynamics (``skeletons/dynamics.yaml``)."""
+"""The classes a scene may belong to (:func:`scene_classes`), each of which may have its own
+default learned dynamics (``skeletons/dynamics.yaml``), program settings
+(``skeletons/settings.yaml``: ``arms``, ``pose``) and closed-loop settings
+(``skeletons/loop.yaml``: ``chains``)."""
 
 
 def scene_classes(scene: Scene) -> tuple[str, ...]:
-    """The classes of ``DYNAMICS_CLASSES`` a scene belongs to."""
+    """The classes of ``DYNAMICS_CLASSES`` a scene belongs to, in that order (chains: the
+    pusher may touch only the object that pushes the goal's object)."""
     return tuple(name for name, member in (
         ("arms", bool(scene.robots)), ("chains", _chain_target(scene) is not None),
         ("obstacles", bool(scene.obstacles)), ("pose", scene.goal.type == "pose")) if member)
@@ -215,8 +219,7 @@ def settings_for(scene: Scene, solver: str = "snopt", dynamics: str = "flow"
                  ) -> ProgramSettings:
     """The program settings of a scene's actors (the arms' overlay, or the free pusher's),
     goal (the pose goals' overlay) and learned dynamics (F_q's overlay, ``rigid``)."""
-    classes = (("arms",) if scene.robots else ()) + (
-        ("pose",) if scene.goal.type == "pose" else ()) + (
+    classes = tuple(c for c in scene_classes(scene) if c in ("arms", "pose")) + (
         ("rigid",) if dynamics == "rigid" else ())
     return program_settings(*classes, solver=solver)
 

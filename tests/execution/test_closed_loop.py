@@ -20,8 +20,7 @@ from robotplan.execution.closed_loop import (
 from robotplan.execution.perturb import Perturbation
 from robotplan.execution.scene_world import Observation
 from robotplan.execution.sim import PHYSICS
-from robotplan.program.skeleton import Phase, Skeleton
-from tests.conftest import TASKS
+from tests.conftest import TASKS, assert_each_refused
 
 
 def test_departure_names_the_object_and_how_far_it_is_off():
@@ -57,23 +56,19 @@ def test_steering_moves_the_pusher_sideways_to_the_object_and_against_its_turn()
 
 
 def test_chains_re_plan_from_their_own_phase_end_departures(tmp_path):
-    """A skeleton in which an object pushes another takes the ``chains`` overlay of
+    """A scene in which an object pushes another takes the ``chains`` overlay of
     skeletons/loop.yaml; a single object's keeps the defaults; a bad overlay names its file
     and field."""
-    single = Skeleton((Phase("reach", "pusher", "red", 0), Phase("push", "pusher", "red", 0)))
-    chain = Skeleton((*single.phases, Phase("push", "pusher", "red", 0, chain="blue")))
+    single, chain = load_scene(TASKS / "box_push.yaml"), load_scene(TASKS / "three_objects.yaml")
     overlay = load_loop_overlays()["chains"]
     assert loop_settings_for(single) == LoopSettings()
     chained = loop_settings_for(chain)
     assert chained != LoopSettings()
     assert all(getattr(chained, k) == v for k, v in overlay.items())
-    bad = tmp_path / "loop.yaml"
-    for text, why in (("chains: {no_such: 1}", "loop.yaml: chains.no_such: not a closed-loop"),
-                      ("pets: {}", "pets: not a scene class"),
-                      ("chains: {phase_drift: yes}", "chains.phase_drift: must be a float")):
-        bad.write_text(text)
-        with pytest.raises(ValueError, match=why):
-            load_loop_overlays.__wrapped__(bad)
+    assert_each_refused(load_loop_overlays.__wrapped__, tmp_path / "loop.yaml", (
+        ("chains: {no_such: 1}", "loop.yaml: chains.no_such: not a closed-loop"),
+        ("pets: {}", "pets: not a scene class"),
+        ("chains: {phase_drift: yes}", "chains.phase_drift: must be a float")))
 
 
 def test_a_perturbed_world_is_seeded_and_within_its_spread():

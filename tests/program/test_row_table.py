@@ -10,7 +10,7 @@ from robotplan.program.push_rows import ROW_BUILDERS
 from robotplan.program.row_table import load_rows, rows_for_stage
 from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings, settings_for
 from robotplan.program.skeleton import load_skeleton_space, parse_skeleton
-from tests.conftest import TASKS
+from tests.conftest import TASKS, assert_each_refused
 
 
 def test_every_row_of_the_table_has_a_builder_and_a_known_setting():
@@ -66,10 +66,7 @@ def test_settings_overlays_per_scene_class(tmp_path, monkeypatch):
     assert arms.a_coll == DEFAULT_SETTINGS.a_coll
     routes = settings_for("routes", base=arms, solver="ipopt")
     assert routes.lever_weight == 100.0 and routes.sparse_jacobians and routes.solver == "ipopt"
-    bad = tmp_path / "settings.yaml"
-    for text, why in (("arms: {no_such: 1}", "not a program setting"),
-                      ("pets: {}", "not a scene class"),
-                      ("arms: {sparse_jacobians: 3}", "must be a bool")):
-        bad.write_text(text)
-        with pytest.raises(ValueError, match=why):
-            settings_module.load_overlays.__wrapped__(bad)
+    assert_each_refused(settings_module.load_overlays.__wrapped__, tmp_path / "settings.yaml", (
+        ("arms: {no_such: 1}", "not a program setting"),
+        ("pets: {}", "not a scene class"),
+        ("arms: {sparse_jacobians: 3}", "must be a bool")))

@@ -1,13 +1,12 @@
 """robotplan.search.scene_search: the search logic around the programs (the programs
 themselves: test_planner and the slow end-to-end tests)."""
 
-import pytest
 
 import robotplan.search.scene_search as search_module
 from robotplan.api import solve
 from robotplan.scene import load_scene
 from robotplan.search.planner import SearchResult
-from tests.conftest import TASKS
+from tests.conftest import TASKS, assert_each_refused
 
 
 def test_arm_search_tries_init_points_seen_from_the_goal_when_face_pushes_fail(
@@ -101,10 +100,8 @@ def test_each_scene_class_plans_with_its_own_default_dynamics(tmp_path):
         assert search_module.default_dynamics(load_scene(TASKS / f"{task}.yaml")) == kind, task
     assert search_module.scene_classes(load_scene(TASKS / "three_objects.yaml")) == ("chains",)
     assert search_module.scene_classes(load_scene(TASKS / "box_push.yaml")) == ()
-    bad = tmp_path / "dynamics.yaml"
-    for text, why in (("arms: flow", "'default'"),
-                      ("default: flow\npets: flow", "pets: not a scene class"),
-                      ("default: quadratic", "default: 'quadratic' is not a dynamics kind")):
-        bad.write_text(text)
-        with pytest.raises(ValueError, match=why):
-            search_module.load_default_dynamics.__wrapped__(bad)
+    assert_each_refused(search_module.load_default_dynamics.__wrapped__,
+                        tmp_path / "dynamics.yaml", (
+        ("arms: flow", "'default'"),
+        ("default: flow\npets: flow", "pets: not a scene class"),
+        ("default: quadratic", "default: 'quadratic' is not a dynamics kind")))
