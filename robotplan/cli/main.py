@@ -13,6 +13,7 @@ import sys
 from robotplan.base.memory import keep_freed_memory
 from robotplan.base.resources import learned_dir, tasks_dir
 from robotplan.cli.common import EXIT_BAD_INPUT, add_dynamics_options, add_execution_options
+from robotplan.cli.hang_commands import cmd_data_hang
 from robotplan.cli.model_commands import (
     cmd_bench,
     cmd_bench_functional,
@@ -125,6 +126,16 @@ def _parser() -> argparse.ArgumentParser:
                     "cross, U, trapezoid; scene i draws family i mod 8), for held-out tests "
                     "as the paper's Tab. 6")
     dp.set_defaults(run=cmd_data_push)
+    dh = dsub.add_parser("hang", help="mug-hanging data from pybullet: mug poses dropped on "
+                         "hooks, labelled hangs or not (paper app. H)")
+    dh.add_argument("--scenes", type=int, required=True)
+    dh.add_argument("--seed", type=int, required=True)
+    dh.add_argument("--out", required=True, metavar="DIR")
+    dh.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    dh.add_argument("--shard-size", type=int, default=20)
+    dh.add_argument("--per-scene", type=int, default=20,
+                    help="labelled configurations kept per scene")
+    dh.set_defaults(run=cmd_data_hang)
 
     t = sub.add_parser("train", help="train learned functionals")
     tsub = t.add_subparsers(dest="what", required=True)

@@ -17,11 +17,8 @@ missing shards.
 
 from __future__ import annotations
 
-import json
 import math
-import os
 from dataclasses import asdict, dataclass
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
@@ -36,6 +33,7 @@ from robotplan.training.footprints import (
     draw_ood_shape,
     encode_footprint,
 )
+from robotplan.training.shards import make_shards, prepare_folder, save_shard, shard_path
 
 __all__ = ["PushDataSpec", "SceneRecord", "generate", "load_shards", "scene_footprint",
            "simulate_scene"]
@@ -170,15 +168,11 @@ def _rollout(world: PushWorld, shape: Shape2D, radius: float, rng: np.random.Gen
                        np.array(contacts, dtype=bool))
 
 
-def _shard_path(out: Path, k: int) -> Path:
-    return out / f"shard_{k:05d}.npz"
-
-
-def _make_shard(args: tuple[Path, int, int, int, int, PushDataSpec]) -> tuple[int, int]:
+def _make_shard(args: tuple[Path, int, int, int, int, PushDataSpec]) -> int:
     out, k, first, last, seed, spec = args
-    path = _shard_path(out, k)
+    path = shard_path(out, k)
     if path.exists():
-        return k, 0
+        return 0
     import torch
 
     torch.set_num_threads(1)
@@ -189,7 +183,7 @@ def _make_shard(args: tuple[Path, int, int, int, int, PushDataSpec]) -> tuple[in
         world.close()
     offsets = np.cumsum([0] + [len(r.object_pose) for r in records])
     codes = [encode_footprint(r.shape) for r in records]
-    arrays = dict(
+    save_shard(path, dict(
         scene_index=np.arange(first, last),
         shape_type=np.array([c[0] for c in codes], dtype=np.int8),
         size=np.array([c[1] for c in codes], dtype=np.float32),
@@ -200,57 +194,25 @@ def _make_shard(args: tuple[Path, int, int, int, int, PushDataSpec]) -> tuple[in
         object_pose=np.concatenate([r.object_pose for r in records]).astype(np.float32),
         pusher_xy=np.concatenate([r.pusher_xy for r in records]).astype(np.float32),
         contact=np.concatenate([r.contact for r in records]),
-    )
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    os.replace(tmp, path)
-    return k, int(offsets[-1] - len(records))
+    ))
+    return int(offsets[-1] - len(records))
+
+
+def _legacy_settings(key: str, before: object) -> object:
+    if key == "spec" and isinstance(before, dict):  # folders made before ``shapes``
+        before.setdefault("shapes", "train")
+    return before
 
 
 def generate(out: Path, scenes: int, seed: int, workers: int = 2, shard_size: int = 50,
              spec: PushDataSpec = PushDataSpec(), progress: bool = True) -> dict:
     """Make (or finish) the data set in ``out``. Returns a summary."""
-    from tqdm import tqdm
-
-    out.mkdir(parents=True, exist_ok=True)
     meta = {"format": FORMAT, "seed": seed, "shard_size": shard_size,
             "physics": PHYSICS.as_dict(), "spec": asdict(spec)}
-    meta_path = out / "meta.json"
-    if meta_path.exists():
-        old = json.loads(meta_path.read_text())
-        for key in meta:
-            before = _jsonable(old.get(key))
-            if key == "spec" and isinstance(before, dict):  # folders made before ``shapes``
-                before.setdefault("shapes", "train")
-            if before != _jsonable(meta[key]):
-                raise ValueError(f"{meta_path}: {key}: the folder holds data made with other "
-                                 f"settings ({old.get(key)!r}); use another --out")
-    meta["scenes"] = max(scenes, json.loads(meta_path.read_text()).get("scenes", 0)
-                         if meta_path.exists() else 0)
-    tmp = meta_path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(meta, indent=1))
-    os.replace(tmp, meta_path)
-    jobs = [(out, k, first, min(first + shard_size, scenes), seed, spec)
-            for k, first in enumerate(range(0, scenes, shard_size))]
-    todo = [j for j in jobs if not _shard_path(out, j[1]).exists()]
-    samples = 0
-    with tqdm(total=len(jobs) * shard_size, initial=(len(jobs) - len(todo)) * shard_size,
-              unit="scene", disable=not progress, desc="push data") as bar:
-        if workers <= 1:
-            for j in todo:
-                samples += _make_shard(j)[1]
-                bar.update(j[3] - j[2])
-        else:
-            with get_context("fork").Pool(workers) as pool:
-                for (_, n), j in zip(pool.imap(_make_shard, todo), todo, strict=True):
-                    samples += n
-                    bar.update(j[3] - j[2])
-    return {"scenes": scenes, "shards": len(jobs), "made_shards": len(todo),
-            "new_samples": samples}
-
-
-def _jsonable(x: object) -> object:
-    return json.loads(json.dumps(x))
+    prepare_folder(out, meta, scenes, _legacy_settings)
+    shards, made, samples = make_shards(out, scenes, shard_size, _make_shard, (seed, spec),
+                                        workers, progress, "push data")
+    return {"scenes": scenes, "shards": shards, "made_shards": made, "new_samples": samples}
 
 
 def load_shards(folder: Path, scenes: int | None = None) -> dict[str, np.ndarray]:

@@ -1,0 +1,161 @@
+"""Mug-hanging data from pybullet (paper §7.1, app. H): per scene a mug and a hook drawn from
+``robots/hang/shapes.yaml``, mug poses drawn uniformly in X_h (position uniform in the cube,
+orientation uniform on SO(3)) and dropped until at least one hangs, then
+``per_scene`` labelled configurations kept: every success found, each success's settled
+pose (where the drop left it, dropped again and labelled by that drop), then the failures in
+the order they were drawn.
+
+Storage is compact (shape parameters and poses; the SDF grids are rendered when training):
+shards of ``shard_size`` scenes and ``meta.json`` (see :mod:`robotplan.training.shards`).
+Scene ``i`` is drawn from ``numpy.random.default_rng([seed, i])``: the data is the same for a
+seed whatever the number of workers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from robotplan.execution.hang_world import HANG_PHYSICS, HangWorld
+from robotplan.scene.hang_ranges import HangRanges, load_hang_ranges
+from robotplan.sdf.hang_shapes import Hook, Mug
+from robotplan.training.shards import make_shards, prepare_folder, save_shard, shard_path
+
+__all__ = ["HangDataSpec", "HangScene", "decode_hook", "decode_mug", "generate_hang",
+           "load_hang_shards", "random_poses", "simulate_hang_scene"]
+
+FORMAT = 1
+MUG_FIELDS = ("radius", "height", "handle_height", "handle_reach", "handle_span", "wall",
+              "handle_radius")
+MAX_PARTS = 3
+DRAW_BATCH = 256  # poses drawn from the scene's generator at a time
+
+
+@dataclass(frozen=True)
+class HangDataSpec:
+    per_scene: int = 20  # labelled configurations kept per scene
+    max_draws: int = 20_000  # drops per scene at most while looking for a success
+    settled: bool = True  # add each success's settled pose, labelled by its own drop
+
+
+@dataclass
+class HangScene:
+    """One scene: its shapes, ``per_scene`` poses X_HM ``(n, 7)`` with their labels."""
+
+    mug: Mug
+    hook: Hook
+    poses: np.ndarray  # (n, 7) x, y, z, qw, qx, qy, qz of the mug in the hook frame
+    hangs: np.ndarray  # (n,) bool: the label y
+    collision: np.ndarray  # (n,) bool: in collision with the hook where it starts
+    draws: int  # poses dropped to find the successes
+    found: bool  # at least one success within max_draws
+
+
+def random_poses(rng: np.random.Generator, centre: np.ndarray, size: float,
+                 n: int) -> np.ndarray:
+    """``n`` poses ``(n, 7)``: positions uniform in the cube of edge ``size`` about ``centre``,
+    orientations uniform on SO(3) (normalised Gaussian quaternions, w ≥ 0)."""
+    pos = centre + rng.uniform(-size / 2, size / 2, (n, 3))
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+    return np.concatenate([pos, q], axis=1)
+
+
+def simulate_hang_scene(index: int, seed: int, spec: HangDataSpec = HangDataSpec(),
+                        ranges: HangRanges | None = None) -> HangScene:
+    """Draw scene ``index`` of ``seed`` and label its poses by dropping them (deterministic)."""
+    ranges = ranges or load_hang_ranges()
+    rng = np.random.default_rng([seed, index])
+    hook, mug = ranges.hook.sample(rng), ranges.mug.sample(rng)
+    centre = ranges.grid.centre(hook)
+    good: list[tuple[np.ndarray, bool, bool]] = []
+    bad: list[tuple[np.ndarray, bool, bool]] = []
+    draws = 0
+    with HangWorld(hook, mug) as world:
+        while not good and draws < spec.max_draws:
+            for X in random_poses(rng, centre, ranges.grid.size, DRAW_BATCH):
+                draws += 1
+                result = world.drop(X)
+                (good if result.hangs else bad).append((X, result.hangs,
+                                                        result.collision_at_start))
+                if result.hangs and spec.settled:
+                    end = np.array(result.X_WM_end)
+                    again = world.drop(end)
+                    (good if again.hangs else bad).append((end, again.hangs,
+                                                           again.collision_at_start))
+                if result.hangs or draws >= spec.max_draws:
+                    break
+    keep = (good[: spec.per_scene // 2] + bad)[: spec.per_scene]
+    while len(keep) < spec.per_scene:  # a scene whose draws ran out early: repeat failures
+        keep.append(keep[len(keep) % max(len(bad), 1)])
+    return HangScene(mug, hook, np.array([k[0] for k in keep]),
+                     np.array([k[1] for k in keep], dtype=bool),
+                     np.array([k[2] for k in keep], dtype=bool), draws, bool(good))
+
+
+def _encode_hook(hook: Hook) -> np.ndarray:
+    """``(2 + 2 · MAX_PARTS,)``: post height, parts, lengths, angles (zero-padded)."""
+    n = len(hook.lengths)
+    pad = [0.0] * (MAX_PARTS - n)
+    return np.array([hook.post_height, n, *hook.lengths, *pad, *hook.angles, *pad])
+
+
+def decode_hook(code: np.ndarray, post_radius: float, rod_radius: float) -> Hook:
+    n = int(code[1])
+    return Hook(float(code[0]), tuple(map(float, code[2:2 + n])),
+                tuple(map(float, code[2 + MAX_PARTS:2 + MAX_PARTS + n])),
+                post_radius=post_radius, rod_radius=rod_radius)
+
+
+def decode_mug(code: np.ndarray) -> Mug:
+    return Mug(**{name: float(v) for name, v in zip(MUG_FIELDS, code, strict=True)})
+
+
+def _make_shard(args: tuple) -> int:
+    out, k, first, last, seed, spec = args
+    path = shard_path(out, k)
+    if path.exists():
+        return 0
+    import torch
+
+    torch.set_num_threads(1)
+    scenes = [simulate_hang_scene(i, seed, spec) for i in range(first, last)]
+    save_shard(path, dict(
+        scene_index=np.arange(first, last),
+        mug=np.array([[getattr(s.mug, f) for f in MUG_FIELDS] for s in scenes]),
+        hook=np.array([_encode_hook(s.hook) for s in scenes]),
+        hook_radii=np.array([(s.hook.post_radius, s.hook.rod_radius) for s in scenes]),
+        poses=np.array([s.poses for s in scenes]),
+        hangs=np.array([s.hangs for s in scenes]),
+        collision=np.array([s.collision for s in scenes]),
+        draws=np.array([s.draws for s in scenes]),
+        found=np.array([s.found for s in scenes]),
+    ))
+    return len(scenes) * spec.per_scene
+
+
+def generate_hang(out: Path, scenes: int, seed: int, workers: int = 2, shard_size: int = 20,
+                  spec: HangDataSpec = HangDataSpec(), progress: bool = True) -> dict:
+    """Make (or finish) the hanging data set in ``out``. Returns a summary."""
+    ranges = load_hang_ranges()
+    meta = {"format": FORMAT, "seed": seed, "shard_size": shard_size,
+            "physics": HANG_PHYSICS.as_dict(), "spec": asdict(spec),
+            "ranges": asdict(ranges)}
+    prepare_folder(out, meta, scenes)
+    shards, made, samples = make_shards(out, scenes, shard_size, _make_shard, (seed, spec),
+                                        workers, progress, "hang data")
+    return {"scenes": scenes, "shards": shards, "made_shards": made, "new_samples": samples}
+
+
+def load_hang_shards(folder: Path) -> dict[str, np.ndarray]:
+    """All shards of ``folder`` concatenated: per scene ``mug (S, 7)``, ``hook (S, 8)``,
+    ``hook_radii (S, 2)``, ``poses (S, n, 7)``, ``hangs``, ``collision (S, n)``, ``draws``,
+    ``found``, ``scene_index``."""
+    paths = sorted(Path(folder).glob("shard_*.npz"))
+    if not paths:
+        raise FileNotFoundError(f"{folder}: no hanging data shards (shard_*.npz) here")
+    parts = [dict(np.load(p)) for p in paths]
+    return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
