@@ -55,6 +55,17 @@ def tiny_ood_push_data(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.fixture(scope="session")
+def tiny_hang_data(tmp_path_factory) -> Path:
+    """3 real hanging scenes (seed 0) made by ``robotplan data hang``: a few seconds."""
+    from robotplan.cli.main import main
+
+    out = tmp_path_factory.mktemp("hang") / "data"
+    assert main(["data", "hang", "--scenes", "3", "--seed", "0", "--out", str(out),
+                 "--workers", "1", "--shard-size", "2"]) == 0
+    return out
+
+
 def assert_each_refused(load, path: Path, cases) -> None:
     """Each ``(text, why)`` of ``cases`` written to ``path`` makes ``load(path)`` raise a
     ValueError whose message matches ``why``."""
@@ -64,6 +75,7 @@ def assert_each_refused(load, path: Path, cases) -> None:
             load(path)
 
 
+TINY_HANG_SPEC = {"channels": (2, 2, 2), "features": 8, "hidden": (16, 16)}
 TINY_SPEC = {"channels": (2, 2, 2), "sdf_features": 8, "point_features": 8, "hidden": (16, 16)}
 
 

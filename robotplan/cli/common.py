@@ -8,11 +8,30 @@ from pathlib import Path
 
 from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
 
-__all__ = ["EXIT_BAD_INPUT", "add_dynamics_options", "device_name", "model_folder",
-           "not_a_model", "print_result"]
+__all__ = [
+    "EXIT_BAD_INPUT",
+    "add_dynamics_options",
+    "device_name",
+    "model_folder",
+    "not_a_model",
+    "print_result",
+    "training_folders_problem",
+]
 
 
 EXIT_BAD_INPUT = 2
+
+
+def training_folders_problem(data: str, out: str, resume: bool, overwrite: bool) -> str | None:
+    """What is wrong with a training run's folders, in one line, or None."""
+    if not Path(data).is_dir():
+        return f"{data}: --data: no such folder"
+    ckpt = Path(out) / "checkpoint.pt"
+    if resume and not ckpt.is_file():
+        return f"{ckpt}: --resume: no checkpoint to resume from"
+    if not resume and Path(out).exists() and any(Path(out).iterdir()) and not overwrite:
+        return f"{out}: --out: the folder is not empty; --resume it or pass --overwrite"
+    return None
 
 
 def print_result(result: dict, as_json: bool) -> None:

@@ -1,4 +1,4 @@
-"""Commands of the mug-hanging task: data hang."""
+"""Commands of the mug-hanging task: data hang, train hang, eval hang."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import sys
 import time
 from pathlib import Path
 
-from robotplan.cli.common import EXIT_BAD_INPUT
+from robotplan.cli.common import EXIT_BAD_INPUT, print_result, training_folders_problem
 
-__all__ = ["cmd_data_hang"]
+__all__ = ["cmd_data_hang", "cmd_eval_hang", "cmd_train_hang"]
 
 
 def cmd_data_hang(args: argparse.Namespace) -> int:
@@ -32,4 +32,60 @@ def cmd_data_hang(args: argparse.Namespace) -> int:
         summary["scenes_per_second"] = round(
             summary["new_samples"] / args.per_scene / max(summary["seconds"], 1e-9), 3)
     print(json.dumps(summary))
+    return 0
+
+
+def cmd_train_hang(args: argparse.Namespace) -> int:
+    import torch
+
+    from robotplan.training.hang_train import HangTrainConfig, train_hang
+
+    problem = training_folders_problem(args.data, args.out, args.resume, args.overwrite)
+    if not problem and args.test and not Path(args.test).is_dir():
+        problem = f"{args.test}: --test: no such folder"
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    torch.set_num_threads(args.threads)
+    cfg = HangTrainConfig(data=args.data, out=args.out, test=args.test, steps=args.steps,
+                          batch=args.batch, lr=args.lr, seed=args.seed, scenes=args.scenes,
+                          minutes=args.minutes, val_every=args.val_every,
+                          command=" ".join(["robotplan", *sys.argv[1:]]))
+    if args.resume:  # the run's settings come from its checkpoint; only the budget may change
+        ckpt = Path(args.out) / "checkpoint.pt"
+        saved = json.loads(torch.load(ckpt, weights_only=True)["config"])
+        cfg = HangTrainConfig(**{**saved, "steps": args.steps or saved["steps"],
+                                 "minutes": args.minutes, "out": args.out,
+                                 "data": args.data})
+    print(json.dumps(train_hang(cfg, resume=args.resume)))
+    return 0
+
+
+def cmd_eval_hang(args: argparse.Namespace) -> int:
+    import numpy as np
+    import torch
+
+    from robotplan.models.hang import load_hang_model
+    from robotplan.training.hang_train import HangSamples, hang_metrics
+
+    for path, what in ((args.model, "--model"), (args.data, "--data")):
+        if not Path(path).is_dir():
+            print(f"error: {path}: {what}: no such folder", file=sys.stderr)
+            return EXIT_BAD_INPUT
+    torch.set_num_threads(args.threads)
+    try:
+        model = load_hang_model(args.model)
+    except (FileNotFoundError, ValueError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    samples = HangSamples(args.data, model.spec, args.scenes)
+    result = hang_metrics(model, samples, np.arange(len(samples)))
+    if args.record:
+        from robotplan.training.train import write_json
+
+        path = Path(args.model) / "metrics.json"
+        metrics = json.loads(path.read_text()) if path.is_file() else {}
+        metrics["heldout"] = {"data": str(args.data), **result}
+        write_json(path, metrics)
+    print_result(result, args.json)
     return 0

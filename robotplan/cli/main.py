@@ -13,7 +13,7 @@ import sys
 from robotplan.base.memory import keep_freed_memory
 from robotplan.base.resources import learned_dir, tasks_dir
 from robotplan.cli.common import EXIT_BAD_INPUT, add_dynamics_options, add_execution_options
-from robotplan.cli.hang_commands import cmd_data_hang
+from robotplan.cli.hang_commands import cmd_data_hang, cmd_eval_hang, cmd_train_hang
 from robotplan.cli.model_commands import (
     cmd_bench,
     cmd_bench_functional,
@@ -173,6 +173,22 @@ def _parser() -> argparse.ArgumentParser:
     tp.add_argument("--resume", action="store_true", help="continue from checkpoint.pt")
     tp.add_argument("--overwrite", action="store_true", help="start over in a used folder")
     tp.set_defaults(run=cmd_train_push)
+    th = tsub.add_parser("hang", help="train H_hang, the mug-hanging success model (eq. 21)")
+    th.add_argument("--data", required=True, metavar="DIR")
+    th.add_argument("--out", required=True, metavar="DIR", help="e.g. learned/hang")
+    th.add_argument("--test", default=None, metavar="DIR",
+                    help="held-out data to validate on (default: 5 %% of the scenes)")
+    th.add_argument("--steps", type=int, default=20_000)
+    th.add_argument("--batch", type=int, default=32)
+    th.add_argument("--lr", type=float, default=1e-4)
+    th.add_argument("--scenes", type=int, default=None, help="use only the first N scenes")
+    th.add_argument("--seed", type=int, default=0)
+    th.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    th.add_argument("--minutes", type=float, default=None, help="stop after this wall time")
+    th.add_argument("--val-every", type=int, default=1000)
+    th.add_argument("--resume", action="store_true", help="continue from checkpoint.pt")
+    th.add_argument("--overwrite", action="store_true", help="start over in a used folder")
+    th.set_defaults(run=cmd_train_hang)
 
     e = sub.add_parser("eval", help="evaluate learned functionals")
     esub = e.add_subparsers(dest="what", required=True)
@@ -192,6 +208,16 @@ def _parser() -> argparse.ArgumentParser:
     ep.add_argument("--record", action="store_true",
                     help="store the result in the model's metrics.json and model card")
     ep.set_defaults(run=cmd_eval_push)
+    eh = esub.add_parser("hang", help="H_hang on held-out hanging data: loss (eq. 21) and "
+                         "accuracy at the paper's thresholds κ1–κ3")
+    eh.add_argument("--model", required=True, metavar="DIR")
+    eh.add_argument("--data", required=True, metavar="DIR")
+    eh.add_argument("--scenes", type=int, default=None)
+    eh.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    eh.add_argument("--json", action="store_true")
+    eh.add_argument("--record", action="store_true",
+                    help="store the result in the model's metrics.json")
+    eh.set_defaults(run=cmd_eval_hang)
     return p
 
 

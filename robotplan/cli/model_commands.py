@@ -15,6 +15,7 @@ from robotplan.cli.common import (
     model_folder,
     not_a_model,
     print_result,
+    training_folders_problem,
 )
 from robotplan.scene import load_scene
 
@@ -47,17 +48,11 @@ def cmd_train_push(args: argparse.Namespace) -> int:
     from robotplan.training.train import TrainConfig, train
 
     out = Path(args.out)
-    if not Path(args.data).is_dir():
-        print(f"error: {args.data}: --data: no such folder", file=sys.stderr)
+    problem = training_folders_problem(args.data, args.out, args.resume, args.overwrite)
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
     ckpt = out / "checkpoint.pt"
-    if args.resume and not ckpt.is_file():
-        print(f"error: {ckpt}: --resume: no checkpoint to resume from", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    if not args.resume and out.exists() and any(out.iterdir()) and not args.overwrite:
-        print(f"error: {out}: --out: the folder is not empty; --resume it or pass --overwrite",
-              file=sys.stderr)
-        return EXIT_BAD_INPUT
     device = device_name(args.device)
     torch.set_num_threads(args.threads)
     cfg = TrainConfig(data=args.data, out=args.out, kind=args.model, steps=args.steps,

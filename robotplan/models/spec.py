@@ -57,29 +57,36 @@ class DynamicsSpec:
         return cls(**kw)
 
 
-def read_spec(folder: str | Path) -> DynamicsSpec:
-    """The ``spec.json`` of a model folder."""
+def _spec_json(folder: str | Path) -> dict:
     path = Path(folder) / "spec.json"
     if not path.is_file():
         raise FileNotFoundError(f"{folder}: no spec.json; not a robotplan model folder")
-    return DynamicsSpec.from_json(json.loads(path.read_text()))
+    return json.loads(path.read_text())
+
+
+def read_spec(folder: str | Path, spec_type: type = DynamicsSpec):
+    """The ``spec.json`` of a model folder, as ``spec_type`` (a dataclass with
+    ``from_json``)."""
+    return spec_type.from_json(_spec_json(folder))
 
 
 def read_model_folder(folder: str | Path, kinds: tuple[str, ...],
-                      device: str | torch.device = "cpu") -> tuple[DynamicsSpec, dict]:
-    """A model folder's spec, whose kind must be one of ``kinds``, and its state_dict
-    (``weights.pt``, read with ``weights_only=True``)."""
-    spec = read_spec(folder)
-    if spec.kind not in kinds:
-        raise ValueError(f"{folder}: spec.json kind {spec.kind!r}, expected "
+                      device: str | torch.device = "cpu", spec_type: type = DynamicsSpec):
+    """A model folder's spec (``spec_type``), whose kind must be one of ``kinds``, and its
+    state_dict (``weights.pt``, read with ``weights_only=True``)."""
+    data = _spec_json(folder)
+    kind = data.get("kind", "flow")
+    if kind not in kinds:
+        raise ValueError(f"{folder}: spec.json kind {kind!r}, expected "
                          + " or ".join(repr(k) for k in kinds))
+    spec = spec_type.from_json(data)
     weights = Path(folder) / "weights.pt"
     if not weights.is_file():
         raise FileNotFoundError(f"{folder}: no weights.pt; not a robotplan model folder")
     return spec, torch.load(weights, map_location=device, weights_only=True)
 
 
-def write_model_folder(model: nn.Module, spec: DynamicsSpec, folder: Path) -> None:
+def write_model_folder(model: nn.Module, spec, folder: Path) -> None:
     """``weights.pt`` (state_dict) and ``spec.json`` into ``folder``, each written whole."""
     folder.mkdir(parents=True, exist_ok=True)
     tmp = folder / ".weights.pt.tmp"

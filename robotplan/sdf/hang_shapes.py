@@ -16,7 +16,6 @@ and is differentiable in both (the transform T(q) of paper §4).
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass
 
@@ -25,33 +24,91 @@ import torch
 from torch import Tensor
 
 from robotplan.geometry.transforms import spatial_to_body
-from robotplan.sdf.closed_form import polygon_sdf, safe_norm
+from robotplan.sdf.closed_form import safe_norm
 from robotplan.sdf.shapes3d import Shape3D
 
-__all__ = ["Hook", "Mug", "polyline_distance", "sdf_at"]
+__all__ = ["MUG_FIELDS", "Hook", "Mug", "cup_sdf", "handle_points", "mug_sdf",
+           "polyline_distance", "sdf_at"]
+
+MUG_FIELDS = ("radius", "height", "handle_height", "handle_reach", "handle_span", "wall",
+              "handle_radius")
 
 
-def polyline_distance(p: Tensor, points: np.ndarray) -> Tensor:
-    """Euclidean distance ``(...)`` of points ``(..., 3)`` from the polyline through
-    ``points (K, 3)`` (K ≥ 2): the least distance to its segments, exact."""
+def polyline_distance(p: Tensor, points: np.ndarray | Tensor) -> Tensor:
+    """Euclidean distance ``(..., N)`` of points ``(..., N, 3)`` from the polyline through
+    ``points`` ``(K, 3)``, or ``(..., K, 3)`` one per leading index (K ≥ 2): the least distance
+    to its segments, exact."""
+    pts = torch.as_tensor(points, dtype=p.dtype, device=p.device)
     best: Tensor | None = None
-    for a, b in itertools.pairwise(points):
-        ax = torch.as_tensor(a, dtype=p.dtype, device=p.device)
-        e = torch.as_tensor(b - a, dtype=p.dtype, device=p.device)
-        w = p - ax
-        t = ((w * e).sum(-1) / float(e @ e)).clamp(0.0, 1.0)
+    for k in range(pts.shape[-2] - 1):
+        a = pts[..., k:k + 1, :]  # (..., 1, 3)
+        e = pts[..., k + 1:k + 2, :] - a
+        w = p - a
+        t = ((w * e).sum(-1) / (e * e).sum(-1)).clamp(0.0, 1.0)
         d = safe_norm(w - t[..., None] * e)
         best = d if best is None else torch.minimum(best, d)
     assert best is not None, "a polyline has at least two points"
     return best
 
 
-def _revolved_sdf(p: Tensor, profile: np.ndarray) -> Tensor:
-    """Exact SDF of the solid swept by the meridian polygon ``profile (V, 2)`` in (ρ, z)
-    around the z axis. The profile must be mirror-symmetric in ρ (it crosses the axis), so
-    that no edge lies on the axis; then the 2D SDF at (|p_xy|, p_z) is the 3D SDF."""
-    rho = safe_norm(p[..., :2])
-    return polygon_sdf(torch.stack((rho, p[..., 2]), dim=-1), profile)
+def _segment_d2(px: Tensor, pz: Tensor, a: tuple[Tensor, Tensor],
+                b: tuple[Tensor, Tensor]) -> Tensor:
+    """Squared distance of 2D points from segments a–b (endpoints broadcast)."""
+    ex, ez = b[0] - a[0], b[1] - a[1]
+    wx, wz = px - a[0], pz - a[1]
+    t = ((wx * ex + wz * ez) / (ex * ex + ez * ez)).clamp(0.0, 1.0)
+    dx, dz = wx - ex * t, wz - ez * t
+    return dx * dx + dz * dz
+
+
+def _planar_polyline_d2(px: Tensor, pz: Tensor, xs: Tensor, zs: Tensor) -> Tensor:
+    """Least squared distance of 2D points ``(..., N)`` from polylines ``xs, zs (..., K)``."""
+    best: Tensor | None = None
+    for k in range(xs.shape[-1] - 1):
+        d2 = _segment_d2(px, pz, (xs[..., k:k + 1], zs[..., k:k + 1]),
+                         (xs[..., k + 1:k + 2], zs[..., k + 1:k + 2]))
+        best = d2 if best is None else torch.minimum(best, d2)
+    assert best is not None, "a polyline has at least two points"
+    return best
+
+
+def _sqrt(d2: Tensor) -> Tensor:
+    return (d2 + 1e-30).sqrt() - 1e-15  # gradient 0, not NaN, at 0; value exact to 1e-15
+
+
+def cup_sdf(params: Tensor, p: Tensor) -> Tensor:
+    """Exact SDF ``(..., N)`` of open cups at points ``(..., N, 3)``; ``params (..., 7)`` in
+    :data:`MUG_FIELDS` order (radius, height and wall used). In the meridian half-plane
+    (ρ, z), ρ ≥ 0, the cup is a U: the bottom slab and the wall; its distance is the least
+    distance to the U's boundary (the axis is not part of it), its sign from containment."""
+    r, h, w = (params[..., i:i + 1] for i in (0, 1, 5))
+    rho, z = safe_norm(p[..., :2]), p[..., 2]
+    zero = torch.zeros_like(r)
+    xs = torch.cat((zero, r, r, r - w, r - w, zero), dim=-1)
+    zs = torch.cat((zero, zero, h, h, w, w), dim=-1)
+    d = _sqrt(_planar_polyline_d2(rho, z, xs, zs))
+    inside = (z >= 0) & (rho <= r) & ((z <= w) | ((z <= h) & (rho >= r - w)))
+    return torch.where(inside, -d, d)
+
+
+def handle_points(params: Tensor, segments: int) -> Tensor:
+    """The handles' centre lines ``(..., segments + 1, 3)`` (see :class:`Mug`)."""
+    r, h, hh, reach, span, _, hr = params.unbind(-1)
+    s = torch.linspace(-math.pi / 2, math.pi / 2, segments + 1, dtype=params.dtype,
+                       device=params.device)
+    x = (r - hr)[..., None] + (reach + hr)[..., None] * torch.cos(s)
+    z = (hh * h)[..., None] - span[..., None] * torch.sin(s)
+    return torch.stack((x, torch.zeros_like(x), z), dim=-1)
+
+
+def mug_sdf(params: Tensor, p: Tensor, segments: int = 8) -> Tensor:
+    """SDF ``(..., N)`` of mugs ``params (..., 7)`` (one per leading index) at points
+    ``(..., N, 3)`` of their own frames: the cup and the handle's tube. The handle's centre
+    line lies in the plane y = 0, so its squared distance is y² plus the in-plane one."""
+    line = handle_points(params, segments)
+    x, y, z = p.unbind(-1)
+    d2 = _planar_polyline_d2(x, z, line[..., 0], line[..., 2]) + y * y
+    return torch.minimum(cup_sdf(params, p), _sqrt(d2) - params[..., 6:7])
 
 
 @dataclass(frozen=True)
@@ -72,30 +129,27 @@ class Mug(Shape3D):
     handle_radius: float = 0.005
     handle_segments: int = 8
 
-    def profile(self) -> np.ndarray:
-        """The cup's meridian polygon ``(8, 2)`` in (ρ, z), mirrored across the axis."""
-        r, h, w = self.radius, self.height, self.wall
-        return np.array([(-r, 0.0), (r, 0.0), (r, h), (r - w, h), (r - w, w), (w - r, w),
-                         (w - r, h), (-r, h)])
+    def params(self, dtype: torch.dtype = torch.float64) -> Tensor:
+        """``(7,)`` in :data:`MUG_FIELDS` order, for the batched :func:`mug_sdf`."""
+        return torch.tensor([getattr(self, f) for f in MUG_FIELDS], dtype=dtype)
 
     def handle_points(self) -> np.ndarray:
         """The handle's centre line ``(segments + 1, 3)``: a half-ellipse from the top
         attachment down to the bottom one, its ends ``handle_radius`` inside the wall."""
-        zc = self.handle_height * self.height
-        base = self.radius - self.handle_radius
-        s = np.linspace(-math.pi / 2, math.pi / 2, self.handle_segments + 1)
-        x = base + (self.handle_reach + self.handle_radius) * np.cos(s)
-        z = zc - self.handle_span * np.sin(s)
-        return np.stack((x, np.zeros_like(x), z), axis=1)
+        return handle_points(self.params(), self.handle_segments).numpy()
+
+    def _batched(self, fn, p_B: Tensor) -> Tensor:
+        flat = p_B.reshape(1, -1, 3)
+        return fn(self.params(p_B.dtype).to(p_B.device)[None], flat).reshape(p_B.shape[:-1])
 
     def cup_sdf(self, p_B: Tensor) -> Tensor:
-        return _revolved_sdf(p_B, self.profile())
+        return self._batched(cup_sdf, p_B)
 
     def handle_sdf(self, p_B: Tensor) -> Tensor:
         return polyline_distance(p_B, self.handle_points()) - self.handle_radius
 
     def sdf(self, p_B: Tensor) -> Tensor:
-        return torch.minimum(self.cup_sdf(p_B), self.handle_sdf(p_B))
+        return self._batched(lambda q, x: mug_sdf(q, x, self.handle_segments), p_B)
 
 
 @dataclass(frozen=True)

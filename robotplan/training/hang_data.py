@@ -20,15 +20,13 @@ import numpy as np
 
 from robotplan.execution.hang_world import HANG_PHYSICS, HangWorld
 from robotplan.scene.hang_ranges import HangRanges, load_hang_ranges
-from robotplan.sdf.hang_shapes import Hook, Mug
+from robotplan.sdf.hang_shapes import MUG_FIELDS, Hook, Mug
 from robotplan.training.shards import make_shards, prepare_folder, save_shard, shard_path
 
 __all__ = ["HangDataSpec", "HangScene", "decode_hook", "decode_mug", "generate_hang",
            "load_hang_shards", "random_poses", "simulate_hang_scene"]
 
 FORMAT = 1
-MUG_FIELDS = ("radius", "height", "handle_height", "handle_reach", "handle_span", "wall",
-              "handle_radius")
 MAX_PARTS = 3
 DRAW_BATCH = 256  # poses drawn from the scene's generator at a time
 

@@ -2,10 +2,8 @@
 kept label reproduced by dropping the pose again in a fresh world, resumable folders."""
 
 import json
-from pathlib import Path
 
 import numpy as np
-import pytest
 
 from robotplan.cli.main import main
 from robotplan.execution.hang_world import HangWorld
@@ -19,17 +17,9 @@ from robotplan.training.hang_data import (
 )
 
 
-@pytest.fixture(scope="module")
-def tiny_hang_data(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("hang") / "data"
-    assert main(["data", "hang", "--scenes", "2", "--seed", "0", "--out", str(out),
-                 "--workers", "1"]) == 0
-    return out
-
-
 def test_every_scene_has_a_success_and_its_settled_pose(tiny_hang_data):
     d = load_hang_shards(tiny_hang_data)
-    assert d["poses"].shape == (2, 20, 7) and d["hangs"].shape == (2, 20)
+    assert d["poses"].shape == (3, 20, 7) and d["hangs"].shape == (3, 20)
     assert d["found"].all()
     assert np.all(d["hangs"].sum(1) >= 1) and np.all(d["hangs"].sum(1) <= 10)
     assert np.all(d["draws"] >= 1)
@@ -38,7 +28,7 @@ def test_every_scene_has_a_success_and_its_settled_pose(tiny_hang_data):
 
 def test_labels_are_reproduced_by_a_fresh_drop(tiny_hang_data):
     d = load_hang_shards(tiny_hang_data)
-    for s in range(2):
+    for s in range(3):
         mug, hook = decode_mug(d["mug"][s]), decode_hook(d["hook"][s], *d["hook_radii"][s])
         with HangWorld(hook, mug) as world:
             labels = [world.drop(X).hangs for X in d["poses"][s][::-1]][::-1]
@@ -54,11 +44,11 @@ def test_a_scene_is_the_same_for_its_seed(tiny_hang_data):
 
 def test_a_folder_resumes_and_refuses_other_settings(tiny_hang_data, capsys):
     meta = json.loads((tiny_hang_data / "meta.json").read_text())
-    assert meta["scenes"] == 2 and meta["ranges"]["grid"]["cells"] == 40
-    assert main(["data", "hang", "--scenes", "2", "--seed", "0", "--out",
-                 str(tiny_hang_data), "--workers", "1"]) == 0
+    assert meta["scenes"] == 3 and meta["ranges"]["grid"]["cells"] == 40
+    assert main(["data", "hang", "--scenes", "3", "--seed", "0", "--out",
+                 str(tiny_hang_data), "--workers", "1", "--shard-size", "2"]) == 0
     assert json.loads(capsys.readouterr().out.strip().splitlines()[-1])["made_shards"] == 0
-    assert main(["data", "hang", "--scenes", "2", "--seed", "1", "--out",
+    assert main(["data", "hang", "--scenes", "3", "--seed", "1", "--out",
                  str(tiny_hang_data)]) == 2
     assert "seed" in capsys.readouterr().err
 

@@ -1,0 +1,90 @@
+"""H_hang, the learned kinematic success model of mug hanging (paper §5.2, app. H.1): the SDFs
+of the mug and of the hook on the grid X_h (40 × 40 × 40, 1 cm) stacked as two channels, three
+3D convolutions (3, 5, 5 channels, kernels 3, 5, 5, strides 1, 2, 2, ReLU), a linear layer
+to 200 features, an MLP of three hidden layers of 300 (ReLU) and one output. Trained with
+eq. (21), H ≈ 0 where the configuration hangs and H > 0 where it does not."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import torch
+from torch import Tensor, nn
+
+from robotplan.models.spec import read_model_folder, write_model_folder
+
+__all__ = ["HangSpec", "HangSuccess", "hang_loss", "load_hang_model", "save_hang_model"]
+
+
+@dataclass(frozen=True)
+class HangSpec:
+    """Constructor arguments of :class:`HangSuccess` and the grid it reads (``spec.json``)."""
+
+    kind: Literal["hang"] = "hang"
+    cells: int = 40
+    size: float = 0.4  # edge of X_h (m)
+    below_arm: float = 0.25  # X_h's floor below the top of the hook's post (m)
+    channels: tuple[int, ...] = (3, 5, 5)
+    kernels: tuple[int, ...] = (3, 5, 5)
+    strides: tuple[int, ...] = (1, 2, 2)
+    features: int = 200
+    hidden: tuple[int, ...] = (300, 300, 300)
+    sdf_scale: float = 10.0  # input SDF values (m) are multiplied by this
+    extra: dict = field(default_factory=dict)  # free-form notes (not used by the network)
+
+    @classmethod
+    def from_json(cls, data: dict) -> HangSpec:
+        kw = dict(data)
+        for k in ("channels", "kernels", "strides", "hidden"):
+            if k in kw:
+                kw[k] = tuple(kw[k])
+        return cls(**kw)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def _conv_out(n: int, kernel: int, stride: int) -> int:
+    return (n - kernel) // stride + 1
+
+
+class HangSuccess(nn.Module):
+    """``forward(grids (B, 2, C, C, C)) → H (B,)``: grids are the mug's and the hook's SDF
+    values (m) at the cell centres of X_h, indexed (x, y, z)."""
+
+    def __init__(self, spec: HangSpec = HangSpec()) -> None:
+        super().__init__()
+        self.spec = spec
+        convs, c_in, n = [], 2, spec.cells
+        for c_out, k, s in zip(spec.channels, spec.kernels, spec.strides, strict=True):
+            convs += [nn.Conv3d(c_in, c_out, k, s), nn.ReLU()]
+            c_in, n = c_out, _conv_out(n, k, s)
+        self.encoder = nn.Sequential(*convs, nn.Flatten(), nn.Linear(c_in * n**3, spec.features))
+        layers, width = [], spec.features
+        for h in spec.hidden:
+            layers += [nn.Linear(width, h), nn.ReLU()]
+            width = h
+        self.head = nn.Sequential(*layers, nn.Linear(width, 1))
+
+    def forward(self, grids: Tensor) -> Tensor:
+        return self.head(self.encoder(grids * self.spec.sdf_scale)).squeeze(-1)
+
+
+def hang_loss(h: Tensor, hangs: Tensor) -> Tensor:
+    """Eq. (21), averaged: y H² + (1 − y) exp(−H), so that H → 0 where the mug hangs
+    (y = 1) and H grows where it does not."""
+    y = hangs.to(h.dtype)
+    return (y * h.square() + (1 - y) * torch.exp(-h)).mean()
+
+
+def save_hang_model(model: HangSuccess, folder: Path) -> None:
+    write_model_folder(model, model.spec, folder)
+
+
+def load_hang_model(folder: str | Path, device: str | torch.device = "cpu") -> HangSuccess:
+    spec, state = read_model_folder(folder, ("hang",), device, spec_type=HangSpec)
+    model = HangSuccess(spec).to(device)
+    model.load_state_dict(state)
+    return model.eval()
