@@ -1,4 +1,4 @@
-"""Commands of the mug-hanging task: data hang, train hang, eval hang."""
+"""Commands of the mug-hanging task: data hang, train hang, eval hang, bench hang."""
 
 from __future__ import annotations
 
@@ -8,9 +8,10 @@ import sys
 import time
 from pathlib import Path
 
+from robotplan.base.resources import learned_dir
 from robotplan.cli.common import EXIT_BAD_INPUT, print_result, training_folders_problem
 
-__all__ = ["cmd_data_hang", "cmd_eval_hang", "cmd_train_hang"]
+__all__ = ["cmd_bench_hang", "cmd_data_hang", "cmd_eval_hang", "cmd_train_hang"]
 
 
 def cmd_data_hang(args: argparse.Namespace) -> int:
@@ -88,4 +89,33 @@ def cmd_eval_hang(args: argparse.Namespace) -> int:
         metrics["heldout"] = {"data": str(args.data), **result}
         write_json(path, metrics)
     print_result(result, args.json)
+    return 0
+
+
+def cmd_bench_hang(args: argparse.Namespace) -> int:
+    from robotplan.bench.hang import METHODS, run_bench_hang
+
+    model = args.model or str(learned_dir("hang"))
+    methods = tuple(args.methods.split(",")) if args.methods else METHODS
+    unknown = [m for m in methods if m not in METHODS]
+    problem = (f"{model}: --model: not a model folder (no spec.json)"
+               if not (Path(model) / "spec.json").is_file() else
+               f"--methods: unknown {unknown}; choose from {','.join(METHODS)}" if unknown else
+               "--scenes must be ≥ 1" if args.scenes < 1 else None)
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    summary = run_bench_hang(args.scenes, args.seed, Path(args.out), model,
+                             workers=args.workers, methods=methods)
+    if args.json:
+        print(json.dumps(summary))
+        return 0
+    print(f"{'method':<14}{'found':>8}{'sim ok':>8}{'coll.free':>10}{'total':>8}"
+          f"{'paper total':>13}")
+    for m in methods:
+        if m in summary:
+            r, paper = summary[m], summary["paper"][m]
+            print(f"{m:<14}{r['found']:>8.3f}{r['sim_success']:>8.3f}"
+                  f"{r['collision_free']:>10.3f}{r['total']:>8.3f}{paper[3]:>13.3f}")
+    print(f"median seconds (optimisation + sampling): {summary['median_seconds']}")
     return 0

@@ -13,7 +13,12 @@ import sys
 from robotplan.base.memory import keep_freed_memory
 from robotplan.base.resources import learned_dir, tasks_dir
 from robotplan.cli.common import EXIT_BAD_INPUT, add_dynamics_options, add_execution_options
-from robotplan.cli.hang_commands import cmd_data_hang, cmd_eval_hang, cmd_train_hang
+from robotplan.cli.hang_commands import (
+    cmd_bench_hang,
+    cmd_data_hang,
+    cmd_eval_hang,
+    cmd_train_hang,
+)
 from robotplan.cli.model_commands import (
     cmd_bench,
     cmd_bench_functional,
@@ -80,6 +85,19 @@ def _parser() -> argparse.ArgumentParser:
                     help="execute in a perturbed world (friction and mass ±20 %%, observation "
                     "noise 1 mm / 0.5°), drawn per scene from SEED (default 0)")
     bp.set_defaults(run=cmd_bench_push)
+    bh = bsub.add_parser("hang", help="find hanging poses on random mug-and-hook scenes and "
+                         "drop them in pybullet (paper Tab. 3)")
+    bh.add_argument("--scenes", type=int, default=150)
+    bh.add_argument("--seed", type=int, default=2)
+    bh.add_argument("--out", required=True, metavar="DIR",
+                    help="rows.jsonl per scene (continues a partial run) and summary.json")
+    bh.add_argument("--model", default=None, metavar="DIR", help="default: learned/hang")
+    bh.add_argument("--methods", default=None,
+                    help="comma-separated subset of opt_sampling, opt_only, sampling_k1, "
+                    "sampling_k2, sampling_k3 (default: all)")
+    bh.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    bh.add_argument("--json", action="store_true")
+    bh.set_defaults(run=cmd_bench_hang)
 
     default_model = str(learned_dir("push_flow"))
     so = sub.add_parser("solve", help="plan a scene, execute it in pybullet, write the result")

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import torch
 from torch import Tensor
 
@@ -24,6 +25,7 @@ __all__ = [
     "quaternion_to_matrix",
     "spatial_to_body",
     "spatial_to_world",
+    "uniform_poses",
     "wrap_angle",
 ]
 
@@ -87,6 +89,17 @@ def spatial_to_world(points_B: Tensor, X_WB: Tensor) -> Tensor:
     """``p_W = R p_B + t`` for points ``(..., N, 3)`` and poses ``(..., 7)``."""
     R = quaternion_to_matrix(X_WB[..., 3:])
     return torch.einsum("...ij,...nj->...ni", R, points_B) + X_WB[..., None, :3]
+
+
+def uniform_poses(rng: np.random.Generator, centre: np.ndarray, size: float,
+                  n: int) -> np.ndarray:
+    """``n`` spatial poses ``(n, 7)``: positions uniform in the cube of edge ``size`` about
+    ``centre (3,)``, orientations uniform on SO(3) (normalised Gaussian quaternions, w ≥ 0)."""
+    pos = np.asarray(centre) + rng.uniform(-size / 2, size / 2, (n, 3))
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+    return np.concatenate([pos, q], axis=1)
 
 
 def wrap_angle(a: float) -> float:

@@ -15,7 +15,12 @@ from torch import Tensor, nn
 
 from robotplan.models.spec import read_model_folder, write_model_folder
 
-__all__ = ["HangSpec", "HangSuccess", "hang_loss", "load_hang_model", "save_hang_model"]
+__all__ = ["HANG_THRESHOLDS", "HangSpec", "HangSuccess", "hang_loss", "load_hang_model",
+           "save_hang_model"]
+
+
+# the paper's feasibility thresholds κ1, κ2, κ3 (app. A.5): H_hang < κ predicts success
+HANG_THRESHOLDS = {"k1": 0.15, "k2": 1.5, "k3": 0.015}
 
 
 @dataclass(frozen=True)

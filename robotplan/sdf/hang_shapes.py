@@ -176,6 +176,14 @@ class Hook(Shape3D):
             pts.append(pts[-1] + length * np.array([math.cos(angle), 0.0, math.sin(angle)]))
         return np.stack(pts)
 
+    def aabb(self) -> tuple[np.ndarray, np.ndarray]:
+        """The hook's axis-aligned bounding box ``(lo, hi)`` in its frame."""
+        arm = self.arm_points()
+        r, rr = self.post_radius, self.rod_radius
+        lo = np.minimum(arm.min(0) - rr, [-r, -r, 0.0])
+        hi = np.maximum(arm.max(0) + rr, [r, r, self.post_height])
+        return lo, hi
+
     def post_sdf(self, p_B: Tensor) -> Tensor:
         radial = safe_norm(p_B[..., :2]) - self.post_radius
         axial = (p_B[..., 2] - self.post_height / 2).abs() - self.post_height / 2

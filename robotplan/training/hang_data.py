@@ -19,12 +19,13 @@ from pathlib import Path
 import numpy as np
 
 from robotplan.execution.hang_world import HANG_PHYSICS, HangWorld
+from robotplan.geometry.transforms import uniform_poses
 from robotplan.scene.hang_ranges import HangRanges, load_hang_ranges
 from robotplan.sdf.hang_shapes import MUG_FIELDS, Hook, Mug
 from robotplan.training.shards import make_shards, prepare_folder, save_shard, shard_path
 
 __all__ = ["HangDataSpec", "HangScene", "decode_hook", "decode_mug", "generate_hang",
-           "load_hang_shards", "random_poses", "simulate_hang_scene"]
+           "load_hang_shards", "simulate_hang_scene"]
 
 FORMAT = 1
 MAX_PARTS = 3
@@ -51,17 +52,6 @@ class HangScene:
     found: bool  # at least one success within max_draws
 
 
-def random_poses(rng: np.random.Generator, centre: np.ndarray, size: float,
-                 n: int) -> np.ndarray:
-    """``n`` poses ``(n, 7)``: positions uniform in the cube of edge ``size`` about ``centre``,
-    orientations uniform on SO(3) (normalised Gaussian quaternions, w ≥ 0)."""
-    pos = centre + rng.uniform(-size / 2, size / 2, (n, 3))
-    q = rng.normal(size=(n, 4))
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
-    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
-    return np.concatenate([pos, q], axis=1)
-
-
 def simulate_hang_scene(index: int, seed: int, spec: HangDataSpec = HangDataSpec(),
                         ranges: HangRanges | None = None) -> HangScene:
     """Draw scene ``index`` of ``seed`` and label its poses by dropping them (deterministic)."""
@@ -74,7 +64,7 @@ def simulate_hang_scene(index: int, seed: int, spec: HangDataSpec = HangDataSpec
     draws = 0
     with HangWorld(hook, mug) as world:
         while not good and draws < spec.max_draws:
-            for X in random_poses(rng, centre, ranges.grid.size, DRAW_BATCH):
+            for X in uniform_poses(rng, centre, ranges.grid.size, DRAW_BATCH):
                 draws += 1
                 result = world.drop(X)
                 (good if result.hangs else bad).append((X, result.hangs,

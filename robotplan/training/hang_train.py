@@ -19,15 +19,17 @@ import numpy as np
 import torch
 
 from robotplan.functionals.hang import HangGrids, mug_grids
-from robotplan.models.hang import HangSpec, HangSuccess, hang_loss, save_hang_model
+from robotplan.models.hang import (
+    HANG_THRESHOLDS,
+    HangSpec,
+    HangSuccess,
+    hang_loss,
+    save_hang_model,
+)
 from robotplan.training.hang_data import decode_hook, load_hang_shards
 from robotplan.training.train import hardware, lr_at, write_json
 
-__all__ = ["HANG_THRESHOLDS", "HangSamples", "HangTrainConfig", "hang_metrics", "train_hang"]
-
-# the paper's feasibility thresholds κ1, κ2, κ3 (app. A.5): H < κ predicts success
-HANG_THRESHOLDS = {"k1": 0.15, "k2": 1.5, "k3": 0.015}
-
+__all__ = ["HangSamples", "HangTrainConfig", "hang_metrics", "train_hang"]
 
 @dataclass
 class HangTrainConfig:

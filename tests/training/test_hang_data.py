@@ -7,12 +7,12 @@ import numpy as np
 
 from robotplan.cli.main import main
 from robotplan.execution.hang_world import HangWorld
+from robotplan.geometry.transforms import uniform_poses
 from robotplan.training.hang_data import (
     HangDataSpec,
     decode_hook,
     decode_mug,
     load_hang_shards,
-    random_poses,
     simulate_hang_scene,
 )
 
@@ -54,7 +54,7 @@ def test_a_folder_resumes_and_refuses_other_settings(tiny_hang_data, capsys):
 
 
 def test_random_poses_are_uniform_rotations(rng):
-    X = random_poses(rng, np.zeros(3), 0.4, 20_000)
+    X = uniform_poses(rng, np.zeros(3), 0.4, 20_000)
     assert np.abs(X[:, :3]).max() <= 0.2
     # uniform on SO(3): the rotated z axis is uniform on the sphere, its z mean 0, var 1/3
     w, x, y, _ = X[:, 3:].T

@@ -1,0 +1,137 @@
+"""``robotplan bench hang``: the paper's Tab. 3 on random mug-and-hook scenes.
+
+Scene ``i`` of ``seed`` draws its hook and mug as the data does (``default_rng([seed, i])``,
+:mod:`robotplan.scene.hang_ranges`). Each method looks for a pose within the same budget of
+functional evaluations: optimisation + sampling (SNOPT from up to 20 random poses),
+optimisation only (one), and sampling only at the thresholds κ1, κ2, κ3. A found pose is
+dropped in pybullet: *sim success* when the mug hangs, *collision free* when it did not
+start inside the hook; *total* = found and hanging and collision free.
+
+``DIR/rows.jsonl`` gets one line per finished scene (an interrupted run continues), then
+``summary.json``.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from robotplan.base.files import write_atomically
+from robotplan.execution.hang_world import HangWorld
+from robotplan.models.hang import HANG_THRESHOLDS, load_hang_model
+from robotplan.program.hang_program import HANG_DEFAULTS, HangProblem, HangSettings
+from robotplan.scene.hang_ranges import load_hang_ranges
+from robotplan.search.hang_search import optimise_hang, sample_hang
+
+__all__ = ["METHODS", "PAPER_TAB3", "run_bench_hang", "summarize_hang"]
+
+METHODS = ("opt_sampling", "opt_only", "sampling_k1", "sampling_k2", "sampling_k3")
+# paper Tab. 3, SDF rows (fractions of the 150 evaluation scenes): found, sim success (of the
+# found), collision free (of the successes), total
+PAPER_TAB3 = {"opt_sampling": (0.987, 0.885, 1.0, 0.873), "opt_only": (0.513, 0.922, 1.0, 0.473),
+              "sampling_k1": (0.873, 0.779, 1.0, 0.680),
+              "sampling_k2": (1.0, 0.473, 1.0, 0.473),
+              "sampling_k3": (0.740, 0.931, 1.0, 0.689)}
+
+
+def _scene(index: int, seed: int):
+    ranges = load_hang_ranges()
+    rng = np.random.default_rng([seed, index])
+    return ranges.hook.sample(rng), ranges.mug.sample(rng)
+
+
+def bench_scene(index: int, seed: int, model_dir: str | Path,
+                settings: HangSettings = HANG_DEFAULTS,
+                methods: tuple[str, ...] = METHODS) -> dict:
+    """Every method on scene ``index``; the found poses checked by a drop."""
+    import torch
+
+    torch.set_num_threads(1)
+    hook, mug = _scene(index, seed)
+    problem = HangProblem(load_hang_model(model_dir), mug, hook)
+    rng = np.random.default_rng([seed, index, 1])
+    row = {"scene": index}
+    with HangWorld(hook, mug) as world:
+        for method in methods:
+            if method.startswith("sampling"):
+                kappa = HANG_THRESHOLDS[method.split("_")[1]]
+                sol = sample_hang(problem, rng, kappa, settings)
+            else:
+                sol = optimise_hang(problem, rng, settings,
+                                    restarts=1 if method == "opt_only" else None)
+            drop = world.drop(sol.pose) if sol.feasible else None
+            row[method] = {"found": sol.feasible,
+                           "sim_success": bool(drop and drop.hangs),
+                           "collision_free": bool(drop and not drop.collision_at_start),
+                           "h_hang": round(sol.h_hang, 4),
+                           "h_coll_cm3": round(sol.h_coll_cm3, 5),
+                           "evaluations": sol.evaluations, "restarts": sol.restarts,
+                           "seconds": round(sol.seconds, 2),
+                           "pose": [round(float(v), 5) for v in sol.pose]}
+    return row
+
+
+def summarize_hang(rows: list[dict]) -> dict:
+    """Tab. 3's columns per method (fractions as the paper counts them) and the median
+    seconds of optimisation + sampling per scene."""
+    out: dict = {"scenes": len(rows)}
+    for method in METHODS:
+        runs = [r[method] for r in rows if method in r]
+        if not runs:
+            continue
+        found = [r for r in runs if r["found"]]
+        hung = [r for r in found if r["sim_success"]]
+        total = [r for r in hung if r["collision_free"]]
+        out[method] = {"found": round(len(found) / len(runs), 4),
+                       "sim_success": round(len(hung) / len(found), 4) if found else 0.0,
+                       "collision_free": round(len(total) / len(hung), 4) if hung else 0.0,
+                       "total": round(len(total) / len(runs), 4)}
+    seconds = [r["opt_sampling"]["seconds"] for r in rows if "opt_sampling" in r]
+    out["median_seconds"] = round(float(np.median(seconds)), 2) if seconds else None
+    return out
+
+
+def _run(args: tuple) -> dict:
+    return bench_scene(*args)
+
+
+def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
+                   workers: int = 2, progress: bool = True,
+                   methods: tuple[str, ...] = METHODS) -> dict:
+    """Run (or continue) the benchmark in ``out``; returns the summary."""
+    from multiprocessing import get_context
+
+    from tqdm import tqdm
+
+    out.mkdir(parents=True, exist_ok=True)
+    rows_path = out / "rows.jsonl"
+    rows = [json.loads(line) for line in rows_path.read_text().splitlines()] \
+        if rows_path.is_file() else []
+    done = {r["scene"] for r in rows}
+    todo = [(i, seed, str(model_dir), HANG_DEFAULTS, methods) for i in range(scenes)
+            if i not in done]
+    t0 = time.time()
+    with tqdm(total=scenes, initial=len(done), unit="scene", desc="bench hang",
+              disable=not progress) as bar, rows_path.open("a") as log:
+        def keep(row: dict) -> None:
+            rows.append(row)
+            log.write(json.dumps(row) + "\n")
+            log.flush()
+            bar.update()
+
+        if workers <= 1:
+            for job in todo:
+                keep(_run(job))
+        else:
+            with get_context("fork").Pool(workers) as pool:
+                for row in pool.imap_unordered(_run, todo):
+                    keep(row)
+    summary = summarize_hang(sorted(rows, key=lambda r: r["scene"]))
+    summary.update(seed=seed, model=str(model_dir), wall_seconds=round(time.time() - t0, 1),
+                   paper=PAPER_TAB3)
+    write_atomically(out / "summary.json", lambda p: p.write_text(json.dumps(summary,
+                                                                            indent=1)))
+    return summary

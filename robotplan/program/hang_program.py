@@ -1,0 +1,130 @@
+"""The mug-hanging program (paper §7.1, problem (2)): a Drake ``MathematicalProgram`` over the
+mug's pose X_HM = (x, y, z, qw, qx, qy, qz) in the hook frame, with the learned success
+functional H_hang as cost and as the row H_hang ≤ κ, the collision functional H_coll (eq. 7,
+a = 1000) as the row H_coll ≤ ``collision_cm3``, the unit quaternion, and the position
+within X_h. SNOPT solves it from one initial pose; :mod:`robotplan.search.hang_search`
+restarts it and samples."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+from pydrake.solvers import MathematicalProgram, SnoptSolver, SolverOptions
+
+from robotplan.functionals.collision3d import FixedCollision3D
+from robotplan.functionals.hang import HangSuccessFunctional
+from robotplan.models.hang import HangSuccess
+from robotplan.program.bridge import bridge, stepwise
+from robotplan.scene.hang_ranges import GridSpec
+from robotplan.sdf.hang_shapes import Hook, Mug
+
+__all__ = ["HANG_DEFAULTS", "HangProblem", "HangSettings", "HangSolution", "solve_hang_once"]
+
+CM3 = 1e6  # m³ → cm³: the collision row in units SNOPT's tolerances suit
+
+
+@dataclass(frozen=True)
+class HangSettings:
+    kappa: float = 0.15  # H_hang ≤ κ predicts success (the paper's κ1)
+    collision_cm3: float = 0.01  # H_coll ≤ this (cm³ of smoothed overlap)
+    restarts: int = 20  # the paper: up to 20 optimisations from random poses
+    evaluations: int = 20_000  # the paper's budget of functional evaluations per scene
+    major_iterations: int = 60
+    feasibility_tol: float = 1e-4
+
+
+HANG_DEFAULTS = HangSettings()
+
+
+@dataclass
+class HangSolution:
+    pose: np.ndarray  # (7,) X_HM
+    h_hang: float
+    h_coll_cm3: float
+    feasible: bool  # H_hang ≤ κ, H_coll within its bound, a unit quaternion
+    evaluations: int  # functional evaluations spent (H_hang on one pose counts one)
+    seconds: float
+    method: str = "optimisation"
+    restarts: int = 0
+
+
+class HangProblem:
+    """The functionals of one scene, and a count of their evaluations."""
+
+    def __init__(self, model: HangSuccess, mug: Mug, hook: Hook) -> None:
+        self.model, self.mug, self.hook = model, mug, hook
+        spec = model.spec
+        grid = GridSpec(size=spec.size, cells=spec.cells, below_arm=spec.below_arm)
+        centre = grid.centre(hook)
+        self.lo, self.hi = centre - spec.size / 2, centre + spec.size / 2
+        self.h_hang = HangSuccessFunctional(model, mug, hook)
+        reach = float(np.hypot(mug.radius + mug.handle_reach + mug.handle_radius, mug.height))
+        self.h_coll = FixedCollision3D(mug, hook, (self.lo - reach, self.hi + reach))
+        self.evaluations = 0
+
+    def hang_values(self, X: np.ndarray) -> np.ndarray:
+        """H_hang ``(n,)`` at poses ``(n, 7)`` (n evaluations)."""
+        Xt = torch.from_numpy(np.atleast_2d(X).astype(np.float64))
+        with torch.no_grad():
+            h = self.h_hang(Xt)[:, 0].numpy()
+        self.evaluations += len(Xt)
+        return h
+
+    def collision_cm3(self, X: np.ndarray) -> np.ndarray:
+        """H_coll in cm³ ``(n,)`` at poses ``(n, 7)``."""
+        Xt = torch.from_numpy(np.atleast_2d(X).astype(np.float64))
+        with torch.no_grad():
+            return self.h_coll(Xt)[:, 0].numpy() * CM3
+
+    def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """H_hang and H_coll in cm³, each ``(n,)``, at poses ``(n, 7)``."""
+        return self.hang_values(X), self.collision_cm3(X)
+
+    def feasible(self, h: np.ndarray, c: np.ndarray, settings: HangSettings,
+                 kappa: float | None = None) -> np.ndarray:
+        return (h <= (settings.kappa if kappa is None else kappa)) & (
+            c <= settings.collision_cm3)
+
+
+def _counted(problem: HangProblem, fn):
+    def wrapped(x: np.ndarray, jac: bool):
+        problem.evaluations += 1
+        return fn(x, jac)
+
+    return wrapped
+
+
+def solve_hang_once(problem: HangProblem, X0: np.ndarray,
+                    settings: HangSettings = HANG_DEFAULTS) -> HangSolution:
+    """One SNOPT solve from pose ``X0 (7,)``."""
+    t0 = time.perf_counter()
+    start_evals = problem.evaluations
+    prog = MathematicalProgram()
+    X = prog.NewContinuousVariables(7, "X_HM")
+    prog.AddBoundingBoxConstraint(problem.lo, problem.hi, X[:3])
+    prog.AddBoundingBoxConstraint(-np.ones(4), np.ones(4), X[3:])
+    prog.AddConstraint(sum(v * v for v in X[3:]) == 1.0)
+    block = X[None, :]
+    hang_fn, hang_vars = stepwise(problem.h_hang, [block], 1.0)
+    coll_fn, coll_vars = stepwise(problem.h_coll, [block], CM3)
+    hang_fn = _counted(problem, hang_fn)
+    hang = bridge(hang_fn)
+    prog.AddCost(lambda x: hang(x)[0], hang_vars)
+    prog.AddConstraint(hang, [-np.inf], [settings.kappa], hang_vars)
+    prog.AddConstraint(bridge(coll_fn), [0.0], [settings.collision_cm3], coll_vars)
+    q = np.asarray(X0[3:], dtype=float)
+    prog.SetInitialGuess(X, np.concatenate([X0[:3], q / np.linalg.norm(q)]))
+    solver = SnoptSolver()
+    opts = SolverOptions()
+    opts.SetOption(solver.id(), "Major iterations limit", settings.major_iterations)
+    opts.SetOption(solver.id(), "Major feasibility tolerance", settings.feasibility_tol)
+    result = solver.Solve(prog, None, opts)
+    pose = result.GetSolution(X)
+    pose[3:] /= np.linalg.norm(pose[3:])
+    h, c = problem.evaluate(pose[None])
+    return HangSolution(pose, float(h[0]), float(c[0]),
+                        bool(problem.feasible(h, c, settings)[0]),
+                        problem.evaluations - start_evals, time.perf_counter() - t0)

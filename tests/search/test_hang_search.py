@@ -1,0 +1,54 @@
+"""The hanging program in Drake and the search around it, on a real (untrained, seeded)
+H_hang: outcomes any sound solver path must give."""
+
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from robotplan.models.hang import HangSpec, HangSuccess
+from robotplan.program.hang_program import HangProblem, HangSettings, solve_hang_once
+from robotplan.search.hang_search import optimise_hang, sample_hang
+from robotplan.sdf.hang_shapes import Hook, Mug
+from tests.conftest import TINY_HANG_SPEC
+
+HOOK = Hook(post_height=0.3, lengths=(0.12, 0.04), angles=(math.radians(10), math.radians(60)))
+MUG = Mug(radius=0.04, height=0.1, handle_height=0.6, handle_reach=0.03, handle_span=0.03)
+
+
+@pytest.fixture(scope="module")
+def problem():
+    torch.manual_seed(0)
+    return HangProblem(HangSuccess(HangSpec(**TINY_HANG_SPEC)).eval(), MUG, HOOK)
+
+
+def test_the_program_moves_a_mug_out_of_the_hook(problem):
+    """H_hang ≤ κ always holds (κ above anything the network says): what is left is the
+    collision row, and the mug must leave the arm it starts through."""
+    arm_z = HOOK.post_height + 0.08 * math.tan(HOOK.angles[0])
+    X0 = np.array([0.08, -(MUG.radius - MUG.wall / 2), arm_z - 0.06, 1.0, 0.0, 0.0, 0.0])
+    start_h, start_c = problem.evaluate(X0[None])
+    assert start_c[0] > 0.1, "the start is deep in collision"
+    settings = HangSettings(kappa=1e6, major_iterations=20)
+    sol = solve_hang_once(problem, X0, settings)
+    assert sol.feasible and sol.h_coll_cm3 <= settings.collision_cm3
+    assert abs(np.linalg.norm(sol.pose[3:]) - 1) < 1e-9
+    assert np.all(sol.pose[:3] >= problem.lo - 1e-6) and np.all(sol.pose[:3] <= problem.hi + 1e-6)
+    assert sol.h_hang <= start_h[0] + 1e-6, "the cost (H_hang) did not rise"
+    assert sol.evaluations > 0
+
+
+def test_sampling_stops_at_a_feasible_pose_or_spends_its_budget(problem):
+    rng = np.random.default_rng(0)
+    found = sample_hang(problem, rng, kappa=1e6, settings=HangSettings(evaluations=64))
+    assert found.feasible and found.evaluations <= 64
+    none = sample_hang(problem, rng, kappa=-1e6, settings=HangSettings(evaluations=64))
+    assert not none.feasible and none.evaluations == 64
+
+
+def test_restarts_stop_at_the_budget(problem):
+    rng = np.random.default_rng(1)
+    sol = optimise_hang(problem, rng, HangSettings(kappa=-1e6, evaluations=30,
+                                                   major_iterations=5), restarts=20)
+    assert not sol.feasible and sol.restarts < 20 and sol.evaluations >= 30
