@@ -9,8 +9,8 @@ import torch
 
 from robotplan.models.hang import HangSpec, HangSuccess
 from robotplan.program.hang_program import HangProblem, HangSettings, solve_hang_once
-from robotplan.search.hang_search import optimise_hang, sample_hang
 from robotplan.sdf.hang_shapes import Hook, Mug
+from robotplan.search.hang_search import optimise_hang, sample_hang
 from tests.conftest import TINY_HANG_SPEC
 
 HOOK = Hook(post_height=0.3, lengths=(0.12, 0.04), angles=(math.radians(10), math.radians(60)))
