@@ -2,8 +2,9 @@
 
 ``*.json`` files are JSON, ``*.yaml``/``*.yml`` files YAML; a file with any other name is
 JSON when it parses as JSON, else YAML. YAML goes through the safe loader only (no Python
-tags), with duplicate keys refused and exponent floats such as ``3e-06`` or ``1E5`` read
-as numbers, as JSON and YAML 1.2 read them (YAML 1.1 wants a dot and a signed exponent).
+tags), with duplicate keys refused, exponent floats such as ``3e-06`` or ``1E5`` read
+as numbers and only true/false read as booleans (``on``, ``yes`` stay strings), as JSON and
+YAML 1.2 read them.
 Every failure raises :class:`~robotplan.scene.reader.SchemaError` whose ``field`` is empty
 or the line of the problem.
 """
@@ -56,6 +57,14 @@ class _StrictSafeLoader(_BaseLoader):  # type: ignore[misc, valid-type]
 _EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$")
 _StrictSafeLoader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_FLOAT,
                                         list("-+0123456789."))
+# YAML 1.2 / JSON booleans only: YAML 1.1 also reads yes/no/on/off as booleans, so that a
+# hang goal's ``on: hook`` would become ``True: hook``
+_BOOL = "tag:yaml.org,2002:bool"
+_StrictSafeLoader.yaml_implicit_resolvers = {
+    first: [(tag, rx) for tag, rx in resolvers if tag != _BOOL]
+    for first, resolvers in _StrictSafeLoader.yaml_implicit_resolvers.items()}
+_StrictSafeLoader.add_implicit_resolver(
+    _BOOL, re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF"))
 
 
 def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict:

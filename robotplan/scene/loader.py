@@ -10,11 +10,12 @@ from pathlib import Path
 from typing import Any
 
 from robotplan.scene.files import read_data
+from robotplan.scene.hang_check import check_hang_scene
 from robotplan.scene.limits import check_counts, check_grid
 from robotplan.scene.placement import check_placement
 from robotplan.scene.reader import SchemaError, read, show
 from robotplan.scene.robots import available_models, load_robot_model
-from robotplan.scene.schema import RegionGoal, Scene, TouchGoal
+from robotplan.scene.schema import SOLID_SHAPES, HangGoal, RegionGoal, Scene, TouchGoal
 
 __all__ = ["SceneError", "load_scene", "parse_scene"]
 
@@ -64,6 +65,14 @@ def parse_scene(data: Any, path: str | Path = "<scene>") -> Scene:
 def _check_scene(scene: Scene) -> None:
     """Cross-field checks the types cannot express. Raises SchemaError."""
     check_grid(scene.workspace)
+    if isinstance(scene.goal, HangGoal):
+        check_hang_scene(scene)
+        return
+    for group in ("objects", "obstacles"):
+        for i, body in enumerate(getattr(scene, group)):
+            if isinstance(body.shape, SOLID_SHAPES):
+                raise SchemaError(f"{group}[{i}].shape", f"a {body.shape.type} belongs to a "
+                                  "hang scene (goal type hang); pushing scenes take footprints")
     if not scene.objects:
         raise SchemaError("objects", "at least one movable object is required")
     if not scene.pushers and not scene.robots:

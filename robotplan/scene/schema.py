@@ -13,13 +13,18 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
 from robotplan.sdf import Box, Circle, LShape, Polygon, Workspace
+from robotplan.sdf.hang_shapes import Hook, Mug
 
 if TYPE_CHECKING:
     from robotplan.scene.bodies import Body
 
 __all__ = [
     "DEFAULT_HEIGHT",
+    "SOLID_SHAPES",
     "BodySpec",
+    "HangGoal",
+    "HookShape",
+    "MugShape",
     "PoseGoal",
     "PusherSpec",
     "Region",
@@ -30,9 +35,67 @@ __all__ = [
     "TouchGoal",
 ]
 
-ShapeSpec = Box | Circle | LShape | Polygon
 POSITIVE = {"positive": True}
 DEFAULT_HEIGHT = 0.06
+
+
+@dataclass(frozen=True)
+class MugShape:
+    """A procedural mug (:class:`robotplan.sdf.hang_shapes.Mug`): its frame at the centre
+    of the bottom, the handle towards +x. ``handle_height`` is a fraction of ``height``."""
+
+    radius: float = field(metadata=POSITIVE)
+    height: float = field(metadata=POSITIVE)
+    handle_height: float = field(metadata=POSITIVE)
+    handle_reach: float = field(metadata=POSITIVE)
+    handle_span: float = field(metadata=POSITIVE)
+    wall: float = field(default=0.006, metadata=POSITIVE)
+    handle_radius: float = field(default=0.005, metadata=POSITIVE)
+    type: Literal["mug"] = "mug"
+
+    def check(self) -> tuple[str, str] | None:
+        if self.wall >= self.radius:
+            return "wall", "must be thinner than the radius"
+        zc = self.handle_height * self.height
+        if zc - self.handle_span - self.handle_radius < self.wall - 1e-12 or \
+                zc + self.handle_span + self.handle_radius > self.height + 1e-12:
+            return "handle_span", "the handle must stay on the cup's wall, between the bottom " \
+                "and the rim"
+        return None
+
+    def solid(self) -> Mug:
+        return Mug(self.radius, self.height, self.handle_height, self.handle_reach,
+                   self.handle_span, self.wall, self.handle_radius)
+
+
+@dataclass(frozen=True)
+class HookShape:
+    """A hook (:class:`robotplan.sdf.hang_shapes.Hook`): a post on the table and an arm of one
+    to three straight parts (lengths, and angles in rad above the horizontal) towards +x."""
+
+    post_height: float = field(metadata=POSITIVE)
+    lengths: tuple[float, ...]
+    angles: tuple[float, ...]
+    post_radius: float = field(default=0.012, metadata=POSITIVE)
+    rod_radius: float = field(default=0.005, metadata=POSITIVE)
+    type: Literal["hook"] = "hook"
+
+    def check(self) -> tuple[str, str] | None:
+        if not 1 <= len(self.lengths) <= 3:
+            return "lengths", "an arm has one to three parts"
+        if len(self.angles) != len(self.lengths):
+            return "angles", "one angle per part, as many as lengths"
+        if min(self.lengths) <= 0:
+            return "lengths", "must be positive"
+        return None
+
+    def solid(self) -> Hook:
+        return Hook(self.post_height, tuple(self.lengths), tuple(self.angles),
+                    self.post_radius, self.rod_radius)
+
+
+ShapeSpec = Box | Circle | LShape | Polygon | MugShape | HookShape
+SOLID_SHAPES = (MugShape, HookShape)  # 3D: only in hang scenes
 
 
 @dataclass(frozen=True)
@@ -125,12 +188,22 @@ class TouchGoal:
 
 
 @dataclass(frozen=True)
+class HangGoal:
+    """The mug ``object`` must hang on the hook ``on`` (an obstacle): found by H_hang and
+    H_coll (paper §7.1), checked by dropping it in the simulator."""
+
+    object: str
+    on: str
+    type: Literal["hang"] = "hang"
+
+
+@dataclass(frozen=True)
 class Scene:
     """A whole scene file. ``version`` must be 1."""
 
     version: int
     objects: list[BodySpec]
-    goal: RegionGoal | PoseGoal | TouchGoal
+    goal: RegionGoal | PoseGoal | TouchGoal | HangGoal
     name: str = "scene"
     workspace: Workspace = field(default_factory=Workspace)
     obstacles: list[BodySpec] = field(default_factory=list)
@@ -159,6 +232,8 @@ class Scene:
             return f"{n} {word}" + ("" if n == 1 else "s")
 
         g = self.goal
+        if isinstance(g, HangGoal):
+            return f"{self.name}: hang {g.object} on {g.on}"
         goal = (f"{g.object} into a region" if isinstance(g, RegionGoal)
                 else f"{g.object} to the pose ({', '.join(f'{v:g}' for v in g.pose)})"
                 if isinstance(g, PoseGoal) else f"{g.actor} touches {g.object}")

@@ -17,9 +17,10 @@ import yaml
 
 from robotplan import SceneError, load_scene
 from robotplan.scene import parse_scene
-from tests.conftest import ROOT, TASKS
+from robotplan.scene.files import read_data
+from tests.conftest import DATA, ROOT, TASKS
 
-EXAMPLES = sorted(TASKS.glob("*.yaml"))
+EXAMPLES = [*sorted(TASKS.glob("*.yaml")), DATA / "mug_hang.yaml"]
 MUTATIONS_PER_SCENE = 50
 ODD_VALUES: list[Any] = [None, {}, [], "a string", "", 1e308, -1e308, 10**30, -(10**400),
                          -3.0, 0, float("nan"), float("inf"), True, [[1, [2, [3]]], "x"],
@@ -74,7 +75,7 @@ def mutants(rng: random.Random) -> list[tuple[str, Any]]:
     """``MUTATIONS_PER_SCENE`` mutants of each example, one to three changes each."""
     out = []
     for path in EXAMPLES:
-        base = yaml.safe_load(path.read_text())
+        base = read_data(path)  # YAML 1.2 booleans, as robotplan reads scenes
         for i in range(MUTATIONS_PER_SCENE):
             data = copy.deepcopy(base)
             for _ in range(rng.choice([1, 1, 2, 3])):

@@ -11,9 +11,11 @@ import yaml
 
 from robotplan import SceneError, load_scene
 from robotplan.scene import RegionGoal, TouchGoal, parse_scene
-from tests.conftest import TASKS
+from robotplan.scene.hang_check import hang_parts
+from robotplan.scene.schema import HangGoal
+from tests.conftest import DATA, TASKS
 
-GOOD = sorted(TASKS.rglob("*.yaml"))  # the task scenes and their variants
+GOOD = [*sorted(TASKS.rglob("*.yaml")), DATA / "mug_hang.yaml"]  # tasks, variants, a hang
 BASE = yaml.safe_load((TASKS / "box_push.yaml").read_text())
 ARMS = yaml.safe_load((TASKS / "two_arm_touch.yaml").read_text())
 
@@ -70,7 +72,7 @@ BAD_CASES = [
      "objects[0].shape.vertices"),
     ("duplicate-name", mutate(BASE, "pushers.0.name", "box"), "pushers[0].name"),
     ("goal-object-missing", mutate(BASE, "goal.object", "nope"), "goal.object"),
-    ("goal-type", mutate(BASE, "goal.type", "hang"), "goal.type"),
+    ("goal-type", mutate(BASE, "goal.type", "stack"), "goal.type"),
     ("touch-goal-no-robot", mutate(ARMS, "goal.robot", "middle"), "goal.robot"),
     ("touch-goal-both", mutate(ARMS, "goal.pusher", "pusher"), "goal.robot"),
     ("touches-unknown", mutate(BASE, "pushers.0.touches", ["ghost"]), "pushers[0].touches[0]"),
@@ -98,6 +100,11 @@ BAD_CASES = [
 def test_good_scenes_load(path):
     scene = load_scene(path)
     assert scene.name == path.stem
+    if isinstance(scene.goal, HangGoal):  # 3D solids, not footprints
+        mug, hook, _, _ = hang_parts(scene)
+        pts = torch.zeros(3, 3, dtype=torch.float64)
+        assert mug.sdf(pts).shape == (3,) and hook.sdf(pts).shape == (3,)
+        return
     assert set(scene.bodies) >= {o.name for o in scene.objects}
     for body in scene.bodies.values():
         pts = torch.zeros(3, 2, dtype=torch.float64)
@@ -205,3 +212,37 @@ def test_a_pose_goal_is_the_objects_own_footprint_at_the_pose():
     region = scene.goal_region
     assert region.shape == scene.objects[0].shape and region.pose == (0.3, 0.05, 1.2)
     assert "box to the pose (0.3, 0.05, 1.2)" in scene.summary()
+
+
+# PyYAML reads YAML 1.1, where the key ``on`` is a boolean: quote it for the mutations
+HANG = yaml.safe_load((DATA / "mug_hang.yaml").read_text().replace("on: hook", '"on": hook'))
+
+
+@pytest.mark.parametrize("name,data,field", [
+    ("hang-on-missing", mutate(HANG, "goal.on", "shelf"), "goal.on"),
+    ("hang-object", mutate(HANG, "goal.object", "cup"), "goal.object"),
+    ("hang-with-pusher", mutate(HANG, "pushers", [{"name": "p", "radius": 0.03,
+                                                   "position": [0.5, 0.5]}]), "pushers"),
+    ("hang-handle-off-cup", mutate(HANG, "objects.0.shape.handle_span", 0.09),
+     "objects[0].shape.handle_span"),
+    ("hang-hook-parts", mutate(HANG, "obstacles.0.shape.angles", [0.1]),
+     "obstacles[0].shape.angles"),
+    ("hang-mug-at-post", mutate(HANG, "objects.0.pose", [0.03, 0.0, 0.0]), "objects[0].pose"),
+    ("mug-in-push-scene", mutate(BASE, "objects.0.shape", {"type": "mug", "radius": 0.04,
+                                                            "height": 0.1, "handle_height": 0.6,
+                                                            "handle_reach": 0.03,
+                                                            "handle_span": 0.03}),
+     "objects[0].shape"),
+])
+def test_bad_hang_scene_is_refused_naming_the_field(tmp_path, name, data, field):
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(SceneError) as err:
+        load_scene(path)
+    assert err.value.field == field, str(err.value)
+
+
+def test_yaml_reads_on_as_a_string():
+    """YAML 1.1 reads ``on`` as a boolean; a hang goal's ``on: hook`` must stay a name."""
+    scene = load_scene(DATA / "mug_hang.yaml")
+    assert scene.goal.on == "hook"
