@@ -11,7 +11,8 @@ from pathlib import Path
 from robotplan.base.resources import learned_dir
 from robotplan.cli.common import EXIT_BAD_INPUT, print_result, training_folders_problem
 
-__all__ = ["cmd_bench_hang", "cmd_data_hang", "cmd_eval_hang", "cmd_train_hang"]
+__all__ = ["cmd_bench_hang", "cmd_data_hang", "cmd_eval_hang", "cmd_train_hang",
+           "solve_hang_scene"]
 
 
 def cmd_data_hang(args: argparse.Namespace) -> int:
@@ -119,3 +120,22 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
                   f"{r['collision_free']:>10.3f}{r['total']:>8.3f}{paper[3]:>13.3f}")
     print(f"median seconds (optimisation + sampling): {summary['median_seconds']}")
     return 0
+
+
+def solve_hang_scene(scene, out: Path, model: str | None) -> int:
+    """``robotplan solve`` of a hang scene: find the pose, drop it, write the result."""
+    from robotplan.api.hang import solve_hang
+
+    folder = Path(model) if model else learned_dir("hang")
+    if not (folder / "spec.json").is_file():
+        print(f"error: {folder}: no trained H_hang here (spec.json); train one with "
+              "robotplan train hang, or pass --model DIR", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    doc = solve_hang(scene, out, folder)
+    ex = doc["execution"]
+    print(f"{doc['status']}: H_hang {doc['h_hang']:.3g}, H_coll {doc['h_coll_cm3']:.3g} cm³ "
+          f"after {doc['restarts']} optimisations ({doc['evaluations']} evaluations, "
+          f"{doc['plan_seconds']} s); dropped in pybullet the mug "
+          f"{'hangs' if ex['hung'] else 'falls'}; wrote {out / 'result.json'} and "
+          f"{out / 'playback.html'}")
+    return 0 if doc["status"] == "solved" else 1

@@ -14,7 +14,9 @@ from robotplan.cli.common import (
     perturbation,
     print_result,
 )
+from robotplan.cli.hang_commands import solve_hang_scene
 from robotplan.scene import SceneError, load_scene
+from robotplan.scene.schema import HangGoal
 
 __all__ = ["cmd_check", "cmd_diagnose", "cmd_render", "cmd_solve", "cmd_view"]
 
@@ -59,6 +61,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
         print(f"error: {out}: --out: the folder is not empty; pass --overwrite to replace "
               "its result", file=sys.stderr)
         return EXIT_BAD_INPUT
+    if isinstance(scene.goal, HangGoal):
+        return solve_hang_scene(scene, out, args.model)
     args.model = model_folder(args)
     if not_a_model(args.model):
         return EXIT_BAD_INPUT

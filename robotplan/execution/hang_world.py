@@ -56,6 +56,7 @@ class DropResult:
     X_WM_end: tuple[float, ...]  # (x, y, z, qw, qx, qy, qz) after the drop and the impulse
 
 
+RECORD_EVERY = 8  # simulation steps between recorded poses (30 per second)
 MAX_COMPOUND = 16  # pybullet's limit on the parts of one compound collision shape
 
 
@@ -126,6 +127,7 @@ class HangWorld:
         self.hook = self._body(0.0, hook_parts(hook))
         self.mug = self._body(physics.mug_mass, mug_parts(mug))
         self.mug_links = range(-1, pb.getNumJoints(self.mug, physicsClientId=c))
+        self._record: list | None = None
         for body in (self.ground, self.hook, self.mug):
             for link in range(-1, pb.getNumJoints(body, physicsClientId=c)):
                 pb.changeDynamics(body, link, lateralFriction=physics.friction,
@@ -189,14 +191,18 @@ class HangWorld:
         pos, quat = self.pb.getBasePositionAndOrientation(self.mug, physicsClientId=self.client)
         return (*pos, *_wxyz(quat))
 
-    def drop(self, X_WM) -> DropResult:
+    def drop(self, X_WM, record: list | None = None) -> DropResult:
         """Place the mug at ``X_WM (7,)`` at rest, let it fall and settle, kick it, and
-        decide whether it hangs. A fall to the ground ends the run early."""
+        decide whether it hangs. A fall to the ground ends the run early. ``record``, if
+        given, receives ``(t, X_WM)`` every ``RECORD_EVERY`` steps (for a playback)."""
+        self._record = record
         pb, c, ph = self.pb, self.client, self.physics
         X = np.asarray(X_WM, dtype=float)
         pb.resetBasePositionAndOrientation(self.mug, X[:3].tolist(), _pb_quat(X[3:]),
                                            physicsClientId=c)
         pb.resetBaseVelocity(self.mug, [0, 0, 0], [0, 0, 0], physicsClientId=c)
+        if record is not None:
+            record.append((0.0, self.pose()))
         pb.performCollisionDetection(physicsClientId=c)
         deepest = min((p[8] for p in pb.getClosestPoints(self.mug, self.hook, 0.0,
                                                          physicsClientId=c)), default=0.0)
@@ -213,8 +219,12 @@ class HangWorld:
 
     def _run(self, steps: int) -> bool:
         """Step the world; True as soon as the mug comes down to the ground."""
-        for _ in range(steps):
+        record = self._record
+        for k in range(steps):
             self.pb.stepSimulation(physicsClientId=self.client)
+            if record is not None and k % RECORD_EVERY == 0:
+                t = (record[-1][0] if record else 0.0) + RECORD_EVERY * self.physics.timestep
+                record.append((t, self.pose()))
             if self._lowest() < self.physics.ground_clearance:
                 return True
         return False

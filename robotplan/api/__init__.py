@@ -17,6 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
+from robotplan.api.hang import (
+    HangPlan,
+    execute_hang,
+    plan_hang,
+    solve_hang,
+    write_hang_playback_page,
+)
+from robotplan.api.results import execution_summary
 from robotplan.base.files import write_atomically
 from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
 from robotplan.execution.closed_loop import LoopSettings, execute_closed_loop
@@ -30,6 +38,7 @@ from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import Solution
 from robotplan.program.solve import warm_guess
 from robotplan.scene import Scene
+from robotplan.scene.schema import HangGoal
 from robotplan.search.planner import FEASIBLE, PLAUSIBLE_RMS_MM, merge_results
 from robotplan.search.scene_search import (
     UnsupportedScene,
@@ -97,6 +106,8 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     first, from its trajectories; a fresh search follows when that does not solve (unless
     ``fallback`` is False).
     """
+    if isinstance(scene.goal, HangGoal):  # kinematic: a pose of the mug, no skeleton
+        return plan_hang(scene, model)
     model_dir = (Path(model) if model is not None
                  else learned_dir(DYNAMICS_FOLDERS[default_dynamics(scene)]))
     guesses = None
@@ -133,7 +144,10 @@ def execute(planned: Plan, scene: Scene | None = None, *, mode: str = "closed_lo
     paper's protocol (§7.2.3). Reaches run slower than the data's pushes (see
     ``plan_substeps``). ``perturb``: friction, mass and observation noise of a perturbed
     world. ``loop``: the closed loop's settings (default: those of the plan's scene class,
-    ``skeletons/loop.yaml``). ``quiet=False`` prints a line per re-plan."""
+    ``skeletons/loop.yaml``). ``quiet=False`` prints a line per re-plan. A hang plan is
+    dropped from its pose."""
+    if isinstance(planned, HangPlan):
+        return execute_hang(planned)
     if planned.best is None:
         raise ValueError("nothing to execute: the plan has no solution")
     if mode not in MODES:
@@ -196,49 +210,9 @@ def playback_layers(planned: Plan, executed: Execution) -> list[Layer]:
 
 def write_playback(planned: Plan, executed: Execution, path: Path) -> None:
     """The self-contained MeshCat page replaying the execution with its plans ghosted."""
+    if isinstance(planned, HangPlan):
+        return write_hang_playback_page(planned, executed, Path(path))
     write_playback_html(planned.scene, Path(path), playback_layers(planned, executed))
-
-
-def _track_doc(sol: Solution, scene: Scene, obj: str) -> dict:
-    times = np.concatenate(([0.0], np.cumsum(plan_substeps(scene, sol)))) * PHYSICS.timestep
-    doc = {"t": [round(float(v), 6) for v in times], "skeleton": sol.skeleton.describe(),
-           "pusher": sol.q_pusher.tolist(),
-           "objects": {obj: sol.q_obj.tolist(), **{k: v.tolist() for k, v in sol.q_others.items()}},
-           "contact_points": sol.contact.tolist(),
-           "joints": {k: v.tolist() for k, v in sol.q_joints.items()}}
-    if sol.contact_others:
-        doc["object_contact_points"] = {k: v.tolist() for k, v in sol.contact_others.items()}
-    return doc
-
-
-def execution_summary(planned: Plan, executed: Execution,
-                      perturb: Perturbation | None = None) -> dict:
-    """The execution's entries of ``result.json``: mode and outcome, every re-plan, the
-    planned trajectories (the first plan and each adopted re-plan) and the executed ones."""
-    ex, obj = executed, planned.obj
-    final = {obj: ex.final_pose, **{k: v[-1] for k, v in ex.others.items()}}
-    plans = ex.plans or [(0, planned.best)]
-    tracks = []
-    for step, sol in plans:
-        track = _track_doc(sol, planned.scene, obj)
-        tracks.append({"step": step, "time": round(float(ex.times[step]), 4), **track})
-    doc = {"execution": {"simulator": "pybullet", "mode": ex.mode,
-                         "coverage": ex.coverage,
-                         "final_poses": {k: [float(x) for x in v] for k, v in final.items()},
-                         "touch_distance": ex.touch_distance,
-                         "obstacle_contact": ex.obstacle_contact,
-                         "forbidden_contacts": ex.forbidden_contacts,
-                         "replans": [r.as_dict() for r in ex.replans],
-                         "perturbation": perturb.describe() if perturb else None},
-           "trajectory": {k: v for k, v in tracks[0].items() if k not in ("step", "time")},
-           "replanned": tracks[1:],
-           "executed": {"t": [round(float(v), 6) for v in ex.times],
-                        "pusher": ex.pusher_positions.tolist(),
-                        "objects": {obj: ex.object_poses.tolist(),
-                                    **{k: v.tolist() for k, v in ex.others.items()}},
-                        "joints": {k: v.tolist() for k, v in ex.joints.items()},
-                        "tips": {k: v.tolist() for k, v in ex.tips.items()}}}
-    return doc
 
 
 def solve(scene: Scene, out: Path, model: str | Path | None = None, *, quiet: bool = False,
@@ -249,6 +223,8 @@ def solve(scene: Scene, out: Path, model: str | Path | None = None, *, quiet: bo
     document. ``compare_open_loop`` also runs the same plan open loop and records its
     outcome under ``open_loop``. ``options``: those of :func:`plan`."""
     out = Path(out)
+    if isinstance(scene.goal, HangGoal):
+        return solve_hang(scene, out, model)
     planned = plan(scene, model, quiet=quiet, **options)
     doc: dict = {"scene": scene.name, **planned.summary()}
     if planned.best is not None:

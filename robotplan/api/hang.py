@@ -1,0 +1,136 @@
+"""The facade for hang scenes: ``plan`` finds a mug pose on the hook (H_hang and H_coll, with
+restarts), ``execute`` drops the mug from it in pybullet, ``write_playback`` shows both.
+
+Poses: the hook stands at its table pose X_WH; the search works in the hook frame H (as the
+data and H_hang do); results are reported in the world frame W, ``(x, y, z, qw, qx, qy, qz)``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from robotplan.base.files import write_atomically
+from robotplan.base.resources import learned_dir
+from robotplan.execution.hang_world import HangWorld
+from robotplan.models.hang import load_hang_model
+from robotplan.program.hang_program import HANG_DEFAULTS, HangProblem, HangSettings, HangSolution
+from robotplan.scene.hang_check import hang_parts
+from robotplan.scene.schema import Scene
+from robotplan.search.hang_search import optimise_hang
+from robotplan.viz.viewer_hang import write_hang_playback
+
+__all__ = ["HangExecution", "HangPlan", "execute_hang", "plan_hang", "solve_hang",
+           "write_hang_playback_page"]
+
+
+def table_pose(x: float, y: float, yaw: float, z: float = 0.0) -> np.ndarray:
+    """A planar table pose as a spatial one ``(7,)``."""
+    return np.array([x, y, z, math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
+
+
+def compose(X_AB: np.ndarray, X_BC: np.ndarray) -> np.ndarray:
+    """X_AC = X_AB · X_BC for spatial poses ``(7,)``."""
+    from pydrake.common.eigen_geometry import Quaternion
+    from pydrake.math import RigidTransform
+
+    def rt(X: np.ndarray) -> RigidTransform:
+        q = np.asarray(X[3:], dtype=float)
+        return RigidTransform(Quaternion(q / np.linalg.norm(q)), np.asarray(X[:3], float))
+
+    out = rt(X_AB) @ rt(X_BC)
+    q = out.rotation().ToQuaternion()
+    return np.array([*out.translation(), q.w(), q.x(), q.y(), q.z()])
+
+
+@dataclass
+class HangPlan:
+    """The pose found for the mug, in the hook frame (``solution.pose``) and in the world."""
+
+    scene: Scene
+    solution: HangSolution
+    model: str
+    X_WH: np.ndarray
+    X_WM_start: np.ndarray
+
+    @property
+    def solved(self) -> bool:
+        return self.solution.feasible
+
+    @property
+    def X_WM(self) -> np.ndarray:
+        return compose(self.X_WH, self.solution.pose)
+
+
+@dataclass
+class HangExecution:
+    hung: bool
+    collision_at_start: bool
+    on_ground: bool
+    X_WM_end: np.ndarray
+    drop: list = field(default_factory=list)  # [(t, X_WM)] every 1/30 s
+    seconds: float = 0.0
+
+
+def plan_hang(scene: Scene, model: str | Path | None = None, *, seed: int = 0,
+              settings: HangSettings | None = None, restarts: int | None = None
+              ) -> HangPlan:
+    """Optimisation from random poses (``restarts``, default the settings' 20) within the
+    evaluation budget; ``seed`` draws the starts; ``settings`` default ``HANG_DEFAULTS``."""
+    settings = settings or HANG_DEFAULTS
+    mug, hook, mug_pose, hook_pose = hang_parts(scene)
+    folder = str(model or learned_dir("hang"))
+    problem = HangProblem(load_hang_model(folder), mug, hook)
+    sol = optimise_hang(problem, np.random.default_rng(seed), settings, restarts)
+    return HangPlan(scene, sol, folder, table_pose(*hook_pose), table_pose(*mug_pose))
+
+
+def execute_hang(planned: HangPlan) -> HangExecution:
+    """Drop the mug from the found pose (in the hook's world, then reported in W)."""
+    mug, hook, _, _ = hang_parts(planned.scene)
+    t0 = time.perf_counter()
+    record: list = []
+    with HangWorld(hook, mug) as world:
+        result = world.drop(planned.solution.pose, record=record)
+    drop = [(t, compose(planned.X_WH, np.asarray(X))) for t, X in record]
+    return HangExecution(result.hangs, result.collision_at_start, result.on_ground,
+                         compose(planned.X_WH, np.asarray(result.X_WM_end)), drop,
+                         time.perf_counter() - t0)
+
+
+def write_hang_playback_page(planned: HangPlan, executed: HangExecution, path: Path) -> None:
+    mug, hook, _, _ = hang_parts(planned.scene)
+    write_hang_playback(mug, hook, planned.X_WH, planned.X_WM_start, planned.X_WM,
+                        executed.drop, Path(path))
+
+
+def _r(v: np.ndarray) -> list[float]:
+    return [round(float(x), 6) for x in v]
+
+
+def solve_hang(scene: Scene, out: Path, model: str | Path | None = None, *, seed: int = 0,
+               restarts: int | None = None, settings: HangSettings | None = None) -> dict:
+    """Plan, drop, write ``out/result.json`` and ``out/playback.html``; returns the result."""
+    t0 = time.perf_counter()
+    planned = plan_hang(scene, model, seed=seed, restarts=restarts, settings=settings)
+    executed = execute_hang(planned)
+    sol = planned.solution
+    doc = {"scene": scene.name, "status": "solved" if planned.solved else "no_solution",
+           "goal": "hang", "model": planned.model,
+           "plan_seconds": round(sol.seconds, 2), "restarts": sol.restarts,
+           "evaluations": sol.evaluations, "h_hang": round(sol.h_hang, 5),
+           "h_coll_cm3": round(sol.h_coll_cm3, 6), "pose": _r(planned.X_WM),
+           "pose_in_hook_frame": _r(sol.pose),
+           "execution": {"simulator": "pybullet", "hung": executed.hung,
+                         "collision_at_start": executed.collision_at_start,
+                         "on_ground": executed.on_ground, "final_pose": _r(executed.X_WM_end)},
+           "seconds": round(time.perf_counter() - t0, 2), "playback": "playback.html"}
+    out.mkdir(parents=True, exist_ok=True)
+    write_hang_playback_page(planned, executed, out / "playback.html")
+    write_atomically(out / "result.json", lambda p: p.write_text(json.dumps(doc, indent=1)))
+    return doc

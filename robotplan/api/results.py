@@ -1,0 +1,55 @@
+"""The result documents of a push plan and its execution (``result.json``'s entries)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robotplan.execution.execute import Execution, plan_substeps
+from robotplan.execution.perturb import Perturbation
+from robotplan.execution.sim import PHYSICS
+from robotplan.program.solution import Solution
+from robotplan.scene import Scene
+
+__all__ = ["execution_summary"]
+
+
+def _track_doc(sol: Solution, scene: Scene, obj: str) -> dict:
+    times = np.concatenate(([0.0], np.cumsum(plan_substeps(scene, sol)))) * PHYSICS.timestep
+    doc = {"t": [round(float(v), 6) for v in times], "skeleton": sol.skeleton.describe(),
+           "pusher": sol.q_pusher.tolist(),
+           "objects": {obj: sol.q_obj.tolist(), **{k: v.tolist() for k, v in sol.q_others.items()}},
+           "contact_points": sol.contact.tolist(),
+           "joints": {k: v.tolist() for k, v in sol.q_joints.items()}}
+    if sol.contact_others:
+        doc["object_contact_points"] = {k: v.tolist() for k, v in sol.contact_others.items()}
+    return doc
+
+
+def execution_summary(planned, executed: Execution,
+                      perturb: Perturbation | None = None) -> dict:
+    """The execution's entries of ``result.json``: mode and outcome, every re-plan, the
+    planned trajectories (the first plan and each adopted re-plan) and the executed ones."""
+    ex, obj = executed, planned.obj
+    final = {obj: ex.final_pose, **{k: v[-1] for k, v in ex.others.items()}}
+    plans = ex.plans or [(0, planned.best)]
+    tracks = []
+    for step, sol in plans:
+        track = _track_doc(sol, planned.scene, obj)
+        tracks.append({"step": step, "time": round(float(ex.times[step]), 4), **track})
+    doc = {"execution": {"simulator": "pybullet", "mode": ex.mode,
+                         "coverage": ex.coverage,
+                         "final_poses": {k: [float(x) for x in v] for k, v in final.items()},
+                         "touch_distance": ex.touch_distance,
+                         "obstacle_contact": ex.obstacle_contact,
+                         "forbidden_contacts": ex.forbidden_contacts,
+                         "replans": [r.as_dict() for r in ex.replans],
+                         "perturbation": perturb.describe() if perturb else None},
+           "trajectory": {k: v for k, v in tracks[0].items() if k not in ("step", "time")},
+           "replanned": tracks[1:],
+           "executed": {"t": [round(float(v), 6) for v in ex.times],
+                        "pusher": ex.pusher_positions.tolist(),
+                        "objects": {obj: ex.object_poses.tolist(),
+                                    **{k: v.tolist() for k, v in ex.others.items()}},
+                        "joints": {k: v.tolist() for k, v in ex.joints.items()},
+                        "tips": {k: v.tolist() for k, v in ex.tips.items()}}}
+    return doc

@@ -1,0 +1,68 @@
+"""The facade on a hang scene: plan → execute → playback through ``robotplan.plan`` /
+``execute`` / ``write_playback`` (a tiny H_hang trained by our code), poses in the world frame,
+and ``robotplan solve`` refusing a missing model."""
+
+import json
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import robotplan
+from robotplan.api.hang import HangPlan, compose, table_pose
+from robotplan.cli.main import main
+from robotplan.program.hang_program import HangSettings
+from robotplan.training.hang_train import HangTrainConfig, train_hang
+from tests.conftest import DATA, TINY_HANG_SPEC
+
+
+@pytest.fixture(scope="module")
+def tiny_model(tiny_hang_data, tmp_path_factory):
+    out = tmp_path_factory.mktemp("hang_model")
+    train_hang(HangTrainConfig(data=str(tiny_hang_data), out=str(out), steps=3,
+                               spec=TINY_HANG_SPEC), progress=False)
+    return out
+
+
+def test_plan_execute_and_playback_through_the_facade(tiny_model, tmp_path, monkeypatch):
+    import robotplan.api.hang as hang_api
+
+    scene = robotplan.load_scene(DATA / "mug_hang.yaml")
+    monkeypatch.setattr(hang_api, "HANG_DEFAULTS", HangSettings(restarts=1, major_iterations=5))
+    planned = robotplan.plan(scene, tiny_model)
+    assert isinstance(planned, HangPlan) and planned.solution.evaluations > 0
+    executed = robotplan.execute(planned)
+    assert executed.drop and executed.drop[0][0] == 0.0
+    assert np.allclose(executed.drop[0][1], planned.X_WM, atol=1e-6), "the drop starts there"
+    robotplan.write_playback(planned, executed, tmp_path / "playback.html")
+    assert (tmp_path / "playback.html").stat().st_size > 10_000
+
+
+def test_world_poses_follow_the_hook():
+    X_WH = table_pose(0.2, -0.1, math.pi / 2)
+    X_HM = np.array([0.1, 0.0, 0.25, 1.0, 0.0, 0.0, 0.0])
+    X_WM = compose(X_WH, X_HM)
+    assert np.allclose(X_WM[:3], [0.2, 0.0, 0.25], atol=1e-12)
+    assert np.allclose(np.abs(X_WM[3:]), [math.sqrt(0.5), 0, 0, math.sqrt(0.5)], atol=1e-12)
+
+
+def test_solve_writes_the_result_or_refuses_a_missing_model(tiny_model, tmp_path, capsys):
+    scene_path = tmp_path / "moved.yaml"
+    text = (DATA / "mug_hang.yaml").read_text().replace("pose: [0.0, 0.0, 0.0]",
+                                                         "pose: [0.1, 0.1, 0.5]")
+    scene_path.write_text(text)
+    assert main(["solve", str(scene_path), "--out", str(tmp_path / "none"),
+                 "--model", str(tmp_path / "nothing")]) == 2
+    assert "no trained H_hang" in capsys.readouterr().err
+    scene = robotplan.load_scene(scene_path)
+    assert scene.obstacles[0].pose == (0.1, 0.1, 0.5)
+    assert replace(scene, name="x").goal.on == "hook"
+    doc_path = tmp_path / "out" / "result.json"
+    from robotplan.api.hang import solve_hang
+
+    doc = solve_hang(scene, tmp_path / "out", tiny_model, restarts=1,
+                     settings=HangSettings(major_iterations=5))
+    assert json.loads(doc_path.read_text()) == doc
+    assert set(doc["execution"]) >= {"hung", "collision_at_start", "final_pose"}
+    assert len(doc["pose"]) == 7
