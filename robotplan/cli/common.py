@@ -12,6 +12,7 @@ __all__ = [
     "EXIT_BAD_INPUT",
     "add_dynamics_options",
     "device_name",
+    "load_footprint_scene",
     "model_folder",
     "not_a_model",
     "print_result",
@@ -20,6 +21,20 @@ __all__ = [
 
 
 EXIT_BAD_INPUT = 2
+
+
+def load_footprint_scene(path: str, command: str):
+    """A scene for a command that works on footprints (table-top SDFs on X_h); a hang scene is
+    refused with SceneError naming the goal (exit 2 through ``main``)."""
+    from robotplan.scene import SceneError, load_scene
+    from robotplan.scene.schema import HangGoal
+
+    scene = load_scene(path)
+    if isinstance(scene.goal, HangGoal):
+        raise SceneError(path, "goal", f"{command} works on table-top footprints; the mug and "
+                         "hook of a hang scene are 3D (robotplan solve plans it and writes its "
+                         "playback)")
+    return scene
 
 
 def training_folders_problem(data: str, out: str, resume: bool, overwrite: bool) -> str | None:

@@ -12,12 +12,12 @@ from robotplan.base.resources import DYNAMICS_FOLDERS
 from robotplan.cli.common import (
     EXIT_BAD_INPUT,
     device_name,
+    load_footprint_scene,
     model_folder,
     not_a_model,
     print_result,
     training_folders_problem,
 )
-from robotplan.scene import load_scene
 
 __all__ = ["cmd_bench", "cmd_bench_functional", "cmd_bench_push", "cmd_data_push", "cmd_eval_push",
            "cmd_train_push"]
@@ -246,7 +246,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from robotplan.bench.sdf import bench_sdf
 
     torch.set_num_threads(args.threads)
-    scene = load_scene(args.scene)
+    scene = load_footprint_scene(args.scene, "bench sdf")
     dtype = {"float32": torch.float32, "float64": torch.float64}[args.dtype]
     result = bench_sdf(scene, steps=args.steps, repeats=args.repeats, dtype=dtype)
     print_result(result, args.json)

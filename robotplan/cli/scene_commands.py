@@ -9,6 +9,7 @@ from pathlib import Path
 
 from robotplan.cli.common import (
     EXIT_BAD_INPUT,
+    load_footprint_scene,
     model_folder,
     not_a_model,
     perturbation,
@@ -37,7 +38,8 @@ def cmd_check(args: argparse.Namespace) -> int:
 def cmd_render(args: argparse.Namespace) -> int:
     from robotplan.viz.render import render_scene_sdf
 
-    scenes = [load_scene(f) for f in args.files]  # refuse bad input before writing anything
+    # refuse bad input before writing anything
+    scenes = [load_footprint_scene(f, "render") for f in args.files]
     out = Path(args.out)
     targets = [out / f"{Path(f).stem}_sdf.png" for f in args.files]
     if not args.overwrite:
@@ -97,7 +99,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     if not_a_model(args.model):
         return EXIT_BAD_INPUT
-    scene = load_scene(args.scene)
+    scene = load_footprint_scene(args.scene, "diagnose")
     try:
         checks = check_steps(scene, json.loads(path.read_text()), args.model)
     except (ValueError, KeyError, StopIteration) as err:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import yaml
 
-from tests.conftest import ROOT, TASKS
+from tests.conftest import DATA, ROOT, TASKS
 from tests.scene.test_loader import BAD_CASES
 
 
@@ -186,3 +186,18 @@ def test_dynamics_picks_a_shipped_model_and_a_model_folder_overrides_it(tmp_path
     res = run("solve", str(TASKS / "box_push.yaml"), "--out", str(tmp_path / "a"),
               "--dynamics", "quadratic")
     assert res.returncode == 2 and "--dynamics" in res.stderr and "Traceback" not in res.stderr
+
+
+def test_footprint_commands_refuse_a_hang_scene(tmp_path):
+    scene = str(DATA / "mug_hang.yaml")
+    assert run("check", scene).returncode == 0
+    solved = tmp_path.parent / f"{tmp_path.name}_solved"
+    solved.mkdir()
+    (solved / "result.json").write_text("{}")
+    for argv in (["render", scene, "--out", str(tmp_path)], ["bench", "sdf", "--scene", scene],
+                 ["diagnose", str(solved), scene]):
+        res = run(*argv)
+        assert res.returncode == 2, argv
+        err = res.stderr.strip()
+        assert "\n" not in err and "goal:" in err and "3D" in err and "Traceback" not in err
+    assert not list(tmp_path.iterdir())
