@@ -5,6 +5,7 @@ import json
 import pytest
 
 from robotplan.models.dynamics import load_model
+from robotplan.models.hang import load_hang_model
 from robotplan.models.rigid import load_rigid
 from robotplan.training.evaluation import evaluate_push
 from robotplan.training.rigid import evaluate_rigid
@@ -25,7 +26,8 @@ def test_model_folder_is_complete(folder):
         assert (folder / name).is_file(), f"{folder.name} lacks {name}"
     json.loads((folder / "metrics.json").read_text())
     kind = json.loads((folder / "spec.json").read_text())["kind"]
-    (load_rigid if kind == "rigid" else load_model)(folder)  # weights_only=True inside
+    loader = {"rigid": load_rigid, "hang": load_hang_model}.get(kind, load_model)
+    loader(folder)  # weights_only=True inside
 
 
 @pytest.mark.parametrize("name", SHIPPED)
