@@ -133,11 +133,7 @@ def _parser() -> argparse.ArgumentParser:
     dsub = d.add_subparsers(dest="what", required=True)
     dp = dsub.add_parser("push", help="push data from pybullet (boxes and L-shapes, or "
                          "unseen footprints)")
-    dp.add_argument("--scenes", type=int, required=True)
-    dp.add_argument("--seed", type=int, required=True)
-    dp.add_argument("--out", required=True, metavar="DIR")
-    dp.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    dp.add_argument("--shard-size", type=int, default=50)
+    _add_data_options(dp, shard_size=50)
     dp.add_argument("--shapes", choices=["train", "ood"], default="train",
                     help="train: boxes and L-shapes (the training distribution); ood: "
                     "footprints never trained on (triangle, pentagon, hexagon, circle, T, "
@@ -146,11 +142,7 @@ def _parser() -> argparse.ArgumentParser:
     dp.set_defaults(run=cmd_data_push)
     dh = dsub.add_parser("hang", help="mug-hanging data from pybullet: mug poses dropped on "
                          "hooks, labelled hangs or not (paper app. H)")
-    dh.add_argument("--scenes", type=int, required=True)
-    dh.add_argument("--seed", type=int, required=True)
-    dh.add_argument("--out", required=True, metavar="DIR")
-    dh.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    dh.add_argument("--shard-size", type=int, default=20)
+    _add_data_options(dh, shard_size=20)
     dh.add_argument("--per-scene", type=int, default=20,
                     help="labelled configurations kept per scene")
     dh.set_defaults(run=cmd_data_hang)
@@ -237,6 +229,15 @@ def _parser() -> argparse.ArgumentParser:
                     help="store the result in the model's metrics.json")
     eh.set_defaults(run=cmd_eval_hang)
     return p
+
+
+def _add_data_options(parser: argparse.ArgumentParser, shard_size: int) -> None:
+    """What every ``data`` command takes: a sharded, resumable, seeded folder."""
+    parser.add_argument("--scenes", type=int, required=True)
+    parser.add_argument("--seed", type=int, required=True)
+    parser.add_argument("--out", required=True, metavar="DIR")
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--shard-size", type=int, default=shard_size)
 
 
 def main(argv: list[str] | None = None) -> int:

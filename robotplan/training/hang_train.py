@@ -9,9 +9,6 @@ end; the model folder (weights, spec, metrics) is refreshed at every validation.
 
 from __future__ import annotations
 
-import json
-import os
-import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -27,7 +24,8 @@ from robotplan.models.hang import (
     save_hang_model,
 )
 from robotplan.training.hang_data import decode_hook, load_hang_shards
-from robotplan.training.train import hardware, lr_at, write_json
+from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
+from robotplan.training.train import hardware, write_json
 
 __all__ = ["HangSamples", "HangTrainConfig", "hang_metrics", "train_hang"]
 
@@ -129,20 +127,13 @@ def hang_metrics(model: HangSuccess, samples: HangSamples, idx: np.ndarray,
 
 def train_hang(cfg: HangTrainConfig, resume: bool = False, progress: bool = True) -> dict:
     """Run (or resume) training; returns the last validation row."""
-    from tqdm import tqdm
-
     out = Path(cfg.out)
     ckpt_path = out / "checkpoint.pt"
     torch.manual_seed(cfg.seed)
     spec = HangSpec.from_json(cfg.spec)
     model = HangSuccess(spec)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
-    step, history, seconds = 0, [], 0.0
-    if resume:
-        state = torch.load(ckpt_path, weights_only=True)
-        model.load_state_dict(state["model"])
-        opt.load_state_dict(state["optimizer"])
-        step, history, seconds = state["step"], json.loads(state["history"]), state["seconds"]
+    run = load_checkpoint(ckpt_path, model, opt) if resume else Run()
     samples = HangSamples(cfg.data, spec, cfg.scenes)
     samples.cache(progress=progress)
     if cfg.test:
@@ -152,68 +143,26 @@ def train_hang(cfg: HangTrainConfig, resume: bool = False, progress: bool = True
         val_samples = samples
         train_idx, val_idx = samples.split_by_scene(cfg.val_fraction, cfg.seed)
     per_epoch = max(1, len(train_idx) // cfg.batch)
-
-    def save_checkpoint() -> None:
-        tmp = ckpt_path.with_suffix(".tmp")
-        torch.save({"model": model.state_dict(), "optimizer": opt.state_dict(), "step": step,
-                    "history": json.dumps(history), "seconds": seconds,
-                    "config": json.dumps(asdict(cfg))}, tmp)
-        os.replace(tmp, ckpt_path)
+    batch_of = epoch_batch(train_idx, cfg.batch, cfg.seed)
 
     def validate() -> dict:
         model.eval()
-        row = {"step": step, "epoch": round(step / per_epoch, 3),
-               "minutes": round(seconds / 60, 1),
+        row = {"step": run.step, "epoch": round(run.step / per_epoch, 3),
+               "minutes": round(run.seconds / 60, 1),
                "validation": hang_metrics(model, val_samples, val_idx)}
         model.train()
-        history.append(row)
+        run.history.append(row)
         save_hang_model(model, out)
-        write_json(out / "training.json", {"config": asdict(cfg), "history": history,
+        write_json(out / "training.json", {"config": asdict(cfg), "history": run.history,
                                              "samples": {"train": len(train_idx),
                                                          "val": len(val_idx)},
                                              "hardware": hardware(torch.device("cpu"))})
         return row
 
+    def step_loss(step: int) -> torch.Tensor:
+        chosen = batch_of(step)
+        return hang_loss(model(samples.inputs(chosen)), samples.hangs[chosen])
+
     out.mkdir(parents=True, exist_ok=True)
-    model.train()
-    run_start = start = last_ckpt = time.time()
-    bar = tqdm(total=cfg.steps, initial=step, unit="step", disable=not progress,
-               desc="train hang")
-    loss_ema = None
-    perm, perm_epoch = train_idx, -1
-    if step == 0:
-        bar.write(json.dumps(validate()))  # the untrained model, for the record
-    try:
-        while step < cfg.steps:
-            epoch, b = divmod(step, per_epoch)
-            if perm_epoch != epoch:
-                perm = np.random.default_rng([cfg.seed, epoch]).permutation(train_idx)
-                perm_epoch = epoch
-            chosen = perm[b * cfg.batch:(b + 1) * cfg.batch]
-            loss = hang_loss(model(samples.inputs(chosen)), samples.hangs[chosen])
-            for g in opt.param_groups:
-                g["lr"] = lr_at(cfg, step)
-            opt.zero_grad(set_to_none=True)
-            loss.backward()
-            opt.step()
-            step += 1
-            now = time.time()
-            seconds += now - start
-            start = now
-            value = float(loss.detach())
-            loss_ema = value if loss_ema is None else 0.98 * loss_ema + 0.02 * value
-            bar.update(1)
-            bar.set_postfix(loss=f"{loss_ema:.4f}", epoch=f"{step / per_epoch:.2f}")
-            if step % cfg.val_every == 0 or step == cfg.steps:
-                bar.write(json.dumps(validate()))
-            if now - last_ckpt > 60 * cfg.checkpoint_minutes:
-                save_checkpoint()
-                last_ckpt = now
-            if cfg.minutes is not None and now - run_start > 60 * cfg.minutes:
-                break
-    finally:
-        bar.close()
-        save_checkpoint()
-    if not history or history[-1]["step"] != step:
-        validate()
-    return history[-1]
+    return run_steps(cfg, run, model, opt, ckpt_path, step_loss, validate, per_epoch,
+                     "train hang", ("loss", lambda v: v, ".4f"), progress)

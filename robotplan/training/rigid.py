@@ -12,9 +12,7 @@ permutation per ``(seed, epoch)``, ``checkpoint.pt`` every few minutes and at th
 
 from __future__ import annotations
 
-import json
 import math
-import os
 import time
 from dataclasses import asdict
 from pathlib import Path
@@ -35,11 +33,11 @@ from robotplan.models.spec import DynamicsSpec
 from robotplan.sdf import Workspace
 from robotplan.training.evaluation import pick_samples
 from robotplan.training.footprints import BOX, LSHAPE
+from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
 from robotplan.training.samples import PushSamples, SampleBatch
 from robotplan.training.train import (
     TrainConfig,
     hardware,
-    lr_at,
     query_points,
     validation_indices,
     write_json,
@@ -109,23 +107,16 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
     row (Δq errors against the ground truth, whichever loss trains)."""
     if cfg.rigid_loss not in ("delta", "sdf"):
         raise ValueError(f"rigid_loss {cfg.rigid_loss!r}: expected 'delta' or 'sdf'")
-    from tqdm import tqdm
-
     out, device = Path(cfg.out), torch.device(cfg.device)
     ckpt_path = out / "checkpoint.pt"
     torch.manual_seed(cfg.seed)
     spec = DynamicsSpec(**{"encoder": "joint", **cfg.spec, "kind": "rigid"})
     model = RigidMotion(spec).to(device)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
-    step, history, seconds = 0, [], 0.0
     if cfg.init_weights and not resume:
         model.load_state_dict(torch.load(cfg.init_weights, map_location=device,
                                          weights_only=True))
-    if resume:
-        state = torch.load(ckpt_path, map_location=device, weights_only=True)
-        model.load_state_dict(state["model"])
-        opt.load_state_dict(state["optimizer"])
-        step, history, seconds = state["step"], json.loads(state["history"]), state["seconds"]
+    run = load_checkpoint(ckpt_path, model, opt, device) if resume else Run()
     samples = PushSamples(cfg.data, cfg.scenes)
     train_idx, val_idx = samples.split_by_scene(cfg.val_fraction, cfg.seed)
     val_batch = samples.batch(validation_indices(samples, val_idx, cfg.val_samples, cfg.seed),
@@ -134,79 +125,39 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
     grid = ws.points().reshape(-1, 2).to(device)
     per_epoch = max(1, len(train_idx) // cfg.batch)
 
-    def save_checkpoint() -> None:
-        tmp = ckpt_path.with_suffix(".tmp")
-        torch.save({"model": model.state_dict(), "optimizer": opt.state_dict(), "step": step,
-                    "history": json.dumps(history), "seconds": seconds,
-                    "config": json.dumps(asdict(cfg))}, tmp)
-        os.replace(tmp, ckpt_path)
-
     def validate() -> dict:
         model.eval()
         pred, true = delta_q_errors(model, val_batch, grid, ws.shape)
         model.train()
         c = val_batch.contact.cpu().numpy()
-        row = {"step": step, "epoch": round(step / per_epoch, 3),
-               "minutes": round(seconds / 60, 1),
+        row = {"step": run.step, "epoch": round(run.step / per_epoch, 3),
+               "minutes": round(run.seconds / 60, 1),
                "val_delta_q_error": {"contact": table5_errors(pred[c], true[c]),
                                      "free": table5_errors(pred[~c], true[~c])},
                "val_turn_gain": round(turn_gain(pred[c], true[c]), 3)}
-        history.append(row)
+        run.history.append(row)
         save_rigid(model, out)
-        write_json(out / "training.json", {"config": asdict(cfg), "history": history,
+        write_json(out / "training.json", {"config": asdict(cfg), "history": run.history,
                                             "samples": {"train": len(train_idx),
                                                         "val": len(val_idx)},
                                             "hardware": hardware(device)})
         return row
 
+    batch_of = epoch_batch(train_idx, cfg.batch, cfg.seed)
+
+    def step_loss(step: int) -> torch.Tensor:
+        batch = samples.batch(batch_of(step), device=device)
+        inputs, pivot, true = rigid_targets(batch, grid, ws.shape)
+        if cfg.rigid_loss == "sdf":
+            gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
+            pts = query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)
+            return sdf_space_loss(model(inputs), inputs[:, 0], pivot, batch.phi1_now(pts),
+                                  pts, ws.bounds) / spec.out_scale**2
+        return ((model(inputs) - true) / model.scale).pow(2).mean()
+
     out.mkdir(parents=True, exist_ok=True)
-    model.train()
-    run_start = start = last_ckpt = time.time()
-    bar = tqdm(total=cfg.steps, initial=step, unit="step", disable=not progress,
-               desc="train rigid")
-    perm, perm_epoch, loss_ema = train_idx, -1, None
-    if step == 0:
-        bar.write(json.dumps(validate()))
-    try:
-        while step < cfg.steps:
-            epoch, b = divmod(step, per_epoch)
-            if perm_epoch != epoch:
-                perm = np.random.default_rng([cfg.seed, epoch]).permutation(train_idx)
-                perm_epoch = epoch
-            batch = samples.batch(perm[b * cfg.batch:(b + 1) * cfg.batch], device=device)
-            inputs, pivot, true = rigid_targets(batch, grid, ws.shape)
-            if cfg.rigid_loss == "sdf":
-                gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
-                pts = query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)
-                loss = sdf_space_loss(model(inputs), inputs[:, 0], pivot, batch.phi1_now(pts),
-                                      pts, ws.bounds) / spec.out_scale**2
-            else:
-                loss = ((model(inputs) - true) / model.scale).pow(2).mean()
-            for g in opt.param_groups:
-                g["lr"] = lr_at(cfg, step)
-            opt.zero_grad(set_to_none=True)
-            loss.backward()
-            opt.step()
-            step += 1
-            now = time.time()
-            seconds, start = seconds + now - start, now
-            value = float(loss.detach()) ** 0.5
-            loss_ema = value if loss_ema is None else 0.98 * loss_ema + 0.02 * value
-            bar.update(1)
-            bar.set_postfix(rms=f"{loss_ema:.3f}", epoch=f"{step / per_epoch:.2f}")
-            if step % cfg.val_every == 0 or step == cfg.steps:
-                bar.write(json.dumps(validate()))
-            if now - last_ckpt > 60 * cfg.checkpoint_minutes:
-                save_checkpoint()
-                last_ckpt = now
-            if cfg.minutes is not None and now - run_start > 60 * cfg.minutes:
-                break
-    finally:
-        bar.close()
-        save_checkpoint()
-    if not history or history[-1]["step"] != step:
-        validate()
-    return history[-1]
+    return run_steps(cfg, run, model, opt, ckpt_path, step_loss, validate, per_epoch,
+                     "train rigid", ("rms", lambda v: v**0.5, ".3f"), progress)
 
 
 @torch.no_grad()

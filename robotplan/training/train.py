@@ -1,7 +1,8 @@
 """Training F_flow / F on push data: loss eq. (5) on random query points, held-out scenes.
 
-The run is fixed by its arguments and seed: batch ``b`` of epoch ``e`` is a slice of a
-permutation drawn from ``(seed, e)``, the query points of step ``s`` come from
+The run is fixed by its arguments and seed (the shared loop:
+:mod:`robotplan.training.loop`): batch ``b`` of epoch ``e`` is a slice of a permutation drawn
+from ``(seed, e)``, the query points of step ``s`` come from
 ``(seed, s)``, so ``--resume`` continues exactly where a checkpoint left off.
 Checkpoints (``checkpoint.pt``: model, optimiser, step; loaded with ``weights_only=True``)
 are written every few minutes and at the end; the model folder (weights, spec, metrics,
@@ -14,7 +15,6 @@ import json
 import math
 import os
 import platform
-import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -23,9 +23,10 @@ import torch
 
 from robotplan.models.dynamics import DynamicsSpec, PushDynamics, save_model
 from robotplan.sdf import Workspace
+from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
 from robotplan.training.samples import PushSamples, SampleBatch
 
-__all__ = ["TrainConfig", "grid_rmse", "hardware", "lr_at", "query_points", "train",
+__all__ = ["TrainConfig", "grid_rmse", "hardware", "query_points", "train",
            "validation_indices", "write_json"]
 
 
@@ -55,14 +56,6 @@ class TrainConfig:
     spec: dict = field(default_factory=dict)  # DynamicsSpec overrides
     # F_q's loss: "delta", the ground-truth Δq; "sdf", eq. (5) through T(Δq) on SDFs alone
     rigid_loss: str = "delta"
-
-
-def lr_at(cfg: TrainConfig, step: int) -> float:
-    """Linear warm-up, then cosine decay from ``lr`` to ``lr_min`` at ``steps``."""
-    if step < cfg.warmup:
-        return cfg.lr * (step + 1) / cfg.warmup
-    frac = min(1.0, (step - cfg.warmup) / max(1, cfg.steps - cfg.warmup))
-    return cfg.lr_min + 0.5 * (cfg.lr - cfg.lr_min) * (1 + math.cos(math.pi * frac))
 
 
 def query_points(batch: SampleBatch, n: int, near_share: float, ws: Workspace,
@@ -123,8 +116,6 @@ def validation_indices(samples: PushSamples, val_idx: np.ndarray, n: int, seed: 
 
 def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict:
     """Run (or resume) training; returns the last metrics."""
-    from tqdm import tqdm
-
     out = Path(cfg.out)
     ckpt_path = out / "checkpoint.pt"
     device = torch.device(cfg.device)
@@ -134,15 +125,10 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
         spec = DynamicsSpec(**{**asdict(spec), "out_scale": 0.1})
     model = PushDynamics(spec).to(device)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
-    step, history, seconds = 0, [], 0.0
     if cfg.init_weights and not resume:
         model.load_state_dict(torch.load(cfg.init_weights, map_location=device,
                                          weights_only=True))
-    if resume:
-        state = torch.load(ckpt_path, map_location=device, weights_only=True)
-        model.load_state_dict(state["model"])
-        opt.load_state_dict(state["optimizer"])
-        step, history, seconds = state["step"], json.loads(state["history"]), state["seconds"]
+    run = load_checkpoint(ckpt_path, model, opt, device) if resume else Run()
     samples = PushSamples(cfg.data, cfg.scenes)
     train_idx, val_idx = samples.split_by_scene(cfg.val_fraction, cfg.seed)
     val_batch = samples.batch(validation_indices(samples, val_idx, cfg.val_samples, cfg.seed),
@@ -154,85 +140,45 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
     train_contact = train_idx[samples.contact[train_idx]]
     train_free = train_idx[~samples.contact[train_idx]]
 
-    def save_checkpoint() -> None:
-        tmp = ckpt_path.with_suffix(".tmp")
-        torch.save({"model": model.state_dict(), "optimizer": opt.state_dict(), "step": step,
-                    "history": json.dumps(history), "seconds": seconds,
-                    "config": json.dumps(asdict(cfg))}, tmp)
-        os.replace(tmp, ckpt_path)
-
     def validate() -> dict:
         model.eval()
         err, base = grid_rmse(model, val_batch, ws, stride=2)
         model.train()
         c = val_batch.contact.cpu().numpy()
-        row = {"step": step, "epoch": round(step / per_epoch, 3), "minutes": round(seconds / 60, 1),
+        row = {"step": run.step, "epoch": round(run.step / per_epoch, 3),
+               "minutes": round(run.seconds / 60, 1),
                "val_rmse_mm": {"contact": round(1e3 * float(err[c].mean()), 3),
                                "free": round(1e3 * float(err[~c].mean()), 3)},
                "val_baseline_mm": {"contact": round(1e3 * float(base[c].mean()), 3),
                                    "free": round(1e3 * float(base[~c].mean()), 3)}}
-        history.append(row)
+        run.history.append(row)
         save_model(model, out)
-        write_json(out / "training.json", {"config": asdict(cfg), "history": history,
+        write_json(out / "training.json", {"config": asdict(cfg), "history": run.history,
                                              "samples": {"train": len(train_idx),
                                                          "val": len(val_idx)},
                                              "hardware": hardware(device)})
         return row
 
+    batch_of = epoch_batch(train_idx, cfg.batch, cfg.seed)
+
+    def step_loss(step: int) -> torch.Tensor:
+        if cfg.contact_share is None:
+            chosen = batch_of(step)
+        else:  # balanced batches: the metric averages contact and free separately
+            rng = np.random.default_rng([cfg.seed, 7, step])
+            n_contact = round(cfg.contact_share * cfg.batch)
+            chosen = np.concatenate([rng.choice(train_contact, n_contact),
+                                     rng.choice(train_free, cfg.batch - n_contact)])
+        batch = samples.batch(chosen, device=device)
+        gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
+        pts = query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)
+        inputs = batch.inputs(grid, ws.shape)
+        return (model(inputs, pts) - _target(model, batch, pts)).pow(2).mean()
+
     out.mkdir(parents=True, exist_ok=True)
-    model.train()
-    run_start = start = last_ckpt = time.time()
-    bar = tqdm(total=cfg.steps, initial=step, unit="step", disable=not progress,
-               desc=f"train {cfg.kind}")
-    loss_ema = None
-    perm, perm_epoch = train_idx, -1
-    if step == 0:
-        bar.write(json.dumps(validate()))  # the untrained model, for the record
-    try:
-        while step < cfg.steps:
-            epoch, b = divmod(step, per_epoch)
-            if cfg.contact_share is None:
-                if perm_epoch != epoch:  # one permutation per epoch (not per step)
-                    perm = np.random.default_rng([cfg.seed, epoch]).permutation(train_idx)
-                    perm_epoch = epoch
-                chosen = perm[b * cfg.batch:(b + 1) * cfg.batch]
-            else:  # balanced batches: the metric averages contact and free separately
-                rng = np.random.default_rng([cfg.seed, 7, step])
-                n_contact = round(cfg.contact_share * cfg.batch)
-                chosen = np.concatenate([rng.choice(train_contact, n_contact),
-                                         rng.choice(train_free, cfg.batch - n_contact)])
-            batch = samples.batch(chosen, device=device)
-            gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
-            pts = query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)
-            inputs = batch.inputs(grid, ws.shape)
-            loss = (model(inputs, pts) - _target(model, batch, pts)).pow(2).mean()
-            for g in opt.param_groups:
-                g["lr"] = lr_at(cfg, step)
-            opt.zero_grad(set_to_none=True)
-            loss.backward()
-            opt.step()
-            step += 1
-            now = time.time()
-            seconds += now - start
-            start = now
-            rmse = 1e3 * float(loss.detach()) ** 0.5
-            loss_ema = rmse if loss_ema is None else 0.98 * loss_ema + 0.02 * rmse
-            bar.update(1)
-            bar.set_postfix(rmse_mm=f"{loss_ema:.2f}", epoch=f"{step / per_epoch:.2f}")
-            if step % cfg.val_every == 0 or step == cfg.steps:
-                row = validate()
-                bar.write(json.dumps(row))
-            if now - last_ckpt > 60 * cfg.checkpoint_minutes:
-                save_checkpoint()
-                last_ckpt = now
-            if cfg.minutes is not None and now - run_start > 60 * cfg.minutes:
-                break
-    finally:
-        bar.close()
-        save_checkpoint()
-    if not history or history[-1]["step"] != step:
-        validate()
-    return history[-1]
+    return run_steps(cfg, run, model, opt, ckpt_path, step_loss, validate, per_epoch,
+                     f"train {cfg.kind}", ("rmse_mm", lambda v: 1e3 * v**0.5, ".2f"),
+                     progress)
 
 
 def hardware(device: torch.device) -> dict:
