@@ -14,7 +14,7 @@ from robotplan.api.hang import HangPlan, compose, table_pose
 from robotplan.cli.main import main
 from robotplan.program.hang_program import HangSettings
 from robotplan.training.hang_train import HangTrainConfig, train_hang
-from tests.conftest import DATA, TINY_HANG_SPEC
+from tests.conftest import TASKS, TINY_HANG_SPEC
 
 
 @pytest.fixture(scope="module")
@@ -28,7 +28,7 @@ def tiny_model(tiny_hang_data, tmp_path_factory):
 def test_plan_execute_and_playback_through_the_facade(tiny_model, tmp_path, monkeypatch):
     import robotplan.api.hang as hang_api
 
-    scene = robotplan.load_scene(DATA / "mug_hang.yaml")
+    scene = robotplan.load_scene(TASKS / "mug_hang.yaml")
     monkeypatch.setattr(hang_api, "HANG_DEFAULTS", HangSettings(restarts=1, major_iterations=5))
     planned = robotplan.plan(scene, tiny_model)
     assert isinstance(planned, HangPlan) and planned.solution.evaluations > 0
@@ -49,7 +49,7 @@ def test_world_poses_follow_the_hook():
 
 def test_solve_writes_the_result_or_refuses_a_missing_model(tiny_model, tmp_path, capsys):
     scene_path = tmp_path / "moved.yaml"
-    text = (DATA / "mug_hang.yaml").read_text().replace("pose: [0.0, 0.0, 0.0]",
+    text = (TASKS / "mug_hang.yaml").read_text().replace("pose: [0.0, 0.0, 0.0]",
                                                          "pose: [0.1, 0.1, 0.5]")
     scene_path.write_text(text)
     assert main(["solve", str(scene_path), "--out", str(tmp_path / "none"),
@@ -64,5 +64,17 @@ def test_solve_writes_the_result_or_refuses_a_missing_model(tiny_model, tmp_path
     doc = solve_hang(scene, tmp_path / "out", tiny_model, restarts=1,
                      settings=HangSettings(major_iterations=5))
     assert json.loads(doc_path.read_text()) == doc
-    assert set(doc["execution"]) >= {"hung", "collision_at_start", "final_pose"}
+    assert set(doc["execution"]) >= {"hung", "collision_at_start", "final_pose", "in_place"}
     assert len(doc["pose"]) == 7
+    assert (tmp_path / "out" / doc["picture"]).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_inverse_pose_undoes_the_hook_pose():
+    from robotplan.api.hang import inverse_pose
+
+    X_WH = table_pose(0.2, -0.1, 0.7, z=0.05)
+    X_HM = np.array([0.1, -0.02, 0.25, 0.9, 0.1, -0.3, 0.2])
+    X_HM[3:] /= np.linalg.norm(X_HM[3:])
+    back = compose(inverse_pose(X_WH), compose(X_WH, X_HM))
+    assert np.allclose(back[:3], X_HM[:3], atol=1e-12)
+    assert abs(abs(back[3:] @ X_HM[3:]) - 1.0) < 1e-12

@@ -23,10 +23,19 @@ from robotplan.program.hang_program import HANG_DEFAULTS, HangProblem, HangSetti
 from robotplan.scene.hang_check import hang_parts
 from robotplan.scene.schema import Scene
 from robotplan.search.hang_search import optimise_hang
+from robotplan.viz.hang_picture import write_hang_picture
 from robotplan.viz.viewer_hang import write_hang_playback
 
-__all__ = ["HangExecution", "HangPlan", "execute_hang", "plan_hang", "solve_hang",
-           "write_hang_playback_page"]
+__all__ = [
+    "HangExecution",
+    "HangPlan",
+    "execute_hang",
+    "inverse_pose",
+    "plan_hang",
+    "solve_hang",
+    "write_hang_playback_page",
+    "write_hang_still",
+]
 
 
 def table_pose(x: float, y: float, yaw: float, z: float = 0.0) -> np.ndarray:
@@ -73,6 +82,8 @@ class HangExecution:
     collision_at_start: bool
     on_ground: bool
     X_WM_end: np.ndarray
+    in_place: bool = False  # hung without first falling onto the hook
+    fall_m: float = 0.0  # how far the mug's centre came down before it rested
     drop: list = field(default_factory=list)  # [(t, X_WM)] every 1/30 s
     seconds: float = 0.0
 
@@ -99,7 +110,8 @@ def execute_hang(planned: HangPlan) -> HangExecution:
         result = world.drop(planned.solution.pose, record=record)
     drop = [(t, compose(planned.X_WH, np.asarray(X))) for t, X in record]
     return HangExecution(result.hangs, result.collision_at_start, result.on_ground,
-                         compose(planned.X_WH, np.asarray(result.X_WM_end)), drop,
+                         compose(planned.X_WH, np.asarray(result.X_WM_end)),
+                         result.in_place(world.physics), result.fall_m, drop,
                          time.perf_counter() - t0)
 
 
@@ -109,13 +121,33 @@ def write_hang_playback_page(planned: HangPlan, executed: HangExecution, path: P
                         executed.drop, Path(path))
 
 
+def write_hang_still(planned: HangPlan, executed: HangExecution, path: Path) -> None:
+    """The found pose and the pose after the drop, in the hook frame, as a PNG."""
+    mug, hook, _, _ = hang_parts(planned.scene)
+    X_HW = inverse_pose(planned.X_WH)
+    outcome = ("hangs" if executed.hung else "falls") + (" in place" if executed.in_place
+                                                         else "")
+    write_hang_picture(mug, hook, planned.solution.pose, compose(X_HW, executed.X_WM_end),
+                       Path(path), title=f"{planned.scene.name}: found pose (light), after "
+                       f"the drop in pybullet (solid): the mug {outcome}")
+
+
+def inverse_pose(X: np.ndarray) -> np.ndarray:
+    """X⁻¹ of a spatial pose ``(7,)``."""
+    q = np.asarray(X[3:], dtype=float) / np.linalg.norm(X[3:])
+    q_inv = np.array([q[0], -q[1], -q[2], -q[3]])
+    t = -compose(np.array([0.0, 0, 0, *q_inv]), np.array([*X[:3], 1.0, 0, 0, 0]))[:3]
+    return np.array([*t, *q_inv])
+
+
 def _r(v: np.ndarray) -> list[float]:
     return [round(float(x), 6) for x in v]
 
 
 def solve_hang(scene: Scene, out: Path, model: str | Path | None = None, *, seed: int = 0,
                restarts: int | None = None, settings: HangSettings | None = None) -> dict:
-    """Plan, drop, write ``out/result.json`` and ``out/playback.html``; returns the result."""
+    """Plan, drop, write ``out/result.json``, ``out/playback.html`` and ``out/hang.png``;
+    returns the result."""
     t0 = time.perf_counter()
     planned = plan_hang(scene, model, seed=seed, restarts=restarts, settings=settings)
     executed = execute_hang(planned)
@@ -128,9 +160,13 @@ def solve_hang(scene: Scene, out: Path, model: str | Path | None = None, *, seed
            "pose_in_hook_frame": _r(sol.pose),
            "execution": {"simulator": "pybullet", "hung": executed.hung,
                          "collision_at_start": executed.collision_at_start,
-                         "on_ground": executed.on_ground, "final_pose": _r(executed.X_WM_end)},
-           "seconds": round(time.perf_counter() - t0, 2), "playback": "playback.html"}
+                         "on_ground": executed.on_ground, "in_place": executed.in_place,
+                         "fall_m": round(executed.fall_m, 4),
+                         "final_pose": _r(executed.X_WM_end)},
+           "seconds": round(time.perf_counter() - t0, 2), "playback": "playback.html",
+           "picture": "hang.png"}
     out.mkdir(parents=True, exist_ok=True)
     write_hang_playback_page(planned, executed, out / "playback.html")
+    write_hang_still(planned, executed, out / "hang.png")
     write_atomically(out / "result.json", lambda p: p.write_text(json.dumps(doc, indent=1)))
     return doc

@@ -5,10 +5,13 @@ Scene ``i`` of ``seed`` draws its hook and mug as the data does (``default_rng([
 functional evaluations: optimisation + sampling (SNOPT from up to 20 random poses),
 optimisation only (one), and sampling only at the thresholds κ1, κ2, κ3. A found pose is
 dropped in pybullet: *sim success* when the mug hangs, *collision free* when it did not
-start inside the hook; *total* = found and hanging and collision free.
+start inside the hook; *total* = found and hanging and collision free. Beside the paper's
+columns, *in place*: the found poses that hang without first falling onto the hook
+(:meth:`robotplan.execution.hang_world.DropResult.in_place`). The three sampling runs share
+one stream of random poses (:func:`robotplan.search.hang_search.sample_hang`).
 
-``DIR/rows.jsonl`` gets one line per finished scene (an interrupted run continues), then
-``summary.json``.
+``DIR/rows.jsonl`` gets one line per finished scene (an interrupted run with the same
+settings, ``DIR/run.json``, continues), then ``summary.json``.
 """
 
 from __future__ import annotations
@@ -55,17 +58,22 @@ def bench_scene(index: int, seed: int, model_dir: str | Path,
     problem = HangProblem(load_hang_model(model_dir), mug, hook)
     rng = np.random.default_rng([seed, index, 1])
     row = {"scene": index}
+    found = {}
+    for method in methods:
+        if method.startswith("opt"):
+            found[method] = optimise_hang(problem, rng, settings,
+                                          restarts=1 if method == "opt_only" else None)
+    sampling = [m for m in methods if m.startswith("sampling")]
+    if sampling:
+        kappas = tuple(HANG_THRESHOLDS[m.split("_")[1]] for m in sampling)
+        found.update(zip(sampling, sample_hang(problem, rng, kappas, settings), strict=True))
     with HangWorld(hook, mug) as world:
         for method in methods:
-            if method.startswith("sampling"):
-                kappa = HANG_THRESHOLDS[method.split("_")[1]]
-                sol = sample_hang(problem, rng, kappa, settings)
-            else:
-                sol = optimise_hang(problem, rng, settings,
-                                    restarts=1 if method == "opt_only" else None)
+            sol = found[method]
             drop = world.drop(sol.pose) if sol.feasible else None
             row[method] = {"found": sol.feasible,
                            "sim_success": bool(drop and drop.hangs),
+                           "in_place": bool(drop and drop.in_place(world.physics)),
                            "collision_free": bool(drop and not drop.collision_at_start),
                            "h_hang": round(sol.h_hang, 4),
                            "h_coll_cm3": round(sol.h_coll_cm3, 5),
@@ -76,8 +84,9 @@ def bench_scene(index: int, seed: int, model_dir: str | Path,
 
 
 def summarize_hang(rows: list[dict]) -> dict:
-    """Tab. 3's columns per method (fractions as the paper counts them) and the median
-    seconds of optimisation + sampling per scene."""
+    """Tab. 3's columns per method (fractions as the paper counts them), the in-place
+    fraction of the found poses, and the median seconds of optimisation + sampling per
+    scene."""
     out: dict = {"scenes": len(rows)}
     for method in METHODS:
         runs = [r[method] for r in rows if method in r]
@@ -89,7 +98,9 @@ def summarize_hang(rows: list[dict]) -> dict:
         out[method] = {"found": round(len(found) / len(runs), 4),
                        "sim_success": round(len(hung) / len(found), 4) if found else 0.0,
                        "collision_free": round(len(total) / len(hung), 4) if hung else 0.0,
-                       "total": round(len(total) / len(runs), 4)}
+                       "total": round(len(total) / len(runs), 4),
+                       "in_place": round(sum(r.get("in_place", False) for r in found)
+                                         / len(found), 4) if found else 0.0}
     seconds = [r["opt_sampling"]["seconds"] for r in rows if "opt_sampling" in r]
     out["median_seconds"] = round(float(np.median(seconds)), 2) if seconds else None
     return out
@@ -101,18 +112,26 @@ def _run(args: tuple) -> dict:
 
 def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
                    workers: int = 2, progress: bool = True,
-                   methods: tuple[str, ...] = METHODS) -> dict:
+                   methods: tuple[str, ...] = METHODS,
+                   settings: HangSettings = HANG_DEFAULTS) -> dict:
     """Run (or continue) the benchmark in ``out``; returns the summary."""
     from multiprocessing import get_context
 
     from tqdm import tqdm
 
     out.mkdir(parents=True, exist_ok=True)
+    run = {"seed": seed, "model": str(model_dir), "evaluations": settings.evaluations,
+           "methods": list(methods)}
+    run_path = out / "run.json"
+    if run_path.is_file() and json.loads(run_path.read_text()) != run:
+        raise ValueError(f"{out}: holds a run with other settings ({run_path}); "
+                         "choose another --out")
+    write_atomically(run_path, lambda p: p.write_text(json.dumps(run, indent=1)))
     rows_path = out / "rows.jsonl"
     rows = [json.loads(line) for line in rows_path.read_text().splitlines()] \
         if rows_path.is_file() else []
     done = {r["scene"] for r in rows}
-    todo = [(i, seed, str(model_dir), HANG_DEFAULTS, methods) for i in range(scenes)
+    todo = [(i, seed, str(model_dir), settings, methods) for i in range(scenes)
             if i not in done]
     t0 = time.time()
     with tqdm(total=scenes, initial=len(done), unit="scene", desc="bench hang",
@@ -131,8 +150,8 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
                 for row in pool.imap_unordered(_run, todo):
                     keep(row)
     summary = summarize_hang(sorted(rows, key=lambda r: r["scene"]))
-    summary.update(seed=seed, model=str(model_dir), wall_seconds=round(time.time() - t0, 1),
-                   paper=PAPER_TAB3)
+    summary.update(seed=seed, model=str(model_dir), evaluations=settings.evaluations,
+                   wall_seconds=round(time.time() - t0, 1), paper=PAPER_TAB3)
     write_atomically(out / "summary.json", lambda p: p.write_text(json.dumps(summary,
                                                                             indent=1)))
     return summary

@@ -95,6 +95,8 @@ def _parser() -> argparse.ArgumentParser:
     bh.add_argument("--methods", default=None,
                     help="comma-separated subset of opt_sampling, opt_only, sampling_k1, "
                     "sampling_k2, sampling_k3 (default: all)")
+    bh.add_argument("--evaluations", type=int, default=20_000,
+                    help="functional evaluations per method and scene (the paper: 20,000)")
     bh.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     bh.add_argument("--json", action="store_true")
     bh.set_defaults(run=cmd_bench_hang)

@@ -5,7 +5,10 @@ Bodies are compounds of convex primitives built from the same parameters as thei
 (:mod:`robotplan.sdf.hang_shapes`): the cup's wall is a ring of boxes, its bottom a
 cylinder, the handle and the hook's arm capsules along their centre lines, the post a
 cylinder. A pose *hangs* when the mug is not in collision with the hook where it starts and,
-after the drop and the impulse, still touches the hook and keeps clear of the ground.
+after the drop and the impulse, still touches the hook and keeps clear of the ground; it
+hangs *in place* when, besides, it came to rest (before the impulse) at most a few
+centimetres below where it was released. A mug released above the
+hook often falls onto the arm and catches there: it hangs, but the pose was not a placement.
 """
 
 from __future__ import annotations
@@ -36,6 +39,9 @@ class HangPhysics:
     after_kick_s: float = 1.5
     ground_clearance: float = 0.01  # m: the mug's lowest point above the ground
     start_penetration: float = 0.001  # m: deeper contact at the start counts as collision
+    # a hang *in place*: the mug's centre comes down at most this far (m) before it rests, so
+    # the pose was a placement, not a fall that caught the arm (docs/experiments.md#hang-labels)
+    in_place_fall: float = 0.05
     wall_boxes: int = 16
 
     def as_dict(self) -> dict:
@@ -54,6 +60,11 @@ class DropResult:
     on_hook: bool
     on_ground: bool
     X_WM_end: tuple[float, ...]  # (x, y, z, qw, qx, qy, qz) after the drop and the impulse
+    fall_m: float = 0.0  # how far the mug's centre came down before the impulse
+
+    def in_place(self, physics: HangPhysics = HANG_PHYSICS) -> bool:
+        """Hangs, and came to rest near its release height (``physics.in_place_fall``)."""
+        return self.hangs and self.fall_m <= physics.in_place_fall
 
 
 RECORD_EVERY = 8  # simulation steps between recorded poses (30 per second)
@@ -126,6 +137,7 @@ class HangWorld:
         self.ground = pb.createMultiBody(0, plane, physicsClientId=c)
         self.hook = self._body(0.0, hook_parts(hook))
         self.mug = self._body(physics.mug_mass, mug_parts(mug))
+        self.mug_height = mug.height
         self.mug_links = range(-1, pb.getNumJoints(self.mug, physicsClientId=c))
         self._record: list | None = None
         for body in (self.ground, self.hook, self.mug):
@@ -177,6 +189,13 @@ class HangWorld:
     def __exit__(self, *exc) -> None:
         self.close()
 
+    def _centre_z(self, X_WM) -> float:
+        """Height of the mug's centre (on its axis, half way up) at pose ``X_WM``."""
+        _, x, y, _ = X_WM[3:7]
+        n = math.sqrt(sum(v * v for v in X_WM[3:7]))
+        zz = 1.0 - 2.0 * (x * x + y * y) / (n * n)  # z component of the mug's rotated z axis
+        return float(X_WM[2]) + zz * self.mug_height / 2
+
     def _steps(self, seconds: float) -> int:
         return round(seconds / self.physics.timestep)
 
@@ -209,13 +228,15 @@ class HangWorld:
         if deepest < -ph.start_penetration:
             return DropResult(False, True, True, False, self.pose())
         fallen = self._run(self._steps(ph.settle_s))
+        fall = self._centre_z(X) - self._centre_z(self.pose())
         if not fallen:
             v = ph.kick_speed / math.sqrt(2.0)
             pb.resetBaseVelocity(self.mug, [v, 0.0, v], [0, 0, 0], physicsClientId=c)
             fallen = self._run(self._steps(ph.after_kick_s))
         on_ground = fallen or self._touches(self.ground)
         on_hook = self._touches(self.hook)
-        return DropResult(on_hook and not on_ground, False, on_hook, on_ground, self.pose())
+        return DropResult(on_hook and not on_ground, False, on_hook, on_ground, self.pose(),
+                          fall)
 
     def _run(self, steps: int) -> bool:
         """Step the world; True as soon as the mug comes down to the ground."""

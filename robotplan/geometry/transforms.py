@@ -20,6 +20,7 @@ import torch
 from torch import Tensor
 
 __all__ = [
+    "perturbed_poses",
     "planar_to_body",
     "planar_to_world",
     "quaternion_to_matrix",
@@ -98,6 +99,26 @@ def uniform_poses(rng: np.random.Generator, centre: np.ndarray, size: float,
     pos = np.asarray(centre) + rng.uniform(-size / 2, size / 2, (n, 3))
     q = rng.normal(size=(n, 4))
     q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+    return np.concatenate([pos, q], axis=1)
+
+
+def perturbed_poses(rng: np.random.Generator, X: np.ndarray, shift: float, turn: float,
+                    n: int) -> np.ndarray:
+    """``n`` spatial poses ``(n, 7)`` about ``X (7,)``: the position offset by a Gaussian of
+    standard deviation ``shift`` (m) per axis, the orientation turned (in the body frame) by a
+    rotation vector with standard deviation ``turn`` (rad) per axis; quaternions with w ≥ 0."""
+    pos = np.asarray(X[:3]) + rng.normal(0.0, shift, (n, 3))
+    v = rng.normal(0.0, turn, (n, 3))
+    angle = np.linalg.norm(v, axis=1, keepdims=True)
+    axis = v / np.maximum(angle, 1e-12)
+    dq = np.concatenate([np.cos(angle / 2), axis * np.sin(angle / 2)], axis=1)
+    w0, x0, y0, z0 = np.asarray(X[3:]) / np.linalg.norm(X[3:])
+    w1, x1, y1, z1 = dq.T
+    q = np.stack([w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1,
+                  w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
+                  w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1,
+                  w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1], axis=1)
     q *= np.where(q[:, :1] < 0, -1.0, 1.0)
     return np.concatenate([pos, q], axis=1)
 

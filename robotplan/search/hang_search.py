@@ -53,28 +53,37 @@ def optimise_hang(problem: HangProblem, rng: np.random.Generator,
     return best
 
 
-def sample_hang(problem: HangProblem, rng: np.random.Generator, kappa: float,
-                settings: HangSettings = HANG_DEFAULTS) -> HangSolution:
-    """Random poses, scored in batches, until one has H_hang < κ and H_coll within bounds, or
-    the evaluation budget is spent (then the least H_hang drawn, not feasible)."""
+def sample_hang(problem: HangProblem, rng: np.random.Generator, kappas: tuple[float, ...],
+                settings: HangSettings = HANG_DEFAULTS) -> list[HangSolution]:
+    """*Sampling only*, one run per threshold κ on one stream of random poses: a run stops at
+    the first pose with H_hang ≤ κ and H_coll within bounds, or when the budget of
+    evaluations is spent (then it reports the least H_hang drawn, not feasible). The runs
+    share their draws, so each is the paper's procedure for its κ and all cost one stream."""
     t0 = time.perf_counter()
     problem.evaluations = 0
+    open_ = dict(enumerate(kappas))
+    out: dict[int, HangSolution] = {}
     best_h, best_X, best_c = np.inf, None, np.inf
-    while problem.evaluations < settings.evaluations:
+    while open_ and problem.evaluations < settings.evaluations:
         n = min(SAMPLE_BATCH, settings.evaluations - problem.evaluations)
         X = _random_starts(problem, rng, n)
         h = problem.hang_values(X)
         c = np.full(n, np.inf)
-        below = np.nonzero(h <= kappa)[0]  # H_coll only where H_hang predicts success
+        below = np.nonzero(h <= max(open_.values()))[0]  # H_coll only where it can matter
         if len(below):
             c[below] = problem.collision_cm3(X[below])
-        ok = problem.feasible(h, c, settings, kappa)
-        if ok.any():
-            i = int(np.argmax(ok))
-            return HangSolution(X[i], float(h[i]), float(c[i]), True, problem.evaluations,
-                                time.perf_counter() - t0, method=f"sampling κ={kappa}")
+        for k, kappa in list(open_.items()):
+            ok = problem.feasible(h, c, settings, kappa)
+            if ok.any():
+                i = int(np.argmax(ok))
+                out[k] = HangSolution(X[i], float(h[i]), float(c[i]), True,
+                                      problem.evaluations - n + i + 1,
+                                      time.perf_counter() - t0, method=f"sampling κ={kappa}")
+                del open_[k]
         i = int(np.argmin(h))
         if h[i] < best_h:
             best_h, best_X, best_c = float(h[i]), X[i], float(c[i])
-    return HangSolution(best_X, best_h, best_c, False, problem.evaluations,
-                        time.perf_counter() - t0, method=f"sampling κ={kappa}")
+    for k, kappa in open_.items():
+        out[k] = HangSolution(best_X, best_h, best_c, False, problem.evaluations,
+                              time.perf_counter() - t0, method=f"sampling κ={kappa}")
+    return [out[k] for k in range(len(kappas))]

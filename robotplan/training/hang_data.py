@@ -1,9 +1,14 @@
 """Mug-hanging data from pybullet (paper §7.1, app. H): per scene a mug and a hook drawn from
 ``robots/hang/shapes.yaml``, mug poses drawn uniformly in X_h (position uniform in the cube,
-orientation uniform on SO(3)) and dropped until at least one hangs, then
-``per_scene`` labelled configurations kept: every success found, each success's settled
-pose (where the drop left it, dropped again and labelled by that drop), then the failures in
-the order they were drawn.
+orientation uniform on SO(3)) and dropped until one hangs, then ``per_scene`` labelled
+configurations kept: where that drop left the mug (its settled pose), ``jitter`` poses drawn
+about the settled pose and clear of the hook, the drawn pose that hung, then failures in the
+order they were drawn. Each is labelled by its own drop.
+
+The label y is a hang *in place* (:meth:`robotplan.execution.hang_world.DropResult.in_place`):
+most uniformly drawn poses that hang were released above the hook and caught the arm on the
+way down, and a model that learns those proposes drops, not placements
+(docs/experiments.md#hang-labels). The plain drop outcome is kept as ``caught``.
 
 Storage is compact (shape parameters and poses; the SDF grids are rendered when training):
 shards of ``shard_size`` scenes and ``meta.json`` (see :mod:`robotplan.training.shards`).
@@ -19,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from robotplan.execution.hang_world import HANG_PHYSICS, HangWorld
-from robotplan.geometry.transforms import uniform_poses
+from robotplan.geometry.transforms import perturbed_poses, uniform_poses
 from robotplan.scene.hang_ranges import HangRanges, load_hang_ranges
 from robotplan.sdf.hang_shapes import MUG_FIELDS, Hook, Mug
 from robotplan.training.shards import make_shards, prepare_folder, save_shard, shard_path
@@ -27,16 +32,24 @@ from robotplan.training.shards import make_shards, prepare_folder, save_shard, s
 __all__ = ["HangDataSpec", "HangScene", "decode_hook", "decode_mug", "generate_hang",
            "load_hang_shards", "simulate_hang_scene"]
 
-FORMAT = 1
+FORMAT = 2
 MAX_PARTS = 3
 DRAW_BATCH = 256  # poses drawn from the scene's generator at a time
+# where a kept pose came from (the ``role`` of each pose in a shard)
+SETTLED, JITTER, DRAWN = 0, 1, 2
 
 
 @dataclass(frozen=True)
 class HangDataSpec:
     per_scene: int = 20  # labelled configurations kept per scene
     max_draws: int = 20_000  # drops per scene at most while looking for a success
-    settled: bool = True  # add each success's settled pose, labelled by its own drop
+    # poses about the settled pose (which rests on the arm): offsets and turns, lifted, and
+    # only those clear of the hook kept (docs/experiments.md#hang-labels)
+    jitter: int = 8
+    jitter_shift: float = 0.01  # m, standard deviation per axis of their offsets
+    jitter_turn_deg: float = 5.0  # standard deviation per axis of their rotation vectors
+    jitter_lift: float = 0.01  # m, at most, upwards
+    jitter_tries: int = 64
 
 
 @dataclass
@@ -46,10 +59,12 @@ class HangScene:
     mug: Mug
     hook: Hook
     poses: np.ndarray  # (n, 7) x, y, z, qw, qx, qy, qz of the mug in the hook frame
-    hangs: np.ndarray  # (n,) bool: the label y
+    hangs: np.ndarray  # (n,) bool: the label y, hangs in place
+    caught: np.ndarray  # (n,) bool: hangs after the drop, wherever it came to rest
     collision: np.ndarray  # (n,) bool: in collision with the hook where it starts
-    draws: int  # poses dropped to find the successes
-    found: bool  # at least one success within max_draws
+    role: np.ndarray  # (n,) SETTLED, JITTER or DRAWN
+    draws: int  # uniform poses dropped until one hung
+    found: bool  # one hung within max_draws
 
 
 def simulate_hang_scene(index: int, seed: int, spec: HangDataSpec = HangDataSpec(),
@@ -59,29 +74,40 @@ def simulate_hang_scene(index: int, seed: int, spec: HangDataSpec = HangDataSpec
     rng = np.random.default_rng([seed, index])
     hook, mug = ranges.hook.sample(rng), ranges.mug.sample(rng)
     centre = ranges.grid.centre(hook)
-    good: list[tuple[np.ndarray, bool, bool]] = []
-    bad: list[tuple[np.ndarray, bool, bool]] = []
+    near: list[tuple] = []  # (X, in place, caught, collision) about the first hang
+    drawn: list[tuple] = []  # uniform draws, the one that hung last
     draws = 0
     with HangWorld(hook, mug) as world:
-        while not good and draws < spec.max_draws:
+
+        def label(X: np.ndarray, role: int) -> tuple:
+            r = world.drop(X)
+            return X, r.in_place(world.physics), r.hangs, r.collision_at_start, role
+
+        while not (drawn and drawn[-1][2]) and draws < spec.max_draws:
             for X in uniform_poses(rng, centre, ranges.grid.size, DRAW_BATCH):
                 draws += 1
-                result = world.drop(X)
-                (good if result.hangs else bad).append((X, result.hangs,
-                                                        result.collision_at_start))
-                if result.hangs and spec.settled:
-                    end = np.array(result.X_WM_end)
-                    again = world.drop(end)
-                    (good if again.hangs else bad).append((end, again.hangs,
-                                                           again.collision_at_start))
-                if result.hangs or draws >= spec.max_draws:
+                drawn.append(label(X, DRAWN))
+                if drawn[-1][2] or draws >= spec.max_draws:
                     break
-    keep = (good[: spec.per_scene // 2] + bad)[: spec.per_scene]
+        found = bool(drawn and drawn[-1][2])
+        if found:
+            settled = np.array(world.drop(drawn[-1][0]).X_WM_end)
+            near.append(label(settled, SETTLED))
+            turn = np.radians(spec.jitter_turn_deg)
+            for X in perturbed_poses(rng, settled, spec.jitter_shift, turn, spec.jitter_tries):
+                X[2] += rng.uniform(0.0, spec.jitter_lift)
+                row = label(X, JITTER)
+                if not row[3]:
+                    near.append(row)
+                if len(near) > spec.jitter:
+                    break
+            near.append(drawn.pop())
+    keep = (near + drawn)[: spec.per_scene]
     while len(keep) < spec.per_scene:  # a scene whose draws ran out early: repeat failures
-        keep.append(keep[len(keep) % max(len(bad), 1)])
-    return HangScene(mug, hook, np.array([k[0] for k in keep]),
-                     np.array([k[1] for k in keep], dtype=bool),
-                     np.array([k[2] for k in keep], dtype=bool), draws, bool(good))
+        keep.append(keep[len(keep) % max(len(drawn), 1)])
+    column = lambda k, dtype=None: np.array([row[k] for row in keep], dtype=dtype)  # noqa: E731
+    return HangScene(mug, hook, column(0), column(1, bool), column(2, bool), column(3, bool),
+                     column(4, np.int8), draws, found)
 
 
 def _encode_hook(hook: Hook) -> np.ndarray:
@@ -118,7 +144,9 @@ def _make_shard(args: tuple) -> int:
         hook_radii=np.array([(s.hook.post_radius, s.hook.rod_radius) for s in scenes]),
         poses=np.array([s.poses for s in scenes]),
         hangs=np.array([s.hangs for s in scenes]),
+        caught=np.array([s.caught for s in scenes]),
         collision=np.array([s.collision for s in scenes]),
+        role=np.array([s.role for s in scenes]),
         draws=np.array([s.draws for s in scenes]),
         found=np.array([s.found for s in scenes]),
     ))
@@ -140,8 +168,8 @@ def generate_hang(out: Path, scenes: int, seed: int, workers: int = 2, shard_siz
 
 def load_hang_shards(folder: Path) -> dict[str, np.ndarray]:
     """All shards of ``folder`` concatenated: per scene ``mug (S, 7)``, ``hook (S, 8)``,
-    ``hook_radii (S, 2)``, ``poses (S, n, 7)``, ``hangs``, ``collision (S, n)``, ``draws``,
-    ``found``, ``scene_index``."""
+    ``hook_radii (S, 2)``, ``poses (S, n, 7)``, ``hangs``, ``caught``, ``collision``,
+    ``role (S, n)``, ``draws``, ``found``, ``scene_index``."""
     paths = sorted(Path(folder).glob("shard_*.npz"))
     if not paths:
         raise FileNotFoundError(f"{folder}: no hanging data shards (shard_*.npz) here")

@@ -7,18 +7,19 @@ from robotplan.bench.hang import METHODS, summarize_hang
 from robotplan.cli.main import main
 
 
-def run(found: bool, hangs: bool, free: bool) -> dict:
-    return {"found": found, "sim_success": hangs, "collision_free": free, "seconds": 1.0}
+def run(found: bool, hangs: bool, free: bool, in_place: bool = False) -> dict:
+    return {"found": found, "sim_success": hangs, "collision_free": free,
+            "in_place": in_place, "seconds": 1.0}
 
 
 def test_fractions_are_of_the_found_and_of_the_successes():
     rows = [{"scene": 0, "opt_sampling": run(True, True, True)},
-            {"scene": 1, "opt_sampling": run(True, True, False)},
+            {"scene": 1, "opt_sampling": run(True, True, False, in_place=True)},
             {"scene": 2, "opt_sampling": run(True, False, True)},
             {"scene": 3, "opt_sampling": run(False, False, False)}]
     s = summarize_hang(rows)["opt_sampling"]
     assert s == {"found": 0.75, "sim_success": round(2 / 3, 4), "collision_free": 0.5,
-                 "total": 0.25}
+                 "total": 0.25, "in_place": round(1 / 3, 4)}
 
 
 def test_one_real_scene_and_bad_arguments(tmp_path, tiny_hang_data, capsys):
@@ -26,18 +27,20 @@ def test_one_real_scene_and_bad_arguments(tmp_path, tiny_hang_data, capsys):
     assert main(["train", "hang", "--data", str(tiny_hang_data), "--out", str(model),
                  "--steps", "2", "--threads", "1"]) == 0
     capsys.readouterr()
-    assert main(["bench", "hang", "--scenes", "1", "--model", str(model), "--out",
-                 str(tmp_path / "b"), "--methods", "sampling_k3", "--workers", "1",
-                 "--json"]) == 0
+    bench = ["bench", "hang", "--scenes", "1", "--model", str(model), "--out",
+             str(tmp_path / "b"), "--methods", "sampling_k2,sampling_k3", "--workers", "1"]
+    assert main([*bench, "--evaluations", "128", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
-    assert summary["scenes"] == 1 and set(summary["sampling_k3"]) == {
-        "found", "sim_success", "collision_free", "total"}
+    assert summary["scenes"] == 1 and summary["evaluations"] == 128
+    assert set(summary["sampling_k3"]) == {"found", "sim_success", "collision_free", "total",
+                                           "in_place"}
     row = json.loads((tmp_path / "b" / "rows.jsonl").read_text())
-    assert row["sampling_k3"]["evaluations"] >= 1
+    assert 1 <= row["sampling_k2"]["evaluations"] <= row["sampling_k3"]["evaluations"] <= 128
+    assert main([*bench, "--evaluations", "64"]) == 2, "a folder of another budget"
     assert main(["bench", "hang", "--model", str(model), "--out", str(tmp_path / "c"),
                  "--methods", "guess"]) == 2
     assert main(["bench", "hang", "--model", str(tmp_path), "--out", str(tmp_path / "c")]) == 2
     err = capsys.readouterr().err
-    assert "--methods" in err and "--model" in err
+    assert "--methods" in err and "--model" in err and "other settings" in err
     assert set(METHODS) == {"opt_sampling", "opt_only", "sampling_k1", "sampling_k2",
                             "sampling_k3"}

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import yaml
 
-from tests.conftest import DATA, ROOT, TASKS
+from tests.conftest import ROOT, TASKS
 from tests.scene.test_loader import BAD_CASES
 
 
@@ -189,7 +189,7 @@ def test_dynamics_picks_a_shipped_model_and_a_model_folder_overrides_it(tmp_path
 
 
 def test_footprint_commands_refuse_a_hang_scene(tmp_path):
-    scene = str(DATA / "mug_hang.yaml")
+    scene = str(TASKS / "mug_hang.yaml")
     assert run("check", scene).returncode == 0
     solved = tmp_path.parent / f"{tmp_path.name}_solved"
     solved.mkdir()

@@ -35,9 +35,10 @@ def world():
         yield w
 
 
-def test_a_mug_threaded_on_the_arm_hangs(world):
+def test_a_mug_threaded_on_the_arm_hangs_in_place(world):
     result = world.drop(threaded_pose())
     assert result.hangs and result.on_hook and not result.on_ground
+    assert result.in_place(), f"it comes down only onto its handle: {result.fall_m:.3f} m"
     end = np.array(result.X_WM_end)
     assert end[2] > 0.1, "it stays up on the arm"
 

@@ -13,9 +13,9 @@ from robotplan import SceneError, load_scene
 from robotplan.scene import RegionGoal, TouchGoal, parse_scene
 from robotplan.scene.hang_check import hang_parts
 from robotplan.scene.schema import HangGoal
-from tests.conftest import DATA, TASKS
+from tests.conftest import TASKS
 
-GOOD = [*sorted(TASKS.rglob("*.yaml")), DATA / "mug_hang.yaml"]  # tasks, variants, a hang
+GOOD = sorted(TASKS.rglob("*.yaml"))  # tasks and variants, a hang among them
 BASE = yaml.safe_load((TASKS / "box_push.yaml").read_text())
 ARMS = yaml.safe_load((TASKS / "two_arm_touch.yaml").read_text())
 
@@ -215,7 +215,7 @@ def test_a_pose_goal_is_the_objects_own_footprint_at_the_pose():
 
 
 # PyYAML reads YAML 1.1, where the key ``on`` is a boolean: quote it for the mutations
-HANG = yaml.safe_load((DATA / "mug_hang.yaml").read_text().replace("on: hook", '"on": hook'))
+HANG = yaml.safe_load((TASKS / "mug_hang.yaml").read_text().replace("on: hook", '"on": hook'))
 
 
 @pytest.mark.parametrize("name,data,field", [
@@ -244,5 +244,5 @@ def test_bad_hang_scene_is_refused_naming_the_field(tmp_path, name, data, field)
 
 def test_yaml_reads_on_as_a_string():
     """YAML 1.1 reads ``on`` as a boolean; a hang goal's ``on: hook`` must stay a name."""
-    scene = load_scene(DATA / "mug_hang.yaml")
+    scene = load_scene(TASKS / "mug_hang.yaml")
     assert scene.goal.on == "hook"

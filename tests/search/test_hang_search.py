@@ -41,10 +41,19 @@ def test_the_program_moves_a_mug_out_of_the_hook(problem):
 
 def test_sampling_stops_at_a_feasible_pose_or_spends_its_budget(problem):
     rng = np.random.default_rng(0)
-    found = sample_hang(problem, rng, kappa=1e6, settings=HangSettings(evaluations=64))
+    found, none = sample_hang(problem, rng, (1e6, -1e6), settings=HangSettings(evaluations=64))
     assert found.feasible and found.evaluations <= 64
-    none = sample_hang(problem, rng, kappa=-1e6, settings=HangSettings(evaluations=64))
     assert not none.feasible and none.evaluations == 64
+
+
+def test_sampling_thresholds_share_one_stream_of_poses(problem):
+    settings = HangSettings(evaluations=128)
+    h = problem.hang_values(np.random.default_rng(3).random((1, 7)))  # any value of this net
+    kappas = (float(h[0]) + 10.0, -1e6)
+    together = sample_hang(problem, np.random.default_rng(2), kappas, settings)
+    alone = sample_hang(problem, np.random.default_rng(2), kappas[:1], settings)[0]
+    assert together[0].evaluations == alone.evaluations
+    assert np.array_equal(together[0].pose, alone.pose)
 
 
 def test_restarts_stop_at_the_budget(problem):

@@ -7,8 +7,11 @@ import numpy as np
 
 from robotplan.cli.main import main
 from robotplan.execution.hang_world import HangWorld
-from robotplan.geometry.transforms import uniform_poses
+from robotplan.geometry.transforms import perturbed_poses, uniform_poses
 from robotplan.training.hang_data import (
+    DRAWN,
+    JITTER,
+    SETTLED,
     HangDataSpec,
     decode_hook,
     decode_mug,
@@ -17,12 +20,20 @@ from robotplan.training.hang_data import (
 )
 
 
-def test_every_scene_has_a_success_and_its_settled_pose(tiny_hang_data):
+def test_every_scene_has_a_hang_and_poses_about_where_it_came_to_rest(tiny_hang_data):
     d = load_hang_shards(tiny_hang_data)
     assert d["poses"].shape == (3, 20, 7) and d["hangs"].shape == (3, 20)
-    assert d["found"].all()
-    assert np.all(d["hangs"].sum(1) >= 1) and np.all(d["hangs"].sum(1) <= 10)
-    assert np.all(d["draws"] >= 1)
+    assert d["found"].all() and np.all(d["draws"] >= 1)
+    spec, role = HangDataSpec(), d["role"]
+    assert np.all(role[:, 0] == SETTLED) and np.all(np.diff(role, axis=1) >= 0)
+    for s in range(3):
+        near = d["poses"][s, role[s] == JITTER, :3]
+        assert 1 <= len(near) <= spec.jitter
+        assert np.all(np.linalg.norm(near - d["poses"][s, 0, :3], axis=-1)
+                      < 6 * spec.jitter_shift + spec.jitter_lift)
+        assert d["caught"][s, np.argmax(role[s] == DRAWN)], "the drawn pose that hung"
+    assert np.all(d["hangs"] <= d["caught"]), "in place is a kind of hang"
+    assert d["hangs"].sum() >= 3 and (d["caught"] & ~d["hangs"]).any()
     assert np.allclose(np.linalg.norm(d["poses"][..., 3:], axis=-1), 1.0)
 
 
@@ -31,8 +42,10 @@ def test_labels_are_reproduced_by_a_fresh_drop(tiny_hang_data):
     for s in range(3):
         mug, hook = decode_mug(d["mug"][s]), decode_hook(d["hook"][s], *d["hook_radii"][s])
         with HangWorld(hook, mug) as world:
-            labels = [world.drop(X).hangs for X in d["poses"][s][::-1]][::-1]
-        assert labels == d["hangs"][s].tolist()
+            results = [world.drop(X) for X in d["poses"][s][::-1]][::-1]
+        assert [r.in_place() for r in results] == d["hangs"][s].tolist()
+        assert [r.hangs for r in results] == d["caught"][s].tolist()
+        assert [r.collision_at_start for r in results] == d["collision"][s].tolist()
 
 
 def test_a_scene_is_the_same_for_its_seed(tiny_hang_data):
@@ -51,6 +64,16 @@ def test_a_folder_resumes_and_refuses_other_settings(tiny_hang_data, capsys):
     assert main(["data", "hang", "--scenes", "3", "--seed", "1", "--out",
                  str(tiny_hang_data)]) == 2
     assert "seed" in capsys.readouterr().err
+
+
+def test_perturbed_poses_spread_as_asked(rng):
+    X0 = np.array([0.1, 0.0, 0.3, np.cos(0.4), 0.0, np.sin(0.4), 0.0])
+    X = perturbed_poses(rng, X0, 0.01, np.radians(8.0), 20_000)
+    assert np.all(np.abs(X[:, :3].std(0) - 0.01) < 5e-4)
+    turn = 2 * np.arccos(np.clip(np.abs(X[:, 3:] @ X0[3:]), 0.0, 1.0))
+    # the angle of a rotation vector with N(0, σ²) per axis follows a Maxwell law, mean 2σ√(2/π)
+    assert abs(turn.mean() - 2 * np.radians(8.0) * np.sqrt(2 / np.pi)) < np.radians(0.2)
+    assert np.allclose(np.linalg.norm(X[:, 3:], axis=1), 1.0) and np.all(X[:, 3] >= 0)
 
 
 def test_random_poses_are_uniform_rotations(rng):
