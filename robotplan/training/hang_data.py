@@ -2,8 +2,9 @@
 ``robots/hang/shapes.yaml``, mug poses drawn uniformly in X_h (position uniform in the cube,
 orientation uniform on SO(3)) and dropped until one hangs, then ``per_scene`` labelled
 configurations kept: where that drop left the mug (its settled pose), ``jitter`` poses drawn
-about the settled pose and clear of the hook, the drawn pose that hung, then failures in the
-order they were drawn. Each is labelled by its own drop.
+about the settled pose and clear of the hook, the drawn pose that hung, ``near_arm`` poses
+with the handle about the arm and clear of it, then failures in the order they were drawn. Each is labelled
+by its own drop.
 
 The label y is a hang *in place* (:meth:`robotplan.execution.hang_world.DropResult.in_place`):
 most uniformly drawn poses that hang were released above the hook and caught the arm on the
@@ -22,9 +23,10 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
+import torch
 
 from robotplan.execution.hang_world import HANG_PHYSICS, HangWorld
-from robotplan.geometry.transforms import perturbed_poses, uniform_poses
+from robotplan.geometry.transforms import perturbed_poses, quaternion_to_matrix, uniform_poses
 from robotplan.scene.hang_ranges import HangRanges, load_hang_ranges
 from robotplan.sdf.hang_shapes import MUG_FIELDS, Hook, Mug
 from robotplan.training.shards import make_shards, prepare_folder, save_shard, shard_path
@@ -36,7 +38,7 @@ FORMAT = 2
 MAX_PARTS = 3
 DRAW_BATCH = 256  # poses drawn from the scene's generator at a time
 # where a kept pose came from (the ``role`` of each pose in a shard)
-SETTLED, JITTER, DRAWN = 0, 1, 2
+SETTLED, JITTER, DRAWN, NEAR_ARM = 0, 1, 2, 3
 
 
 @dataclass(frozen=True)
@@ -50,6 +52,11 @@ class HangDataSpec:
     jitter_turn_deg: float = 5.0  # standard deviation per axis of their rotation vectors
     jitter_lift: float = 0.01  # m, at most, upwards
     jitter_tries: int = 64
+    # poses with a point of the handle's centre line near a point of the arm's, any rotation,
+    # clear of the hook: the near misses an optimiser meets (docs/experiments.md#hang-labels)
+    near_arm: int = 5
+    near_arm_spread: float = 0.02  # m, standard deviation per axis about the touching pose
+    near_arm_tries: int = 64
 
 
 @dataclass
@@ -62,7 +69,7 @@ class HangScene:
     hangs: np.ndarray  # (n,) bool: the label y, hangs in place
     caught: np.ndarray  # (n,) bool: hangs after the drop, wherever it came to rest
     collision: np.ndarray  # (n,) bool: in collision with the hook where it starts
-    role: np.ndarray  # (n,) SETTLED, JITTER or DRAWN
+    role: np.ndarray  # (n,) SETTLED, JITTER, NEAR_ARM or DRAWN
     draws: int  # uniform poses dropped until one hung
     found: bool  # one hung within max_draws
 
@@ -102,12 +109,40 @@ def simulate_hang_scene(index: int, seed: int, spec: HangDataSpec = HangDataSpec
                 if len(near) > spec.jitter:
                     break
             near.append(drawn.pop())
-    keep = (near + drawn)[: spec.per_scene]
+        arm: list[tuple] = []
+        for X in handle_on_arm_poses(rng, hook.arm_points(), mug.handle_points(),
+                                     spec.near_arm_spread, spec.near_arm_tries):
+            row = label(X, NEAR_ARM)
+            if not row[3]:
+                arm.append(row)
+            if len(arm) >= spec.near_arm:
+                break
+    keep = (near + arm + drawn)[: spec.per_scene]
     while len(keep) < spec.per_scene:  # a scene whose draws ran out early: repeat failures
         keep.append(keep[len(keep) % max(len(drawn), 1)])
     column = lambda k, dtype=None: np.array([row[k] for row in keep], dtype=dtype)  # noqa: E731
     return HangScene(mug, hook, column(0), column(1, bool), column(2, bool), column(3, bool),
                      column(4, np.int8), draws, found)
+
+
+def _points_on(rng: np.random.Generator, line: np.ndarray, n: int) -> np.ndarray:
+    """``n`` points ``(n, 3)`` uniform along the polyline ``line (K, 3)``."""
+    seg = np.linalg.norm(np.diff(line, axis=0), axis=1)
+    k = rng.choice(len(seg), size=n, p=seg / seg.sum())
+    t = rng.uniform(0.0, 1.0, (n, 1))
+    return line[k] + t * (line[k + 1] - line[k])
+
+
+def handle_on_arm_poses(rng: np.random.Generator, arm: np.ndarray, handle: np.ndarray,
+                        spread: float, n: int) -> np.ndarray:
+    """``n`` mug poses X_HM ``(n, 7)``: a uniform rotation, and the position that puts a random
+    point of the handle's centre line ``handle (K, 3)`` (mug frame) on a random point of the
+    arm's ``arm (J, 3)`` (hook frame), offset by a Gaussian of ``spread`` per axis."""
+    X = uniform_poses(rng, np.zeros(3), 0.0, n)
+    R = quaternion_to_matrix(torch.from_numpy(X[:, 3:])).numpy()
+    a, h = _points_on(rng, arm, n), _points_on(rng, handle, n)
+    X[:, :3] = a - np.einsum("nij,nj->ni", R, h) + rng.normal(0.0, spread, (n, 3))
+    return X
 
 
 def _encode_hook(hook: Hook) -> np.ndarray:
@@ -133,8 +168,6 @@ def _make_shard(args: tuple) -> int:
     path = shard_path(out, k)
     if path.exists():
         return 0
-    import torch
-
     torch.set_num_threads(1)
     scenes = [simulate_hang_scene(i, seed, spec) for i in range(first, last)]
     save_shard(path, dict(

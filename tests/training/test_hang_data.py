@@ -4,17 +4,21 @@ kept label reproduced by dropping the pose again in a fresh world, resumable fol
 import json
 
 import numpy as np
+import torch
 
 from robotplan.cli.main import main
 from robotplan.execution.hang_world import HangWorld
-from robotplan.geometry.transforms import perturbed_poses, uniform_poses
+from robotplan.geometry.transforms import perturbed_poses, spatial_to_world, uniform_poses
+from robotplan.sdf.hang_shapes import polyline_distance
 from robotplan.training.hang_data import (
     DRAWN,
     JITTER,
+    NEAR_ARM,
     SETTLED,
     HangDataSpec,
     decode_hook,
     decode_mug,
+    handle_on_arm_poses,
     load_hang_shards,
     simulate_hang_scene,
 )
@@ -25,10 +29,12 @@ def test_every_scene_has_a_hang_and_poses_about_where_it_came_to_rest(tiny_hang_
     assert d["poses"].shape == (3, 20, 7) and d["hangs"].shape == (3, 20)
     assert d["found"].all() and np.all(d["draws"] >= 1)
     spec, role = HangDataSpec(), d["role"]
-    assert np.all(role[:, 0] == SETTLED) and np.all(np.diff(role, axis=1) >= 0)
+    assert np.all(role[:, 0] == SETTLED)
     for s in range(3):
         near = d["poses"][s, role[s] == JITTER, :3]
-        assert 1 <= len(near) <= spec.jitter
+        assert 1 <= len(near) <= spec.jitter and np.all(role[s, 1:1 + len(near)] == JITTER)
+        assert 1 <= (role[s] == NEAR_ARM).sum() <= spec.near_arm
+        assert not d["collision"][s, role[s] == NEAR_ARM].any(), "kept clear of the hook"
         assert np.all(np.linalg.norm(near - d["poses"][s, 0, :3], axis=-1)
                       < 6 * spec.jitter_shift + spec.jitter_lift)
         assert d["caught"][s, np.argmax(role[s] == DRAWN)], "the drawn pose that hung"
@@ -74,6 +80,19 @@ def test_perturbed_poses_spread_as_asked(rng):
     # the angle of a rotation vector with N(0, σ²) per axis follows a Maxwell law, mean 2σ√(2/π)
     assert abs(turn.mean() - 2 * np.radians(8.0) * np.sqrt(2 / np.pi)) < np.radians(0.2)
     assert np.allclose(np.linalg.norm(X[:, 3:], axis=1), 1.0) and np.all(X[:, 3] >= 0)
+
+
+def test_handle_on_arm_poses_put_the_handle_on_the_arm(rng):
+    mug = decode_mug(np.array([0.04, 0.1, 0.6, 0.03, 0.03, 0.006, 0.005]))
+    arm = np.array([[0.0, 0.0, 0.3], [0.12, 0.0, 0.32], [0.15, 0.0, 0.36]])
+    X = handle_on_arm_poses(rng, arm, mug.handle_points(), 0.0, 200)
+    line = mug.handle_points()
+    t = np.linspace(0.0, 1.0, 50)[:, None, None]
+    dense = torch.from_numpy((line[:-1] + t * (line[1:] - line[:-1])).reshape(-1, 3))
+    # with no spread, some point of the handle's centre line lies on the arm's
+    on = spatial_to_world(dense[None].expand(200, -1, -1), torch.from_numpy(X)).numpy()
+    gap = np.array([polyline_distance(torch.from_numpy(p), arm).min().item() for p in on])
+    assert np.all(gap < 1e-3)
 
 
 def test_random_poses_are_uniform_rotations(rng):
