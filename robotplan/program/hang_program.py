@@ -1,9 +1,10 @@
 """The mug-hanging program (paper §7.1, problem (2)): a Drake ``MathematicalProgram`` over the
 mug's pose X_HM = (x, y, z, qw, qx, qy, qz) in the hook frame, with the learned success
-functional H_hang as cost and as the row H_hang ≤ κ, the collision functional H_coll (eq. 7,
-a = 1000) as the row H_coll ≤ ``collision_cm3``, the unit quaternion, and the position
-within X_h. SNOPT solves it from one initial pose; :mod:`robotplan.search.hang_search`
-restarts it and samples."""
+functional as the cost H_hang² and the row |H_hang| ≤ κ (the network is trained towards 0
+where the mug hangs and has no data below 0, so the row keeps the optimiser out of there),
+the collision functional H_coll (eq. 7, a = 1000) as the row H_coll ≤ ``collision_cm3``,
+the unit quaternion, and the position within X_h. SNOPT solves it from one initial pose;
+:mod:`robotplan.search.hang_search` restarts it and samples."""
 
 from __future__ import annotations
 
@@ -97,6 +98,10 @@ def _counted(problem: HangProblem, fn):
     return wrapped
 
 
+def _square(v):
+    return v * v
+
+
 def solve_hang_once(problem: HangProblem, X0: np.ndarray,
                     settings: HangSettings = HANG_DEFAULTS) -> HangSolution:
     """One SNOPT solve from pose ``X0 (7,)``."""
@@ -112,8 +117,8 @@ def solve_hang_once(problem: HangProblem, X0: np.ndarray,
     coll_fn, coll_vars = stepwise(problem.h_coll, [block], CM3)
     hang_fn = _counted(problem, hang_fn)
     hang = bridge(hang_fn)
-    prog.AddCost(lambda x: hang(x)[0], hang_vars)
-    prog.AddConstraint(hang, [-np.inf], [settings.kappa], hang_vars)
+    prog.AddCost(lambda x: _square(hang(x)[0]), hang_vars)
+    prog.AddConstraint(hang, [-settings.kappa], [settings.kappa], hang_vars)
     prog.AddConstraint(bridge(coll_fn), [0.0], [settings.collision_cm3], coll_vars)
     q = np.asarray(X0[3:], dtype=float)
     prog.SetInitialGuess(X, np.concatenate([X0[:3], q / np.linalg.norm(q)]))

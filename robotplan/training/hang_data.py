@@ -3,8 +3,8 @@
 orientation uniform on SO(3)) and dropped until one hangs, then ``per_scene`` labelled
 configurations kept: where that drop left the mug (its settled pose), ``jitter`` poses drawn
 about the settled pose and clear of the hook, the drawn pose that hung, ``near_arm`` poses
-with the handle about the arm and clear of it, then failures in the order they were drawn. Each is labelled
-by its own drop.
+with the handle about the arm and clear of it, then failures in the order they were drawn.
+Each is labelled by its own drop.
 
 The label y is a hang *in place* (:meth:`robotplan.execution.hang_world.DropResult.in_place`):
 most uniformly drawn poses that hang were released above the hook and caught the arm on the
