@@ -132,6 +132,14 @@ def write_hang_still(planned: HangPlan, executed: HangExecution, path: Path) -> 
                        f"the drop in pybullet (solid): the mug {outcome}")
 
 
+def write_hang_scene_picture(scene: Scene, path: Path) -> None:
+    """The scene as it starts, the mug where it stands and the hook, as a PNG."""
+    mug, hook, mug_pose, hook_pose = hang_parts(scene)
+    X_HM = compose(inverse_pose(table_pose(*hook_pose)), table_pose(*mug_pose))
+    write_hang_picture(mug, hook, None, X_HM, Path(path),
+                       title=f"{scene.name}: the mug where it stands and the hook")
+
+
 def inverse_pose(X: np.ndarray) -> np.ndarray:
     """X⁻¹ of a spatial pose ``(7,)``."""
     q = np.asarray(X[3:], dtype=float) / np.linalg.norm(X[3:])

@@ -36,12 +36,14 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
+    from robotplan.api.hang import write_hang_scene_picture
     from robotplan.viz.render import render_scene_sdf
 
     # refuse bad input before writing anything
-    scenes = [load_footprint_scene(f, "render") for f in args.files]
+    scenes = [load_scene(f) for f in args.files]
     out = Path(args.out)
-    targets = [out / f"{Path(f).stem}_sdf.png" for f in args.files]
+    targets = [out / f"{Path(f).stem}_{'scene' if isinstance(s.goal, HangGoal) else 'sdf'}.png"
+               for f, s in zip(args.files, scenes, strict=True)]
     if not args.overwrite:
         existing = [str(t) for t in targets if t.exists()]
         if existing:
@@ -49,7 +51,10 @@ def cmd_render(args: argparse.Namespace) -> int:
                   file=sys.stderr)
             return EXIT_BAD_INPUT
     for scene, target in zip(scenes, targets, strict=False):
-        render_scene_sdf(scene, target)
+        if isinstance(scene.goal, HangGoal):  # 3D shapes: a picture of the scene
+            write_hang_scene_picture(scene, target)
+        else:
+            render_scene_sdf(scene, target)
         print(f"wrote {target}")
     return 0
 

@@ -30,10 +30,10 @@ def _triangles(parts: list, X: np.ndarray) -> np.ndarray:
                            for p in parts])
 
 
-def write_hang_picture(mug: Mug, hook: Hook, X_HM_found: np.ndarray, X_HM_end: np.ndarray,
-                       path: Path, title: str = "") -> None:
-    """Two views of the hook (its own frame H) with the mug ghosted at ``X_HM_found`` and
-    solid at ``X_HM_end`` (poses ``(7,)``); written whole or not at all."""
+def write_hang_picture(mug: Mug, hook: Hook, X_HM_found: np.ndarray | None,
+                       X_HM_end: np.ndarray, path: Path, title: str = "") -> None:
+    """Two views of the hook (its own frame H) with the mug ghosted at ``X_HM_found`` (if
+    given) and solid at ``X_HM_end`` (poses ``(7,)``); written whole or not at all."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -46,7 +46,8 @@ def write_hang_picture(mug: Mug, hook: Hook, X_HM_found: np.ndarray, X_HM_end: n
     identity = np.array([0.0, 0, 0, 1, 0, 0, 0])
     bodies = [(_triangles(hook_parts, identity), (0.4, 0.4, 0.4, 1.0))]
     bodies += [(_triangles(mug_parts, X), MUG_COLOURS[name])
-               for name, X in (("found", X_HM_found), ("after the drop", X_HM_end))]
+               for name, X in (("found", X_HM_found), ("after the drop", X_HM_end))
+               if X is not None]
     # framed on the mugs and the top of the hook: the post runs out of the picture downwards
     mugs = np.concatenate([b[0].reshape(-1, 3) for b in bodies[1:]])
     top = bodies[0][0].reshape(-1, 3)
