@@ -43,18 +43,28 @@ def table_pose(x: float, y: float, yaw: float, z: float = 0.0) -> np.ndarray:
     return np.array([x, y, z, math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
 
 
-def compose(X_AB: np.ndarray, X_BC: np.ndarray) -> np.ndarray:
-    """X_AC = X_AB · X_BC for spatial poses ``(7,)``."""
+def _rigid(X: np.ndarray):
+    """A spatial pose ``(7,)`` as Drake's RigidTransform."""
     from pydrake.common.eigen_geometry import Quaternion
     from pydrake.math import RigidTransform
 
-    def rt(X: np.ndarray) -> RigidTransform:
-        q = np.asarray(X[3:], dtype=float)
-        return RigidTransform(Quaternion(q / np.linalg.norm(q)), np.asarray(X[:3], float))
+    q = np.asarray(X[3:], dtype=float)
+    return RigidTransform(Quaternion(q / np.linalg.norm(q)), np.asarray(X[:3], dtype=float))
 
-    out = rt(X_AB) @ rt(X_BC)
-    q = out.rotation().ToQuaternion()
-    return np.array([*out.translation(), q.w(), q.x(), q.y(), q.z()])
+
+def _pose(T) -> np.ndarray:
+    q = T.rotation().ToQuaternion()
+    return np.array([*T.translation(), q.w(), q.x(), q.y(), q.z()])
+
+
+def compose(X_AB: np.ndarray, X_BC: np.ndarray) -> np.ndarray:
+    """X_AC = X_AB · X_BC for spatial poses ``(7,)``."""
+    return _pose(_rigid(X_AB) @ _rigid(X_BC))
+
+
+def inverse_pose(X: np.ndarray) -> np.ndarray:
+    """X⁻¹ of a spatial pose ``(7,)``."""
+    return _pose(_rigid(X).inverse())
 
 
 @dataclass
@@ -138,14 +148,6 @@ def write_hang_scene_picture(scene: Scene, path: Path) -> None:
     X_HM = compose(inverse_pose(table_pose(*hook_pose)), table_pose(*mug_pose))
     write_hang_picture(mug, hook, None, X_HM, Path(path),
                        title=f"{scene.name}: the mug where it stands and the hook")
-
-
-def inverse_pose(X: np.ndarray) -> np.ndarray:
-    """X⁻¹ of a spatial pose ``(7,)``."""
-    q = np.asarray(X[3:], dtype=float) / np.linalg.norm(X[3:])
-    q_inv = np.array([q[0], -q[1], -q[2], -q[3]])
-    t = -compose(np.array([0.0, 0, 0, *q_inv]), np.array([*X[:3], 1.0, 0, 0, 0]))[:3]
-    return np.array([*t, *q_inv])
 
 
 def _r(v: np.ndarray) -> list[float]:

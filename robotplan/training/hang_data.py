@@ -81,7 +81,7 @@ def simulate_hang_scene(index: int, seed: int, spec: HangDataSpec = HangDataSpec
     rng = np.random.default_rng([seed, index])
     hook, mug = ranges.hook.sample(rng), ranges.mug.sample(rng)
     centre = ranges.grid.centre(hook)
-    near: list[tuple] = []  # (X, in place, caught, collision) about the first hang
+    near: list[tuple] = []  # (X, in place, caught, collision, role) about the first hang
     drawn: list[tuple] = []  # uniform draws, the one that hung last
     draws = 0
     with HangWorld(hook, mug) as world:
@@ -89,6 +89,17 @@ def simulate_hang_scene(index: int, seed: int, spec: HangDataSpec = HangDataSpec
         def label(X: np.ndarray, role: int) -> tuple:
             r = world.drop(X)
             return X, r.in_place(world.physics), r.hangs, r.collision_at_start, role
+
+        def clear_of_hook(poses, role: int, n: int) -> list[tuple]:
+            """The first ``n`` of ``poses`` that do not start inside the hook, labelled."""
+            rows: list[tuple] = []
+            for X in poses:
+                row = label(X, role)
+                if not row[3]:
+                    rows.append(row)
+                if len(rows) >= n:  # before the next pose is drawn
+                    break
+            return rows
 
         while not (drawn and drawn[-1][2]) and draws < spec.max_draws:
             for X in uniform_poses(rng, centre, ranges.grid.size, DRAW_BATCH):
@@ -98,25 +109,19 @@ def simulate_hang_scene(index: int, seed: int, spec: HangDataSpec = HangDataSpec
                     break
         found = bool(drawn and drawn[-1][2])
         if found:
+            # where the hanging pose comes to rest, from a drop of its own: pybullet carries
+            # contact state from one drop to the next, so this is what the data was made with
             settled = np.array(world.drop(drawn[-1][0]).X_WM_end)
             near.append(label(settled, SETTLED))
-            turn = np.radians(spec.jitter_turn_deg)
-            for X in perturbed_poses(rng, settled, spec.jitter_shift, turn, spec.jitter_tries):
-                X[2] += rng.uniform(0.0, spec.jitter_lift)
-                row = label(X, JITTER)
-                if not row[3]:
-                    near.append(row)
-                if len(near) > spec.jitter:
-                    break
+            about = perturbed_poses(rng, settled, spec.jitter_shift,
+                                    np.radians(spec.jitter_turn_deg), spec.jitter_tries)
+            up = np.eye(7)[2]
+            lifted = (X + rng.uniform(0.0, spec.jitter_lift) * up for X in about)
+            near += clear_of_hook(lifted, JITTER, spec.jitter)
             near.append(drawn.pop())
-        arm: list[tuple] = []
-        for X in handle_on_arm_poses(rng, hook.arm_points(), mug.handle_points(),
-                                     spec.near_arm_spread, spec.near_arm_tries):
-            row = label(X, NEAR_ARM)
-            if not row[3]:
-                arm.append(row)
-            if len(arm) >= spec.near_arm:
-                break
+        arm = clear_of_hook(handle_on_arm_poses(rng, hook.arm_points(), mug.handle_points(),
+                                                spec.near_arm_spread, spec.near_arm_tries),
+                            NEAR_ARM, spec.near_arm)
     keep = (near + arm + drawn)[: spec.per_scene]
     while len(keep) < spec.per_scene:  # a scene whose draws ran out early: repeat failures
         keep.append(keep[len(keep) % max(len(drawn), 1)])

@@ -6,7 +6,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import torch
 
+from robotplan.geometry.transforms import quaternion_to_matrix
 from robotplan.sdf.hang_shapes import Hook, Mug
 from robotplan.viz.viewer_hang import hang_meshes
 
@@ -16,16 +18,10 @@ VIEWS = ((20.0, -60.0), (20.0, 30.0))  # (elevation, azimuth) in degrees
 MUG_COLOURS = {"found": (0.2, 0.45, 0.85, 0.35), "after the drop": (0.2, 0.45, 0.85, 1.0)}
 
 
-def _rotation(q: np.ndarray) -> np.ndarray:
-    w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-
-
 def _triangles(parts: list, X: np.ndarray) -> np.ndarray:
     """``(F, 3, 3)`` world triangles of mesh ``parts`` posed at ``X (7,)``."""
-    R, t = _rotation(X[3:]), np.asarray(X[:3], dtype=float)
+    R = quaternion_to_matrix(torch.as_tensor(X[3:], dtype=torch.float64)).numpy()
+    t = np.asarray(X[:3], dtype=float)
     return np.concatenate([(np.asarray(p.vertices) @ R.T + t)[np.asarray(p.faces)]
                            for p in parts])
 
