@@ -12,8 +12,8 @@ from pathlib import Path
 from robotplan.base.resources import learned_dir
 from robotplan.cli.common import EXIT_BAD_INPUT, print_result, training_folders_problem
 
-__all__ = ["cmd_bench_hang", "cmd_data_hang", "cmd_eval_hang", "cmd_train_hang",
-           "solve_hang_scene"]
+__all__ = ["cmd_bench_hang", "cmd_data_hang", "cmd_eval_hang", "cmd_mine_hang",
+           "cmd_train_hang", "solve_hang_scene"]
 
 
 def cmd_data_hang(args: argparse.Namespace) -> int:
@@ -38,6 +38,31 @@ def cmd_data_hang(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_mine_hang(args: argparse.Namespace) -> int:
+    from robotplan.training.hang_mining import MiningSpec, mine_hang
+
+    model = args.model or str(learned_dir("hang"))
+    problem = (f"{args.data}: --data: no such folder" if not Path(args.data).is_dir() else
+               f"{model}: --model: not a model folder (no spec.json)"
+               if not (Path(model) / "spec.json").is_file() else
+               "--starts must be ≥ 1" if args.starts < 1 else
+               "--scenes must be ≥ 1" if args.scenes is not None and args.scenes < 1 else None)
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    t0 = time.time()
+    try:
+        summary = mine_hang(Path(args.data), Path(model), Path(args.out), args.seed,
+                            args.scenes, MiningSpec(starts=args.starts), workers=args.workers,
+                            first=args.first)
+    except (ValueError, FileNotFoundError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    summary["seconds"] = round(time.time() - t0, 1)
+    print(json.dumps(summary))
+    return 0
+
+
 def cmd_train_hang(args: argparse.Namespace) -> int:
     import torch
 
@@ -46,6 +71,13 @@ def cmd_train_hang(args: argparse.Namespace) -> int:
     problem = training_folders_problem(args.data, args.out, args.resume, args.overwrite)
     if not problem and args.test and not Path(args.test).is_dir():
         problem = f"{args.test}: --test: no such folder"
+    missing = [m for m in args.mined if not Path(m).is_dir()]
+    if not problem and missing:
+        problem = f"{missing[0]}: --mined: no such folder"
+    if not problem and args.init and not (Path(args.init) / "spec.json").is_file():
+        problem = f"{args.init}: --init: not a model folder (no spec.json)"
+    if not problem and args.mined_repeat < 1:
+        problem = "--mined-repeat must be ≥ 1"
     if problem:
         print(f"error: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -53,7 +85,8 @@ def cmd_train_hang(args: argparse.Namespace) -> int:
     cfg = HangTrainConfig(data=args.data, out=args.out, test=args.test, steps=args.steps,
                           batch=args.batch, lr=args.lr, seed=args.seed, scenes=args.scenes,
                           minutes=args.minutes, val_every=args.val_every,
-                          command=" ".join(["robotplan", *sys.argv[1:]]))
+                          mined=list(args.mined), mined_repeat=args.mined_repeat,
+                          init=args.init, command=" ".join(["robotplan", *sys.argv[1:]]))
     if args.resume:  # the run's settings come from its checkpoint; only the budget may change
         ckpt = Path(args.out) / "checkpoint.pt"
         saved = json.loads(torch.load(ckpt, weights_only=True)["config"])

@@ -17,6 +17,7 @@ from robotplan.cli.hang_commands import (
     cmd_bench_hang,
     cmd_data_hang,
     cmd_eval_hang,
+    cmd_mine_hang,
     cmd_train_hang,
 )
 from robotplan.cli.model_commands import (
@@ -148,6 +149,19 @@ def _parser() -> argparse.ArgumentParser:
     dh.add_argument("--per-scene", type=int, default=20,
                     help="labelled configurations kept per scene")
     dh.set_defaults(run=cmd_data_hang)
+    dm = dsub.add_parser("hang-mine", help="hard examples for H_hang: the planner's program "
+                         "run with a model on the scenes of a hang data folder, its end poses "
+                         "dropped in pybullet and labelled")
+    dm.add_argument("--data", required=True, metavar="DIR", help="a robotplan data hang folder")
+    dm.add_argument("--model", default=None, metavar="DIR", help="default: learned/hang")
+    dm.add_argument("--out", required=True, metavar="DIR")
+    dm.add_argument("--first", type=int, default=0, help="start at this scene of --data")
+    dm.add_argument("--scenes", type=int, default=None,
+                    help="mine N scenes (default: all from --first on)")
+    dm.add_argument("--starts", type=int, default=2, help="program solves per scene")
+    dm.add_argument("--seed", type=int, default=0, help="draws the start poses")
+    dm.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    dm.set_defaults(run=cmd_mine_hang)
 
     t = sub.add_parser("train", help="train learned functionals")
     tsub = t.add_subparsers(dest="what", required=True)
@@ -190,6 +204,13 @@ def _parser() -> argparse.ArgumentParser:
     th.add_argument("--out", required=True, metavar="DIR", help="e.g. learned/hang")
     th.add_argument("--test", default=None, metavar="DIR",
                     help="held-out data to validate on (default: 5 %% of the scenes)")
+    th.add_argument("--mined", action="append", default=[], metavar="DIR",
+                    help="also train on the planner's poses mined into DIR (robotplan data "
+                         "hang-mine); repeat for several folders")
+    th.add_argument("--mined-repeat", type=int, default=1,
+                    help="each mined sample this many times per epoch")
+    th.add_argument("--init", default=None, metavar="DIR",
+                    help="start from this model's weights (fine-tuning)")
     th.add_argument("--steps", type=int, default=20_000)
     th.add_argument("--batch", type=int, default=32)
     th.add_argument("--lr", type=float, default=1e-4)

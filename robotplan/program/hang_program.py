@@ -86,8 +86,11 @@ class HangProblem:
 
     def feasible(self, h: np.ndarray, c: np.ndarray, settings: HangSettings,
                  kappa: float | None = None) -> np.ndarray:
-        return (h <= (settings.kappa if kappa is None else kappa)) & (
-            c <= settings.collision_cm3)
+        """H_hang ≤ κ and H_coll ≤ its bound, each within SNOPT's feasibility tolerance (the
+        solver stops on the bound; a pose it calls feasible is one)."""
+        tol = settings.feasibility_tol
+        return (h <= (settings.kappa if kappa is None else kappa) + tol) & (
+            c <= settings.collision_cm3 + tol)
 
 
 def _counted(problem: HangProblem, fn):

@@ -21,6 +21,7 @@ from robotplan.models.hang import (
     HangSpec,
     HangSuccess,
     hang_loss,
+    load_hang_model,
     save_hang_model,
 )
 from robotplan.training.hang_data import decode_hook, load_hang_shards
@@ -34,6 +35,11 @@ class HangTrainConfig:
     data: str
     out: str
     test: str | None = None  # held-out data folder; else val_fraction of the scenes
+    # folders of poses the planner found, labelled (robotplan.training.hang_mining): trained
+    # on with ``data``, each of their samples ``mined_repeat`` times per epoch
+    mined: list[str] = field(default_factory=list)
+    mined_repeat: int = 1
+    init: str | None = None  # a model folder whose weights training starts from
     steps: int = 20_000
     batch: int = 32
     lr: float = 1e-4
@@ -50,23 +56,34 @@ class HangTrainConfig:
 
 
 class HangSamples:
-    """Every labelled configuration of a data folder: ``scene (N,)``, ``poses (N, 7)``,
-    ``hangs (N,)``, and per scene the mug, the hook and the hook's grid."""
+    """Every labelled configuration of one or more data folders: ``scene (N,)``,
+    ``poses (N, 7)``, ``hangs (N,)``, ``source (N,)`` (which folder), and per scene the mug,
+    the hook and the hook's grid. A folder's scenes are its own (a mined folder repeats the
+    shapes of the folder it was mined from, as scenes of its own)."""
 
-    def __init__(self, folder: str | Path, spec: HangSpec, scenes: int | None = None) -> None:
-        d = load_hang_shards(Path(folder))
-        n_scenes = len(d["mug"]) if scenes is None else min(scenes, len(d["mug"]))
-        per = d["poses"].shape[1]
-        hooks = [decode_hook(d["hook"][s], *d["hook_radii"][s]) for s in range(n_scenes)]
+    def __init__(self, folders: str | Path | list, spec: HangSpec,
+                 scenes: int | None = None) -> None:
+        parts = [load_hang_shards(Path(f)) for f in
+                 (folders if isinstance(folders, list | tuple) else [folders])]
+        mugs, hooks, poses, hangs, scene, source = [], [], [], [], [], []
+        for k, d in enumerate(parts):
+            n = len(d["mug"]) if scenes is None else min(scenes, len(d["mug"]))
+            per = d["poses"].shape[1]
+            scene.append(len(hooks) + np.repeat(np.arange(n), per))
+            source.append(np.full(n * per, k))
+            hooks += [decode_hook(d["hook"][s], *d["hook_radii"][s]) for s in range(n)]
+            mugs.append(d["mug"][:n])
+            poses.append(d["poses"][:n].reshape(-1, 7))
+            hangs.append(d["hangs"][:n].reshape(-1))
         grids = [HangGrids(h, spec) for h in hooks]
         self.cells = spec.cells
         self.lattice = grids[0].points - grids[0].centre
         self.centres = torch.stack([g.centre for g in grids])
         self.hooks = torch.stack([g.hook for g in grids])  # (S, C, C, C)
-        self.mugs = torch.from_numpy(d["mug"][:n_scenes]).float()
-        self.scene = np.repeat(np.arange(n_scenes), per)
-        self.poses = torch.from_numpy(d["poses"][:n_scenes].reshape(-1, 7)).float()
-        self.hangs = torch.from_numpy(d["hangs"][:n_scenes].reshape(-1))
+        self.mugs = torch.from_numpy(np.concatenate(mugs)).float()
+        self.scene, self.source = np.concatenate(scene), np.concatenate(source)
+        self.poses = torch.from_numpy(np.concatenate(poses)).float()
+        self.hangs = torch.from_numpy(np.concatenate(hangs))
 
     def __len__(self) -> int:
         return len(self.scene)
@@ -98,7 +115,9 @@ class HangSamples:
         return torch.stack((mug, self.hooks[self.scene[idx]]), dim=1)
 
     def split_by_scene(self, fraction: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
-        scenes = np.unique(self.scene)
+        """Training and validation indices, the validation scenes drawn from the first
+        folder's."""
+        scenes = np.unique(self.scene[self.source == 0])
         val = np.random.default_rng([seed, 5]).choice(
             scenes, max(1, round(fraction * len(scenes))), replace=False)
         is_val = np.isin(self.scene, val)
@@ -130,11 +149,15 @@ def train_hang(cfg: HangTrainConfig, resume: bool = False, progress: bool = True
     out = Path(cfg.out)
     ckpt_path = out / "checkpoint.pt"
     torch.manual_seed(cfg.seed)
-    spec = HangSpec.from_json(cfg.spec)
-    model = HangSuccess(spec)
+    if cfg.init:
+        model = load_hang_model(cfg.init).train()
+        spec = model.spec
+    else:
+        spec = HangSpec.from_json(cfg.spec)
+        model = HangSuccess(spec)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
     run = load_checkpoint(ckpt_path, model, opt) if resume else Run()
-    samples = HangSamples(cfg.data, spec, cfg.scenes)
+    samples = HangSamples([cfg.data, *cfg.mined], spec, cfg.scenes)
     samples.cache(progress=progress)
     if cfg.test:
         val_samples = HangSamples(cfg.test, spec)
@@ -142,6 +165,8 @@ def train_hang(cfg: HangTrainConfig, resume: bool = False, progress: bool = True
     else:
         val_samples = samples
         train_idx, val_idx = samples.split_by_scene(cfg.val_fraction, cfg.seed)
+    mined = train_idx[samples.source[train_idx] > 0]
+    train_idx = np.concatenate([train_idx, *[mined] * (cfg.mined_repeat - 1)])
     per_epoch = max(1, len(train_idx) // cfg.batch)
     batch_of = epoch_batch(train_idx, cfg.batch, cfg.seed)
 

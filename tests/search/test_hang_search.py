@@ -32,11 +32,19 @@ def test_the_program_moves_a_mug_out_of_the_hook(problem):
     assert start_c[0] > 0.1, "the start is deep in collision"
     settings = HangSettings(kappa=1e6, major_iterations=20)
     sol = solve_hang_once(problem, X0, settings)
-    assert sol.feasible and sol.h_coll_cm3 <= settings.collision_cm3
+    assert sol.feasible and sol.h_coll_cm3 <= settings.collision_cm3 + settings.feasibility_tol
     assert abs(np.linalg.norm(sol.pose[3:]) - 1) < 1e-9
     assert np.all(sol.pose[:3] >= problem.lo - 1e-6) and np.all(sol.pose[:3] <= problem.hi + 1e-6)
     assert abs(sol.h_hang) <= abs(start_h[0]) + 1e-6, "the cost (H_hang²) did not rise"
     assert sol.evaluations > 0
+
+
+def test_feasible_means_within_the_solvers_tolerance_of_each_bound(problem):
+    s = HangSettings()
+    tol = s.feasibility_tol
+    h = np.array([s.kappa + tol / 2, s.kappa + 2 * tol, 0.0, 0.0])
+    c = np.array([0.0, 0.0, s.collision_cm3 + tol / 2, s.collision_cm3 + 2 * tol])
+    assert problem.feasible(h, c, s).tolist() == [True, False, True, False]
 
 
 def test_sampling_stops_at_a_feasible_pose_or_spends_its_budget(problem):

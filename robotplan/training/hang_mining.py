@@ -1,0 +1,122 @@
+"""Hard examples for H_hang: the poses the planner finds with a model, labelled by their drop.
+
+A success model trained on drawn poses is right on poses like those it saw and can be wrong
+where an optimiser goes looking for its minimum: SNOPT descends H_hang to ≈ 0 at poses whose
+drop falls (docs/experiments.md#hang-mining). For every scene of a data folder, this runs the
+planner's own program (:func:`robotplan.program.hang_program.solve_hang_once`) from
+``starts`` random poses, drops each end pose in pybullet and stores it labelled, in the
+format of :mod:`robotplan.training.hang_data` with the role ``OPTIMISED``, beside the model's
+value there. Training on the data folder plus such folders (``robotplan train hang --mined``)
+teaches the network where it was wrong; mining again with the new model finds its next
+mistakes.
+
+Scene ``i`` draws its starts from ``numpy.random.default_rng([seed, i])``: a folder is the
+same whatever the number of workers, and an interrupted run continues.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from robotplan.execution.hang_world import HANG_PHYSICS, HangWorld
+from robotplan.geometry.transforms import uniform_poses
+from robotplan.models.hang import load_hang_model
+from robotplan.program.hang_program import (
+    HANG_DEFAULTS,
+    HangProblem,
+    HangSettings,
+    solve_hang_once,
+)
+from robotplan.training.hang_data import OPTIMISED, decode_hook, decode_mug, load_hang_shards
+from robotplan.training.shards import make_shards, prepare_folder, save_shard, shard_path
+
+__all__ = ["MiningSpec", "mine_hang", "mine_scene"]
+
+FORMAT = 1
+
+
+@dataclass(frozen=True)
+class MiningSpec:
+    starts: int = 2  # SNOPT solves per scene, each from a uniform random pose in X_h
+    major_iterations: int = HANG_DEFAULTS.major_iterations
+
+
+def mine_scene(problem: HangProblem, rng: np.random.Generator, spec: MiningSpec,
+               world: HangWorld) -> dict[str, np.ndarray]:
+    """``spec.starts`` end poses of the program on one scene, each dropped: ``poses (n, 7)``,
+    ``hangs`` (in place), ``caught``, ``collision``, ``h_model`` (H_hang there)."""
+    settings = HangSettings(major_iterations=spec.major_iterations)
+    centre = (problem.lo + problem.hi) / 2
+    rows = []
+    for X0 in uniform_poses(rng, centre, float(problem.hi[0] - problem.lo[0]), spec.starts):
+        sol = solve_hang_once(problem, X0, settings)
+        r = world.drop(sol.pose)
+        rows.append((sol.pose, r.in_place(world.physics), r.hangs, r.collision_at_start,
+                     sol.h_hang))
+    return {"poses": np.array([r[0] for r in rows]),
+            "hangs": np.array([r[1] for r in rows], dtype=bool),
+            "caught": np.array([r[2] for r in rows], dtype=bool),
+            "collision": np.array([r[3] for r in rows], dtype=bool),
+            "h_model": np.array([r[4] for r in rows])}
+
+
+def _mine_shard(args: tuple) -> int:
+    out, k, first, last, data, model_dir, seed, spec = args
+    path = shard_path(out, k)
+    if path.exists():
+        return 0
+    torch.set_num_threads(1)
+    model = load_hang_model(model_dir)
+    rows = []
+    for i in range(first, last):
+        hook = decode_hook(data["hook"][i], *data["hook_radii"][i])
+        mug = decode_mug(data["mug"][i])
+        with HangWorld(hook, mug) as world:
+            rows.append(mine_scene(HangProblem(model, mug, hook),
+                                   np.random.default_rng([seed, int(data["scene_index"][i])]),
+                                   spec, world))
+    stacked = {key: np.array([r[key] for r in rows]) for key in rows[0]}
+    n = last - first
+    save_shard(path, dict(
+        scene_index=data["scene_index"][first:last], mug=data["mug"][first:last],
+        hook=data["hook"][first:last], hook_radii=data["hook_radii"][first:last],
+        role=np.full((n, spec.starts), OPTIMISED, dtype=np.int8),
+        draws=np.zeros(n, dtype=int), found=stacked["hangs"].any(axis=1), **stacked))
+    return n * spec.starts
+
+
+def _weights_digest(model_dir: Path) -> str:
+    return hashlib.sha256((model_dir / "weights.pt").read_bytes()).hexdigest()[:16]
+
+
+def mine_hang(data: Path, model_dir: Path, out: Path, seed: int, scenes: int | None = None,
+              spec: MiningSpec = MiningSpec(), workers: int = 2, shard_size: int = 10,
+              progress: bool = True, first: int = 0) -> dict:
+    """Mine (or finish mining) ``scenes`` scenes of ``data`` from its scene ``first`` on (all
+    the rest by default) with the model in ``model_dir`` into ``out``. Returns a summary:
+    scenes, poses, the fraction the model calls a success (H_hang ≤ κ1) and of those the
+    fraction that hang in place."""
+    d = load_hang_shards(data)
+    if not 0 <= first < len(d["mug"]):
+        raise ValueError(f"{data}: --first {first}: the folder has {len(d['mug'])} scenes")
+    n = len(d["mug"]) - first if scenes is None else min(scenes, len(d["mug"]) - first)
+    meta = {"format": FORMAT, "kind": "mined", "data": str(data), "first": first,
+            "seed": seed, "model": str(model_dir),
+            "weights_sha256": _weights_digest(model_dir), "spec": asdict(spec),
+            "physics": HANG_PHYSICS.as_dict(), "shard_size": shard_size}
+    prepare_folder(out, meta, n)
+    head = {key: v[first:first + n] for key, v in d.items()}
+    _, made, _ = make_shards(out, n, shard_size, _mine_shard,
+                             (head, model_dir, seed, spec), workers, progress, "mine hang")
+    mined = load_hang_shards(out)
+    believed = mined["h_model"] <= HANG_DEFAULTS.kappa
+    return {"scenes": n, "poses": int(mined["hangs"].size), "made_shards": made,
+            "model_success": round(float(believed.mean()), 4),
+            "in_place_of_model_success": round(float(mined["hangs"][believed].mean()), 4)
+            if believed.any() else None,
+            "in_place": round(float(mined["hangs"].mean()), 4)}
