@@ -121,7 +121,7 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
 
     out.mkdir(parents=True, exist_ok=True)
     run = {"seed": seed, "model": str(model_dir), "evaluations": settings.evaluations,
-           "methods": list(methods)}
+           "start_pool": settings.start_pool, "methods": list(methods)}
     run_path = out / "run.json"
     if run_path.is_file() and json.loads(run_path.read_text()) != run:
         raise ValueError(f"{out}: holds a run with other settings ({run_path}); "

@@ -133,16 +133,19 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
 
     model = args.model or str(learned_dir("hang"))
     methods = tuple(args.methods.split(",")) if args.methods else METHODS
+    pool = HANG_DEFAULTS.start_pool if args.start_pool is None else args.start_pool
     unknown = [m for m in methods if m not in METHODS]
     problem = (f"{model}: --model: not a model folder (no spec.json)"
                if not (Path(model) / "spec.json").is_file() else
                f"--methods: unknown {unknown}; choose from {','.join(METHODS)}" if unknown else
                "--scenes must be ≥ 1" if args.scenes < 1 else
-               "--evaluations must be ≥ 1" if args.evaluations < 1 else None)
+               "--evaluations must be ≥ 1" if args.evaluations < 1 else
+               "--start-pool must be ≥ 1" if pool < 1 else None)
     if problem:
         print(f"error: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    settings = replace(HANG_DEFAULTS, evaluations=args.evaluations)
+    settings = replace(HANG_DEFAULTS, evaluations=args.evaluations,
+                       start_pool=pool)
     try:
         summary = run_bench_hang(args.scenes, args.seed, Path(args.out), model,
                                  workers=args.workers, methods=methods, settings=settings)

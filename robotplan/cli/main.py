@@ -98,6 +98,9 @@ def _parser() -> argparse.ArgumentParser:
                     "sampling_k2, sampling_k3 (default: all)")
     bh.add_argument("--evaluations", type=int, default=20_000,
                     help="functional evaluations per method and scene (the paper: 20,000)")
+    bh.add_argument("--start-pool", type=int, default=None, metavar="N",
+                    help="each optimisation starts from the best of N random poses (default: "
+                    "the planner's, HangSettings.start_pool)")
     bh.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     bh.add_argument("--json", action="store_true")
     bh.set_defaults(run=cmd_bench_hang)

@@ -35,6 +35,9 @@ class HangSettings:
     evaluations: int = 20_000  # the paper's budget of functional evaluations per scene
     major_iterations: int = 60
     feasibility_tol: float = 1e-4
+    # each optimisation starts from the best of this many uniform random poses (least H_hang
+    # among those within the collision bound; 1: one random pose, the paper's restarts)
+    start_pool: int = 1
 
 
 HANG_DEFAULTS = HangSettings()

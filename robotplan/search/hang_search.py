@@ -18,7 +18,7 @@ from robotplan.program.hang_program import (
     solve_hang_once,
 )
 
-__all__ = ["optimise_hang", "sample_hang"]
+__all__ = ["optimise_hang", "sample_hang", "start_pose"]
 
 SAMPLE_BATCH = 64  # poses scored per network call while sampling
 
@@ -26,6 +26,19 @@ SAMPLE_BATCH = 64  # poses scored per network call while sampling
 def _random_starts(problem: HangProblem, rng: np.random.Generator, n: int) -> np.ndarray:
     return uniform_poses(rng, (problem.lo + problem.hi) / 2, float(problem.hi[0] - problem.lo[0]),
                          n)
+
+
+def start_pose(problem: HangProblem, rng: np.random.Generator,
+               settings: HangSettings = HANG_DEFAULTS) -> np.ndarray:
+    """Where one optimisation starts ``(7,)``: a uniform random pose, or with
+    ``settings.start_pool`` > 1 the pool's pose of least H_hang among those within the
+    collision bound (of least H_hang overall when none is); the pool's evaluations count."""
+    pool = _random_starts(problem, rng, settings.start_pool)
+    if len(pool) == 1:
+        return pool[0]
+    h, c = problem.evaluate(pool)
+    clear = c <= settings.collision_cm3
+    return pool[int(np.argmin(np.where(clear, h, np.inf)) if clear.any() else np.argmin(h))]
 
 
 def optimise_hang(problem: HangProblem, rng: np.random.Generator,
@@ -39,8 +52,8 @@ def optimise_hang(problem: HangProblem, rng: np.random.Generator,
     best: HangSolution | None = None
     n = settings.restarts if restarts is None else restarts
     solves = 0
-    for X0 in _random_starts(problem, rng, n):
-        sol = solve_hang_once(problem, X0, settings)
+    while solves < n:
+        sol = solve_hang_once(problem, start_pose(problem, rng, settings), settings)
         solves += 1
         if best is None or sol.feasible or sol.h_hang < best.h_hang:
             best = sol

@@ -3,10 +3,11 @@
 A success model trained on drawn poses is right on poses like those it saw and can be wrong
 where an optimiser goes looking for its minimum: SNOPT descends H_hang to ≈ 0 at poses whose
 drop falls (docs/experiments.md#hang-mining). For every scene of a data folder, this runs the
-planner's own program (:func:`robotplan.program.hang_program.solve_hang_once`) from
-``starts`` random poses, drops each end pose in pybullet and stores it labelled, in the
-format of :mod:`robotplan.training.hang_data` with the role ``OPTIMISED``, beside the model's
-value there. Training on the data folder plus such folders (``robotplan train hang --mined``)
+planner's own program (:func:`robotplan.program.hang_program.solve_hang_once`) ``starts``
+times from where the planner starts (:func:`robotplan.search.hang_search.start_pose`),
+drops each end pose in pybullet and stores it labelled, in the format of
+:mod:`robotplan.training.hang_data` with the role ``OPTIMISED``, beside the model's value
+there. Training on the data folder plus such folders (``robotplan train hang --mined``)
 teaches the network where it was wrong; mining again with the new model finds its next
 mistakes.
 
@@ -24,7 +25,6 @@ import numpy as np
 import torch
 
 from robotplan.execution.hang_world import HANG_PHYSICS, HangWorld
-from robotplan.geometry.transforms import uniform_poses
 from robotplan.models.hang import load_hang_model
 from robotplan.program.hang_program import (
     HANG_DEFAULTS,
@@ -32,6 +32,7 @@ from robotplan.program.hang_program import (
     HangSettings,
     solve_hang_once,
 )
+from robotplan.search.hang_search import start_pose
 from robotplan.training.hang_data import OPTIMISED, decode_hook, decode_mug, load_hang_shards
 from robotplan.training.shards import make_shards, prepare_folder, save_shard, shard_path
 
@@ -42,19 +43,20 @@ FORMAT = 1
 
 @dataclass(frozen=True)
 class MiningSpec:
-    starts: int = 2  # SNOPT solves per scene, each from a uniform random pose in X_h
+    starts: int = 2  # SNOPT solves per scene, each from where the planner would start
     major_iterations: int = HANG_DEFAULTS.major_iterations
+    start_pool: int = HANG_DEFAULTS.start_pool  # see HangSettings
 
 
 def mine_scene(problem: HangProblem, rng: np.random.Generator, spec: MiningSpec,
                world: HangWorld) -> dict[str, np.ndarray]:
     """``spec.starts`` end poses of the program on one scene, each dropped: ``poses (n, 7)``,
     ``hangs`` (in place), ``caught``, ``collision``, ``h_model`` (H_hang there)."""
-    settings = HangSettings(major_iterations=spec.major_iterations)
-    centre = (problem.lo + problem.hi) / 2
+    settings = HangSettings(major_iterations=spec.major_iterations,
+                            start_pool=spec.start_pool)
     rows = []
-    for X0 in uniform_poses(rng, centre, float(problem.hi[0] - problem.lo[0]), spec.starts):
-        sol = solve_hang_once(problem, X0, settings)
+    for _ in range(spec.starts):
+        sol = solve_hang_once(problem, start_pose(problem, rng, settings), settings)
         r = world.drop(sol.pose)
         rows.append((sol.pose, r.in_place(world.physics), r.hangs, r.collision_at_start,
                      sol.h_hang))

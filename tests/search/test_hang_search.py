@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 import torch
 
+from robotplan.geometry.transforms import uniform_poses
 from robotplan.models.hang import HangSpec, HangSuccess
 from robotplan.program.hang_program import HangProblem, HangSettings, solve_hang_once
 from robotplan.sdf.hang_shapes import Hook, Mug
-from robotplan.search.hang_search import optimise_hang, sample_hang
+from robotplan.search.hang_search import optimise_hang, sample_hang, start_pose
 from tests.conftest import TINY_HANG_SPEC
 
 HOOK = Hook(post_height=0.3, lengths=(0.12, 0.04), angles=(math.radians(10), math.radians(60)))
@@ -45,6 +46,24 @@ def test_feasible_means_within_the_solvers_tolerance_of_each_bound(problem):
     h = np.array([s.kappa + tol / 2, s.kappa + 2 * tol, 0.0, 0.0])
     c = np.array([0.0, 0.0, s.collision_cm3 + tol / 2, s.collision_cm3 + 2 * tol])
     assert problem.feasible(h, c, s).tolist() == [True, False, True, False]
+
+
+def test_a_pooled_start_is_the_pools_best_pose_within_the_collision_bound(problem):
+    settings = HangSettings(start_pool=32)
+    pool = uniform_poses(np.random.default_rng(5), (problem.lo + problem.hi) / 2,
+                         float(problem.hi[0] - problem.lo[0]), 32)
+    h, c = problem.evaluate(pool)
+    clear = c <= settings.collision_cm3
+    assert clear.any() and not clear.all(), "the pool holds both kinds"
+    problem.evaluations = 0
+    X0 = start_pose(problem, np.random.default_rng(5), settings)
+    i = int(np.nonzero((pool == X0).all(axis=1))[0][0])
+    assert clear[i] and h[i] == h[clear].min()
+    assert problem.evaluations == 32
+    single = start_pose(problem, np.random.default_rng(5), HangSettings())
+    one = uniform_poses(np.random.default_rng(5), (problem.lo + problem.hi) / 2,
+                        float(problem.hi[0] - problem.lo[0]), 1)[0]
+    assert np.array_equal(single, one) and problem.evaluations == 32
 
 
 def test_sampling_stops_at_a_feasible_pose_or_spends_its_budget(problem):
