@@ -64,7 +64,7 @@ class DropResult:
 
     def in_place(self, physics: HangPhysics = HANG_PHYSICS) -> bool:
         """Hangs, and came to rest near its release height (``physics.in_place_fall``)."""
-        return self.hangs and self.fall_m <= physics.in_place_fall
+        return bool(self.hangs and self.fall_m <= physics.in_place_fall)
 
 
 RECORD_EVERY = 8  # simulation steps between recorded poses (30 per second)

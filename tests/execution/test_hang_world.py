@@ -39,6 +39,7 @@ def test_a_mug_threaded_on_the_arm_hangs_in_place(world):
     result = world.drop(threaded_pose())
     assert result.hangs and result.on_hook and not result.on_ground
     assert result.in_place(), f"it comes down only onto its handle: {result.fall_m:.3f} m"
+    assert type(result.in_place()) is bool, "result.json writes it"
     end = np.array(result.X_WM_end)
     assert end[2] > 0.1, "it stays up on the arm"
 
