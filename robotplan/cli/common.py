@@ -59,12 +59,19 @@ def print_result(result: dict, as_json: bool) -> None:
         print(f"{k:>{width}}: {v}")
 
 
+def model_folder_problem(folder: str, flag: str = "--model") -> str | None:
+    """What is wrong with a model folder given by ``flag``, in one line, or None."""
+    if (Path(folder) / "spec.json").is_file():
+        return None
+    return f"{folder}: {flag}: not a model folder (no spec.json)"
+
+
 def not_a_model(folder: str | None) -> bool:
     """True (after the one-line error) when ``--model`` is not a model folder."""
-    if folder is None or (Path(folder) / "spec.json").is_file():
-        return False
-    print(f"error: {folder}: --model: not a model folder (no spec.json)", file=sys.stderr)
-    return True
+    problem = None if folder is None else model_folder_problem(folder)
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+    return problem is not None
 
 
 def add_dynamics_options(parser, several: bool = False) -> None:

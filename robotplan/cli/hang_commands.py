@@ -10,7 +10,12 @@ from dataclasses import replace
 from pathlib import Path
 
 from robotplan.base.resources import learned_dir
-from robotplan.cli.common import EXIT_BAD_INPUT, print_result, training_folders_problem
+from robotplan.cli.common import (
+    EXIT_BAD_INPUT,
+    model_folder_problem,
+    print_result,
+    training_folders_problem,
+)
 
 __all__ = ["cmd_bench_hang", "cmd_data_hang", "cmd_eval_hang", "cmd_mine_hang",
            "cmd_train_hang", "solve_hang_scene"]
@@ -43,10 +48,10 @@ def cmd_mine_hang(args: argparse.Namespace) -> int:
 
     model = args.model or str(learned_dir("hang"))
     problem = (f"{args.data}: --data: no such folder" if not Path(args.data).is_dir() else
-               f"{model}: --model: not a model folder (no spec.json)"
-               if not (Path(model) / "spec.json").is_file() else
-               "--starts must be ≥ 1" if args.starts < 1 else
-               "--scenes must be ≥ 1" if args.scenes is not None and args.scenes < 1 else None)
+               model_folder_problem(model) or (
+                   "--starts must be ≥ 1" if args.starts < 1 else
+                   "--scenes must be ≥ 1" if args.scenes is not None and args.scenes < 1
+                   else None))
     if problem:
         print(f"error: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -74,8 +79,8 @@ def cmd_train_hang(args: argparse.Namespace) -> int:
     missing = [m for m in args.mined if not Path(m).is_dir()]
     if not problem and missing:
         problem = f"{missing[0]}: --mined: no such folder"
-    if not problem and args.init and not (Path(args.init) / "spec.json").is_file():
-        problem = f"{args.init}: --init: not a model folder (no spec.json)"
+    if not problem and args.init:
+        problem = model_folder_problem(args.init, "--init")
     if not problem and args.mined_repeat < 1:
         problem = "--mined-repeat must be ≥ 1"
     if problem:
@@ -135,12 +140,11 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
     methods = tuple(args.methods.split(",")) if args.methods else METHODS
     pool = HANG_DEFAULTS.start_pool if args.start_pool is None else args.start_pool
     unknown = [m for m in methods if m not in METHODS]
-    problem = (f"{model}: --model: not a model folder (no spec.json)"
-               if not (Path(model) / "spec.json").is_file() else
-               f"--methods: unknown {unknown}; choose from {','.join(METHODS)}" if unknown else
-               "--scenes must be ≥ 1" if args.scenes < 1 else
-               "--evaluations must be ≥ 1" if args.evaluations < 1 else
-               "--start-pool must be ≥ 1" if pool < 1 else None)
+    problem = model_folder_problem(model) or (
+        f"--methods: unknown {unknown}; choose from {','.join(METHODS)}" if unknown else
+        "--scenes must be ≥ 1" if args.scenes < 1 else
+        "--evaluations must be ≥ 1" if args.evaluations < 1 else
+        "--start-pool must be ≥ 1" if pool < 1 else None)
     if problem:
         print(f"error: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
