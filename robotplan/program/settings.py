@@ -63,6 +63,10 @@ class ProgramSettings:
     # it when it ends worse): more iterations cost time without better plans, fewer lose
     # plans (measured: docs/experiments.md#learned-iterations)
     iterations: int = 30
+    # the search stops at the first solved plan whose learned-dynamics residual (RMS per
+    # step, mm) is at most this: F_flow's own one-step error in contact; F_q's overlay
+    # (`rigid`) stops at its first solved plan (measured: docs/experiments.md#dynamics-residual)
+    good_rms_mm: float = 5.0
     # SNOPT's limit on minor (QP) iterations over a whole solve: this many per constraint
     # row, at least SNOPT's default 10,000 (so programs of up to two free pushes, ≤ 666
     # rows, keep the default): long chained pushes need more, short programs gain nothing

@@ -6,7 +6,7 @@ obstacles, its objects keep ``OBSTACLE_MARGIN`` from them (open-loop pushing dri
 
 Candidates are tried most promising first (init points behind the object as seen from the
 goal) and the search stops at the first one that is *good enough*: feasible, with the
-learned-dynamics residual of a typical real push (``GOOD_RMS_MM``), or, after
+learned-dynamics residual of a typical real push (``ProgramSettings.good_rms_mm``), or, after
 ``PATIENCE_S`` seconds, as soon as it holds a solved plan. ``exhaustive=True`` solves every
 candidate, as the paper does."""
 
@@ -31,7 +31,7 @@ from robotplan.scene import Scene
 __all__ = ["PATIENCE_S", "SearchResult", "is_solved", "merge_results", "search_push",
            "stops_search"]
 
-GOOD_RMS_MM = 5.0  # H_F residual (RMS over steps) good enough to stop: F_flow's own error
+GOOD_RMS_MM = ProgramSettings.good_rms_mm  # H_F residual (RMS over steps): F_flow's own error
 # a plan whose H_F residual exceeds the no-motion baseline is one the learned dynamics call
 # impossible: it breaks the dynamics, however well it meets the constraints
 # (measured: docs/experiments.md#dynamics-residual)
@@ -99,19 +99,23 @@ def is_solved(s: Solution) -> bool:
             and _clearance_short(s) == 0.0)
 
 
-def good_enough(s: Solution) -> bool:
-    """Solved, with the learned-dynamics residual of a typical real push."""
-    return is_solved(s) and s.dynamics_rms_mm <= GOOD_RMS_MM
+def good_enough(s: Solution, good_rms_mm: float = GOOD_RMS_MM) -> bool:
+    """Solved, with a learned-dynamics residual of at most ``good_rms_mm`` (that of a
+    typical real push)."""
+    return is_solved(s) and s.dynamics_rms_mm <= good_rms_mm
 
 
 def stops_search(sol: Solution, holds_solved: bool, elapsed: float,
-                 time_budget: float | None, patience: float, exhaustive: bool) -> bool:
+                 time_budget: float | None, patience: float, exhaustive: bool,
+                 good_rms_mm: float = GOOD_RMS_MM) -> bool:
     """Whether the search stops on collecting ``sol``, ``elapsed`` seconds in: past the time
-    budget always; otherwise (unless ``exhaustive``) on a good-enough plan, or past
-    ``patience`` seconds with a solved plan in hand (``holds_solved``, ``sol`` included)."""
+    budget always; otherwise (unless ``exhaustive``) on a good-enough plan (residual at most
+    ``good_rms_mm``), or past ``patience`` seconds with a solved plan in hand
+    (``holds_solved``, ``sol`` included)."""
     if time_budget is not None and elapsed > time_budget:
         return True
-    return not exhaustive and (good_enough(sol) or (holds_solved and elapsed > patience))
+    return not exhaustive and (good_enough(sol, good_rms_mm)
+                               or (holds_solved and elapsed > patience))
 
 
 def order_candidates(scene: Scene, skeletons: list[Skeleton],
@@ -144,10 +148,11 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
                 patience: float = PATIENCE_S,
                 guesses: dict[Skeleton, dict] | None = None) -> SearchResult:
     """Solve the skeletons (a process per core), most promising first, and pick the best;
-    unless ``exhaustive``, stop at the first good-enough plan or, after ``patience``
-    seconds, at the first program collected while a solved plan is in hand; start no
-    program after ``time_budget`` seconds (the best so far wins). ``guesses``: the learned
-    program's initial guess by skeleton (a warm start skips the kinematic stage)."""
+    unless ``exhaustive``, stop at the first good-enough plan (``settings.good_rms_mm``)
+    or, after ``patience`` seconds, at the first program collected while a solved plan is in
+    hand; start no program after ``time_budget`` seconds (the best so far wins).
+    ``guesses``: the learned program's initial guess by skeleton (a warm start skips the
+    kinematic stage)."""
     from tqdm import tqdm
 
     settings = settings or ProgramSettings()
@@ -166,7 +171,7 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
         bar.set_postfix(best_violation=f"{min(s.violation for s in solutions):.3g}")
         holds_solved = holds_solved or is_solved(sol)
         return stops_search(sol, holds_solved, time.time() - t0, time_budget, patience,
-                            exhaustive)
+                            exhaustive, settings.good_rms_mm)
 
     if workers <= 1:
         _init_worker(*args)

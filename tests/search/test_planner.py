@@ -54,7 +54,7 @@ def test_ranking_prefers_plans_the_learned_dynamics_believe():
 
 def test_the_search_stops_on_a_good_plan_or_after_its_patience_with_a_solved_one():
     from robotplan.program.solution import Solution
-    from robotplan.search.planner import PATIENCE_S, is_solved, stops_search
+    from robotplan.search.planner import PATIENCE_S, PLAUSIBLE_RMS_MM, is_solved, stops_search
 
     sk = parse_skeleton("push@0", "pusher", "box")
 
@@ -74,6 +74,9 @@ def test_the_search_stops_on_a_good_plan_or_after_its_patience_with_a_solved_one
     # exhaustive: only the time budget stops it
     assert not stops_search(good, True, late, None, PATIENCE_S, True)
     assert stops_search(broken, False, 101.0, 100.0, PATIENCE_S, True)
+    # a looser good-enough residual (F_q's overlay) stops at the first solved plan
+    assert stops_search(solved, False, early, None, PATIENCE_S, False, PLAUSIBLE_RMS_MM)
+    assert not stops_search(broken, False, early, None, PATIENCE_S, False, PLAUSIBLE_RMS_MM)
 
 
 def test_plans_around_obstacles_must_keep_the_margin():
