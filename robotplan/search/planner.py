@@ -31,7 +31,8 @@ from robotplan.scene import Scene
 __all__ = ["PATIENCE_S", "SearchResult", "is_solved", "merge_results", "search_push",
            "stops_search"]
 
-GOOD_RMS_MM = ProgramSettings.good_rms_mm  # H_F residual (RMS over steps): F_flow's own error
+# residual RMS (mm) below which plans rank alike, and the default good-enough residual
+GOOD_RMS_MM = ProgramSettings.good_rms_mm
 # a plan whose H_F residual exceeds the no-motion baseline is one the learned dynamics call
 # impossible: it breaks the dynamics, however well it meets the constraints
 # (measured: docs/experiments.md#dynamics-residual)
