@@ -199,6 +199,12 @@ def _parser() -> argparse.ArgumentParser:
     tp.add_argument("--near-share", type=float, default=0.25,
                     help="share of the query points drawn within 10 cm of the object (the "
                          "rest uniform on the table); more resolves the object's turning")
+    tp.add_argument("--augment", choices=["none", "turns"], default="none",
+                    help="turns: show each push with the scene turned by a random multiple "
+                         "of 90 degrees about the grid's centre (an exact symmetry)")
+    tp.add_argument("--anneal-by-time", action="store_true",
+                    help="with --minutes: the learning rate reaches its floor when the "
+                         "minutes run out, even if fewer steps fit")
     tp.add_argument("--resume", action="store_true", help="continue from checkpoint.pt")
     tp.add_argument("--overwrite", action="store_true", help="start over in a used folder")
     tp.set_defaults(run=cmd_train_push)

@@ -9,14 +9,17 @@ gradient is the exact ``(p − c)/|p − c|`` direction, so it is differentiable
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
-import trimesh
 from torch import Tensor
 
 from robotplan.sdf.closed_form import safe_norm
 from robotplan.sdf.shapes2d import Shape2D
+
+if TYPE_CHECKING:  # trimesh is imported where a mesh is used: it costs ~1 s at start-up
+    import trimesh
 
 __all__ = ["Box3D", "Capsule", "Cylinder", "Extrusion", "Mesh", "Shape3D", "Sphere"]
 
@@ -105,11 +108,15 @@ class Mesh(Shape3D):
 
     @classmethod
     def load(cls, path: str) -> Mesh:
+        import trimesh
+
         return cls(trimesh.load_mesh(path, force="mesh"))
 
     def sdf(self, p_B: Tensor) -> Tensor:
         flat = p_B.reshape(-1, 3)
         pts = flat.detach().cpu().double().numpy()
+        import trimesh
+
         closest, _, _ = trimesh.proximity.closest_point(self.mesh, pts)
         inside = self.mesh.contains(pts)
         c = torch.from_numpy(np.asarray(closest)).to(flat)

@@ -31,11 +31,12 @@ class Run:
     seconds: float = 0.0
 
 
-def lr_at(cfg, step: int) -> float:
-    """Linear warm-up, then cosine decay from ``lr`` to ``lr_min`` at ``steps``."""
+def lr_at(cfg, step: int, time_fraction: float = 0.0) -> float:
+    """Linear warm-up, then cosine decay from ``lr`` to ``lr_min`` at ``steps``, or earlier
+    where ``time_fraction`` (the share of a wall-time budget spent) is further along."""
     if step < cfg.warmup:
         return cfg.lr * (step + 1) / cfg.warmup
-    frac = min(1.0, (step - cfg.warmup) / max(1, cfg.steps - cfg.warmup))
+    frac = min(1.0, max((step - cfg.warmup) / max(1, cfg.steps - cfg.warmup), time_fraction))
     return cfg.lr_min + 0.5 * (cfg.lr - cfg.lr_min) * (1 + math.cos(math.pi * frac))
 
 
@@ -92,8 +93,12 @@ def run_steps(cfg, run: Run, model: torch.nn.Module, opt: torch.optim.Optimizer,
     try:
         while run.step < cfg.steps:
             loss = step_loss(run.step)
+            # --anneal-by-time: the cosine ends with the wall-time budget even where fewer
+            # steps fit than asked (the run is then not step-for-step reproducible)
+            spent = ((time.time() - run_start) / (60 * cfg.minutes)
+                     if getattr(cfg, "anneal_by_time", False) and cfg.minutes else 0.0)
             for g in opt.param_groups:
-                g["lr"] = lr_at(cfg, run.step)
+                g["lr"] = lr_at(cfg, run.step, spent)
             opt.zero_grad(set_to_none=True)
             loss.backward()
             opt.step()

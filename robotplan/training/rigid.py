@@ -37,6 +37,7 @@ from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
 from robotplan.training.samples import PushSamples, SampleBatch
 from robotplan.training.train import (
     TrainConfig,
+    augmented,
     hardware,
     query_points,
     validation_indices,
@@ -146,7 +147,7 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
     batch_of = epoch_batch(train_idx, cfg.batch, cfg.seed)
 
     def step_loss(step: int) -> torch.Tensor:
-        batch = samples.batch(batch_of(step), device=device)
+        batch = augmented(samples.batch(batch_of(step), device=device), cfg, ws, step)
         inputs, pivot, true = rigid_targets(batch, grid, ws.shape)
         if cfg.rigid_loss == "sdf":
             gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)

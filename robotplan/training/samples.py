@@ -8,7 +8,8 @@ through their own exact SDFs.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+import math
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -69,6 +70,26 @@ class SampleBatch:
         """Samples ``start`` to ``stop`` of the batch."""
         return SampleBatch(**{f.name: None if getattr(self, f.name) is None
                               else getattr(self, f.name)[start:stop] for f in fields(self)})
+
+    def turned(self, quarter_turns: Tensor, center: tuple[float, float]) -> SampleBatch:
+        """The same samples with the whole scene turned by ``quarter_turns (B,)`` × 90° about
+        ``center``, the centre of X_h: an exact symmetry of the world (isotropic friction,
+        gravity along z) and, on a square grid centred there, of the rendered inputs too, so
+        a trainer can use it to show each push in four orientations."""
+        angle = quarter_turns.to(self.object_prev) * (math.pi / 2)
+        c, s = torch.cos(angle).round(), torch.sin(angle).round()  # exact 0, ±1
+        o = torch.as_tensor(center, dtype=self.object_prev.dtype, device=angle.device)
+
+        def xy(p: Tensor) -> Tensor:
+            d = p[:, :2] - o
+            return o + torch.stack((c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]), 1)
+
+        def pose(p: Tensor) -> Tensor:
+            return torch.cat((xy(p), (p[:, 2] + angle)[:, None]), 1)
+
+        return replace(self, object_prev=pose(self.object_prev),
+                       object_now=pose(self.object_now), pusher_prev=xy(self.pusher_prev),
+                       pusher_now=xy(self.pusher_now))
 
     def inputs(self, grid_points: Tensor, shape: tuple[int, int]) -> Tensor:
         """The model inputs φ1_{t−1}, φ2_{t−1}, φ2_t on X_h: ``(B, 3, H, W)``."""

@@ -26,8 +26,10 @@ from robotplan.sdf import Workspace
 from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
 from robotplan.training.samples import PushSamples, SampleBatch
 
-__all__ = ["TrainConfig", "grid_rmse", "hardware", "query_points", "train",
-           "validation_indices", "write_json"]
+__all__ = ["AUGMENTS", "TrainConfig", "augmented", "grid_rmse", "hardware", "query_points",
+           "train", "validation_indices", "write_json"]
+
+AUGMENTS = ("none", "turns")
 
 
 @dataclass
@@ -56,6 +58,10 @@ class TrainConfig:
     spec: dict = field(default_factory=dict)  # DynamicsSpec overrides
     # F_q's loss: "delta", the ground-truth Δq; "sdf", eq. (5) through T(Δq) on SDFs alone
     rigid_loss: str = "delta"
+    # "turns": each sample's scene turned by a random multiple of 90° about X_h's centre
+    # (an exact symmetry, SampleBatch.turned), four orientations of every push
+    augment: str = "none"
+    anneal_by_time: bool = False  # the cosine also ends when ``minutes`` run out
 
 
 def query_points(batch: SampleBatch, n: int, near_share: float, ws: Workspace,
@@ -76,6 +82,18 @@ def query_points(batch: SampleBatch, n: int, near_share: float, ws: Workspace,
                                                                      rad * ang.sin()), -1)
         pts[:, :k] = near
     return pts
+
+
+def augmented(batch: SampleBatch, cfg: TrainConfig, ws: Workspace, step: int) -> SampleBatch:
+    """The batch of ``step`` as training sees it under ``cfg.augment``; the turns are drawn
+    from ``(seed, step)`` so a resumed run sees the same ones."""
+    if cfg.augment == "none":
+        return batch
+    if cfg.augment != "turns":
+        raise ValueError(f"augment {cfg.augment!r}: expected one of {', '.join(AUGMENTS)}")
+    k = np.random.default_rng([cfg.seed, 11, step]).integers(0, 4, len(batch.radius))
+    center = ((ws.bounds[0] + ws.bounds[1]) / 2, (ws.bounds[2] + ws.bounds[3]) / 2)
+    return batch.turned(torch.as_tensor(k, device=batch.radius.device), center)
 
 
 def _target(model: PushDynamics, batch: SampleBatch, pts: torch.Tensor) -> torch.Tensor:
@@ -169,7 +187,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
             n_contact = round(cfg.contact_share * cfg.batch)
             chosen = np.concatenate([rng.choice(train_contact, n_contact),
                                      rng.choice(train_free, cfg.batch - n_contact)])
-        batch = samples.batch(chosen, device=device)
+        batch = augmented(samples.batch(chosen, device=device), cfg, ws, step)
         gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
         pts = query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)
         inputs = batch.inputs(grid, ws.shape)

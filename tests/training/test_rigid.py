@@ -1,9 +1,12 @@
 """F_q training and evaluation on tiny real pybullet data with a tiny model."""
 
 import json
+import math
 import subprocess
 import sys
+from dataclasses import replace
 
+import pytest
 import torch
 
 from robotplan.models.rigid import load_rigid
@@ -33,13 +36,18 @@ def test_training_lowers_the_delta_q_error(tiny_push_data, tmp_path):
     assert load_rigid(tmp_path / "fq").spec.kind == "rigid"
 
 
-def test_resume_continues_exactly(tiny_push_data, tmp_path):
+@pytest.mark.parametrize("augment", ["none", "turns"])
+def test_resume_continues_exactly(tiny_push_data, tmp_path, augment):
     torch.set_num_threads(1)
-    train_rigid(config(tiny_push_data, tmp_path / "a", 20), progress=False)
-    interrupted = config(tiny_push_data, tmp_path / "b", 20)
+
+    def cfg(name):
+        return replace(config(tiny_push_data, tmp_path / name, 20), augment=augment)
+
+    train_rigid(cfg("a"), progress=False)
+    interrupted = cfg("b")
     interrupted.minutes = 0.0
     assert train_rigid(interrupted, progress=False)["step"] == 1
-    train_rigid(config(tiny_push_data, tmp_path / "b", 20), resume=True, progress=False)
+    train_rigid(cfg("b"), resume=True, progress=False)
     a, b = load_rigid(tmp_path / "a"), load_rigid(tmp_path / "b")
     for (k, va), vb in zip(a.state_dict().items(), b.state_dict().values(), strict=True):
         assert torch.allclose(va, vb, atol=1e-6), k
@@ -100,3 +108,36 @@ def test_training_on_sdfs_alone_lowers_the_delta_q_error(tiny_push_data, tmp_pat
         return err["contact"]["alpha_deg"][0] + err["free"]["alpha_deg"][0]
 
     assert turn_error(last) < 0.85 * turn_error(history[0])
+
+
+def test_quarter_turns_turn_the_rendered_inputs_and_the_delta_q(tiny_push_data,
+                                                                 tiny_ood_push_data):
+    """Turning the scene by k × 90° about X_h's centre rotates the rendered grids by k
+    quarter turns and the true Δq's shift by k × 90°, leaving its turn: the symmetry the
+    ``turns`` augmentation relies on, for boxes, L-shapes and the unseen footprints."""
+    from robotplan.models.spec import DynamicsSpec
+    from robotplan.sdf import Workspace
+    from robotplan.training.rigid import rigid_targets
+    from robotplan.training.samples import PushSamples
+
+    spec = DynamicsSpec(kind="rigid")
+    ws = Workspace(spec.workspace_center, spec.workspace_size,
+                   spec.workspace_size[0] / spec.grid[1])
+    grid = ws.points(torch.float64).reshape(-1, 2)
+    for folder in (tiny_push_data, tiny_ood_push_data):
+        samples = PushSamples(folder)
+        idx = torch.arange(0, len(samples), max(1, len(samples) // 12)).numpy()
+        batch = samples.batch(idx, dtype=torch.float64)
+        inputs, _, delta = rigid_targets(batch, grid, ws.shape)
+        assert batch.contact.any()
+        for k in (1, 2, 3):
+            turned = batch.turned(torch.full((len(idx),), k), (0.0, 0.0))
+            t_inputs, _, t_delta = rigid_targets(turned, grid, ws.shape)
+            # rows run along y, columns along x: a counter-clockwise turn is rot90 of (y, x)
+            expected = torch.rot90(inputs, k, dims=(3, 2))
+            assert (t_inputs - expected).abs().max() < 1e-9
+            c, s = round(math.cos(k * math.pi / 2)), round(math.sin(k * math.pi / 2))
+            shift = torch.stack((c * delta[:, 0] - s * delta[:, 1],
+                                 s * delta[:, 0] + c * delta[:, 1]), 1)
+            assert (t_delta[:, :2] - shift).abs().max() < 1e-9
+            assert (t_delta[:, 2] - delta[:, 2]).abs().max() < 1e-9
