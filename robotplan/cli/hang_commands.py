@@ -12,6 +12,7 @@ from pathlib import Path
 from robotplan.base.resources import learned_dir
 from robotplan.cli.common import (
     EXIT_BAD_INPUT,
+    device_name,
     model_folder_problem,
     print_result,
     training_folders_problem,
@@ -91,13 +92,15 @@ def cmd_train_hang(args: argparse.Namespace) -> int:
                           batch=args.batch, lr=args.lr, seed=args.seed, scenes=args.scenes,
                           minutes=args.minutes, val_every=args.val_every,
                           mined=list(args.mined), mined_repeat=args.mined_repeat,
-                          init=args.init, command=" ".join(["robotplan", *sys.argv[1:]]))
+                          init=args.init, device=device_name(args.device),
+                          anneal_by_time=args.anneal_by_time,
+                          command=" ".join(["robotplan", *sys.argv[1:]]))
     if args.resume:  # the run's settings come from its checkpoint; only the budget may change
         ckpt = Path(args.out) / "checkpoint.pt"
         saved = json.loads(torch.load(ckpt, weights_only=True)["config"])
         cfg = HangTrainConfig(**{**saved, "steps": args.steps or saved["steps"],
                                  "minutes": args.minutes, "out": args.out,
-                                 "data": args.data})
+                                 "data": args.data, "device": device_name(args.device)})
     print(json.dumps(train_hang(cfg, resume=args.resume)))
     return 0
 

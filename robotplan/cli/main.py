@@ -226,7 +226,12 @@ def _parser() -> argparse.ArgumentParser:
     th.add_argument("--scenes", type=int, default=None, help="use only the first N scenes")
     th.add_argument("--seed", type=int, default=0)
     th.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    th.add_argument("--device", default="cpu", help="cpu, cuda or auto (the network's; grids "
+                    "are rendered on the CPU)")
     th.add_argument("--minutes", type=float, default=None, help="stop after this wall time")
+    th.add_argument("--anneal-by-time", action="store_true",
+                    help="with --minutes: the learning rate reaches its floor when the "
+                         "minutes run out")
     th.add_argument("--val-every", type=int, default=1000)
     th.add_argument("--resume", action="store_true", help="continue from checkpoint.pt")
     th.add_argument("--overwrite", action="store_true", help="start over in a used folder")

@@ -53,6 +53,8 @@ class HangTrainConfig:
     checkpoint_minutes: float = 5.0
     command: str = ""
     spec: dict = field(default_factory=dict)  # HangSpec overrides (e.g. a tiny network)
+    device: str = "cpu"  # the network's; grids are rendered and cached on the CPU
+    anneal_by_time: bool = False  # the cosine also ends when ``minutes`` run out
 
 
 class HangSamples:
@@ -129,7 +131,9 @@ def hang_metrics(model: HangSuccess, samples: HangSamples, idx: np.ndarray,
                  chunk: int = 64) -> dict:
     """Loss (eq. 21) and, per threshold κ, the accuracy of "H < κ predicts success" and its
     rates on the successes (recall) and the failures (specificity)."""
-    h = torch.cat([model(samples.inputs(idx[i:i + chunk])) for i in range(0, len(idx), chunk)])
+    device = next(model.parameters()).device
+    h = torch.cat([model(samples.inputs(idx[i:i + chunk]).to(device)).cpu()
+                   for i in range(0, len(idx), chunk)])
     y = samples.hangs[idx]
     out = {"loss": round(float(hang_loss(h, y)), 5), "samples": len(idx),
            "successes": int(y.sum()), "h_median_success": round(float(h[y].median()), 4)
@@ -146,21 +150,22 @@ def hang_metrics(model: HangSuccess, samples: HangSamples, idx: np.ndarray,
 
 def train_hang(cfg: HangTrainConfig, resume: bool = False, progress: bool = True) -> dict:
     """Run (or resume) training; returns the last validation row."""
-    out = Path(cfg.out)
+    out, device = Path(cfg.out), torch.device(cfg.device)
     ckpt_path = out / "checkpoint.pt"
     torch.manual_seed(cfg.seed)
     if cfg.init:
-        model = load_hang_model(cfg.init).train()
+        model = load_hang_model(cfg.init, device).train()
         spec = model.spec
     else:
         spec = HangSpec.from_json(cfg.spec)
-        model = HangSuccess(spec)
+        model = HangSuccess(spec).to(device)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
-    run = load_checkpoint(ckpt_path, model, opt) if resume else Run()
+    run = load_checkpoint(ckpt_path, model, opt, device) if resume else Run()
     samples = HangSamples([cfg.data, *cfg.mined], spec, cfg.scenes)
     samples.cache(progress=progress)
     if cfg.test:
         val_samples = HangSamples(cfg.test, spec)
+        val_samples.cache(progress=progress)  # validated many times: rendered once
         train_idx, val_idx = np.arange(len(samples)), np.arange(len(val_samples))
     else:
         val_samples = samples
@@ -181,12 +186,13 @@ def train_hang(cfg: HangTrainConfig, resume: bool = False, progress: bool = True
         write_json(out / "training.json", {"config": asdict(cfg), "history": run.history,
                                              "samples": {"train": len(train_idx),
                                                          "val": len(val_idx)},
-                                             "hardware": hardware(torch.device("cpu"))})
+                                             "hardware": hardware(device)})
         return row
 
     def step_loss(step: int) -> torch.Tensor:
         chosen = batch_of(step)
-        return hang_loss(model(samples.inputs(chosen)), samples.hangs[chosen])
+        return hang_loss(model(samples.inputs(chosen).to(device)),
+                         samples.hangs[chosen].to(device))
 
     out.mkdir(parents=True, exist_ok=True)
     return run_steps(cfg, run, model, opt, ckpt_path, step_loss, validate, per_epoch,
