@@ -60,6 +60,8 @@ class Replan:
     violation: float | None
     seconds: float
     skeleton: str
+    # seconds of the best program's stages and functionals (Solution.timings)
+    timings: dict | None = None
 
     def as_dict(self) -> dict:
         out = asdict(self)
@@ -246,7 +248,8 @@ def _ask(loop: _Loop, scene: Scene, seen: Observation, tail: Solution | None, re
     solved = bool(getattr(result, "solved", False)) and best is not None
     record = Replan(loop.now(), len(loop.executed), reason, solved,
                     float(best.violation) if best is not None else None,
-                    time.perf_counter() - t0, best.skeleton.describe() if best else "")
+                    time.perf_counter() - t0, best.skeleton.describe() if best else "",
+                    dict(best.timings) if best is not None and best.timings else None)
     loop.replans.append(record)
     if report is not None:
         outcome_text = "solved" if solved else "not solved: the current plan goes on"

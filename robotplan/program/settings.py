@@ -124,7 +124,8 @@ class ProgramSettings:
 
 
 DEFAULT_SETTINGS = ProgramSettings()  # the free pushers' settings
-SCENE_CLASSES = ("arms", "routes", "pose", "rigid")
+# "replan": a search warm started from an earlier plan (the closed loop's re-plans), last
+SCENE_CLASSES = ("arms", "routes", "pose", "rigid", "replan")
 
 
 @cache

@@ -257,6 +257,8 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     ``guesses``: initial guesses of the learned program by skeleton (warm starts)."""
     obj, actors = check_supported(scene)
     settings = settings_for(scene, solver, dynamics_kind(model_dir))
+    if guesses:  # a re-plan from an earlier plan: the `replan` overlay's budget
+        settings = program_settings("replan", base=settings)
     result, spaces = SearchResult(None), {}  # spaces: a skeleton may recur in two tiers
     space = space_for(scene)
     for candidates, space in candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet):

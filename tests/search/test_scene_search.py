@@ -105,3 +105,35 @@ def test_each_scene_class_plans_with_its_own_default_dynamics(tmp_path):
         ("arms: flow", "'default'"),
         ("default: flow\npets: flow", "pets: not a scene class"),
         ("default: quadratic", "default: 'quadratic' is not a dynamics kind")))
+
+
+def test_a_warm_started_search_plans_with_the_replan_overlay(monkeypatch):
+    """A search from an earlier plan (a re-plan) gets ``replan`` of skeletons/settings.yaml
+    over its scene's settings; the same search without a guess does not."""
+    import numpy as np
+
+    from robotplan.program.settings import load_overlays
+    from robotplan.program.skeleton import parse_skeleton
+
+    calls = []
+
+    def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
+               time_budget, space, guesses=None):
+        calls.append(settings)
+        return SearchResult(None, [], 1.0)
+
+    monkeypatch.setattr(search_module, "search_push", record)
+    scene = load_scene(TASKS / "box_push.yaml")
+    sk = parse_skeleton("push@0", scene.pushers[0].name, scene.objects[0].name)
+    model = TASKS.parent / "learned" / "push_rigid"
+    guess = {"q_obj": np.zeros((2 * 10 + 1, 3))}
+    search_module.search_scene(scene, model, skeleton=sk, quiet=True, progress=False,
+                               guesses={sk: guess})
+    search_module.search_scene(scene, model, skeleton=sk, quiet=True, progress=False)
+    warm, fresh = calls
+    overlay = load_overlays()["replan"]
+    assert overlay, "skeletons/settings.yaml has a replan overlay"
+    for key, value in overlay.items():
+        assert getattr(warm, key) == value, key
+    assert any(getattr(fresh, key) != value for key, value in overlay.items())
+    assert warm.good_rms_mm == fresh.good_rms_mm  # the scene's own overlays stay
