@@ -79,7 +79,7 @@ def run_steps(cfg, run: Run, model: torch.nn.Module, opt: torch.optim.Optimizer,
     """Optimise until ``cfg.steps`` (or ``cfg.minutes`` of wall time); returns the last
     validation row. ``shown = (name, f, format)``: the bar shows an average of
     ``f(loss)`` under ``name``. ``cfg`` needs ``steps, lr, lr_min, warmup, val_every,
-    checkpoint_minutes, minutes``."""
+    checkpoint_minutes, minutes, anneal_by_time``."""
     from tqdm import tqdm
 
     name, of_loss, fmt = shown
@@ -96,7 +96,7 @@ def run_steps(cfg, run: Run, model: torch.nn.Module, opt: torch.optim.Optimizer,
             # --anneal-by-time: the cosine ends with the wall-time budget even where fewer
             # steps fit than asked (the run is then not step-for-step reproducible)
             spent = ((time.time() - run_start) / (60 * cfg.minutes)
-                     if getattr(cfg, "anneal_by_time", False) and cfg.minutes else 0.0)
+                     if cfg.anneal_by_time and cfg.minutes else 0.0)
             for g in opt.param_groups:
                 g["lr"] = lr_at(cfg, run.step, spent)
             opt.zero_grad(set_to_none=True)

@@ -92,8 +92,7 @@ def augmented(batch: SampleBatch, cfg: TrainConfig, ws: Workspace, step: int) ->
     if cfg.augment != "turns":
         raise ValueError(f"augment {cfg.augment!r}: expected one of {', '.join(AUGMENTS)}")
     k = np.random.default_rng([cfg.seed, 11, step]).integers(0, 4, len(batch.radius))
-    center = ((ws.bounds[0] + ws.bounds[1]) / 2, (ws.bounds[2] + ws.bounds[3]) / 2)
-    return batch.turned(torch.as_tensor(k, device=batch.radius.device), center)
+    return batch.turned(torch.as_tensor(k, device=batch.radius.device), tuple(ws.center))
 
 
 def _target(model: PushDynamics, batch: SampleBatch, pts: torch.Tensor) -> torch.Tensor:
