@@ -44,9 +44,9 @@ class LoopSettings:
     steer_limit: float = 0.03
 
 
-LOOP_CLASSES = ("chains",)
+LOOP_CLASSES = ("chains", "pose")
 """Scene classes with their own closed-loop settings: ``chains``, scenes in which the pusher
-pushes one object into another."""
+pushes one object into another; ``pose``, pose goals."""
 
 
 @cache

@@ -1,15 +1,19 @@
-"""H_g, the goal-region functional (paper §6.2, eq. 8)."""
+"""H_g, the goal-region functional (paper §6.2, eq. 8), and the pose goal's error."""
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
 import torch
 from torch import Tensor
 
 from robotplan.functionals.base import Functional, Quadrature, sdf_pose_gradients
+from robotplan.functionals.sticking import centroid
 from robotplan.functionals.windows import body_aabb, margin, window_bound_gradients, window_points
 from robotplan.scene.bodies import Body
 
-__all__ = ["GoalRegion"]
+__all__ = ["GoalRegion", "PoseError", "gyration_radius"]
 
 
 class GoalRegion(Functional):
@@ -66,3 +70,48 @@ class GoalRegion(Functional):
         J = (torch.bmm(slope[:, None, :], d_pose)[:, 0]
              + (g_lo[..., None] * J_lo + g_hi[..., None] * J_hi).sum(1))
         return fw.sum(1, keepdim=True), [J[:, None, :]]
+
+
+def gyration_radius(outline: np.ndarray) -> float:
+    """Radius of gyration (m) of a simple polygon ``(V, 2)`` about its area centroid:
+    √(J_c / A) with J_c the polar second moment of area (shoelace form)."""
+    x, y = outline[:, 0], outline[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    area = cross.sum() / 2
+    c = centroid(outline)
+    polar = (cross * (x * x + x * xn + xn * xn + y * y + y * yn + yn * yn)).sum() / 12
+    return float(math.sqrt(max(polar / area - c @ c, 0.0)))
+
+
+class PoseError(Functional):
+    """The pose goal's error: ``residual(X_WB (T, 3)) → (T, 3)`` in m,
+    ``[Δc_x, Δc_y, 2 ρ sin(Δθ/2)]`` with Δc the footprint centroid's offset from its place at
+    the target pose ``X_WG`` and ρ the footprint's radius of gyration, so that the squared
+    norm is the mean squared displacement of the footprint's points from the target
+    (|Δc|² + ρ² (2 − 2 cos Δθ)). Unlike H_g with the footprint as region, whose smoothing
+    leaves a sixth of a box's area "outside" at the exact pose, it is zero there."""
+
+    def __init__(self, outline_B: np.ndarray, X_WG: tuple[float, float, float]) -> None:
+        self.c_B = torch.as_tensor(centroid(outline_B))
+        self.rho = gyration_radius(outline_B)
+        self.X_WG = torch.as_tensor(np.asarray(X_WG, dtype=float))
+
+    def _centroid(self, X: Tensor) -> Tensor:
+        c, s = torch.cos(X[..., 2]), torch.sin(X[..., 2])
+        cB = self.c_B.to(X)
+        return X[..., :2] + torch.stack((c * cB[0] - s * cB[1], s * cB[0] + c * cB[1]), -1)
+
+    def residual(self, X_WB: Tensor) -> Tensor:
+        goal = self.X_WG.to(X_WB)
+        d = self._centroid(X_WB) - self._centroid(goal[None])
+        turn = 2 * self.rho * torch.sin((X_WB[:, 2] - goal[2]) / 2)
+        return torch.cat((d, turn[:, None]), -1)
+
+    def tolerance(self, outline_B: np.ndarray, share: float) -> float:
+        """The RMS displacement (m) that moves at most ``share`` of the footprint's area off
+        its target by translation: share · 2A / P (a translation δ uncovers at most δ·P/2)."""
+        edges = np.linalg.norm(np.roll(outline_B, -1, axis=0) - outline_B, axis=1)
+        x, y = outline_B[:, 0], outline_B[:, 1]
+        area = abs((x * np.roll(y, -1) - np.roll(x, -1) * y).sum()) / 2
+        return float(share * 2 * area / edges.sum())

@@ -30,8 +30,6 @@ from robotplan.functionals.collision import FixedCollision, SweptClearance, face
 from robotplan.functionals.sticking import (
     QuasiStaticObjectPush,
     StickingContact,
-    centroid,
-    limit_surface_radius,
 )
 from robotplan.models.dynamics import PushDynamics
 from robotplan.program.guess import guess_goal, initial_guess
@@ -40,7 +38,6 @@ from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import Solution
 from robotplan.scene import Scene
-from robotplan.sdf.footprint import support_corners
 
 __all__ = ["ChainPushProgram", "chain_guess", "objects_touch", "touching_distance"]
 
@@ -148,8 +145,7 @@ class ChainPushProgram(PushProgram):
     def _add_object_push(self, turn: bool) -> None:
         """QuasiStaticObjectPush rows of the target at ``p_chain`` in chained push steps."""
         target, k = self.target, self.chain_steps
-        radius = limit_surface_radius(support_corners(target.shape),
-                                      centroid(target.shape.outline()))
+        radius = self._turning_radius(target.shape)
         H = QuasiStaticObjectPush(target, radius, self.settings.push_friction, turn=turn)
         self._add_quasi_static_rows(H, [self.Q3[k - 1], self.Q3[k], self.P3], "_chain")
 

@@ -8,6 +8,7 @@ import torch
 
 from robotplan.functionals import Collision, ContactPoint, GoalRegion
 from robotplan.functionals.collision import FixedCollision, SweptClearance, face_contact_overlap
+from robotplan.functionals.goal import PoseError
 from robotplan.functionals.sticking import (
     CornerClearance,
     PushingDirection,
@@ -167,11 +168,17 @@ class PushRows(DynamicsRows):
         ``turn_in_learned``; otherwise the learned stage keeps the cone only and H_F alone
         decides how the object turns)."""
         c_B = centroid(self.obj.shape.outline())
-        radius = limit_surface_radius(support_corners(self.obj.shape), c_B)
+        radius = self._turning_radius(self.obj.shape)
         H = QuasiStaticPush(c_B, radius, self.settings.push_friction, turn=turn)
         k = self.push_steps
         self._add_quasi_static_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P],
                                     scale=scale)
+
+    def _turning_radius(self, shape) -> float:
+        """The limit surface radius c of ``shape`` over √turn_gain: c² Δθ = g · r × Δc."""
+        c_B = centroid(shape.outline())
+        return limit_surface_radius(support_corners(shape), c_B) / np.sqrt(
+            self.settings.turn_gain)
 
     def _add_quasi_static_rows(self, H: QuasiStaticPush, blocks: list[np.ndarray],
                                suffix: str = "", scale: float = 100.0) -> None:
@@ -209,6 +216,14 @@ class PushRows(DynamicsRows):
             H = ContactPoint(self.obj, self.scene.bodies[self.scene.goal.actor])
             self._add_rows(H, [self.Q1[-1:], self.Q2[-1:], self.P_touch], 2, 100, 0.0, 0.0,
                            "H_touch")  # cm, as H_PoC
+            return
+        if self.scene.goal.type == "pose":
+            # the object's own footprint at the target pose: each component of the pose
+            # error within tol/√3 (cm), so that at most goal_tol of the area is off target
+            outline = self.goal_body.shape.outline()
+            H = PoseError(outline, tuple(self.scene.goal.pose))
+            bound = 100 * H.tolerance(outline, self.settings.goal_tol) / np.sqrt(3)
+            self._add_rows(H, [self.goal_Q[self.N:]], 3, 100, -bound, bound, "H_pose")
             return
         if self.region is None:
             return

@@ -109,6 +109,10 @@ class ProgramSettings:
     # of the turning pybullet produces, the law much more
     # (measured: docs/experiments.md#turn-in-learned)
     turn_in_learned: bool = True
+    # the turning law's gain g (c² Δθ = g · r × Δc; 1: the ellipsoidal limit surface of the
+    # support points): pybullet turns a box or T pushed along a face normal 1.32× as far
+    # (median over off-centre sticking pushes; measured: docs/experiments.md#pose-goals)
+    turn_gain: float = 1.0
     # arms (robotplan/program/arm_program.py)
     step_seconds: float = 1.0 / 12.0  # one planned step: 20 simulation steps, as the data
     reach_slowdown: float = 3.0  # reach steps last this many planned steps in execution

@@ -1,6 +1,10 @@
+import math
+
+import pytest
 import torch
 
 from robotplan.functionals import GoalRegion, Quadrature
+from robotplan.functionals.goal import PoseError, gyration_radius
 from tests.functionals.conftest import F64, central_difference_jacobian
 
 
@@ -42,3 +46,53 @@ def test_inset_measures_against_the_shrunk_region(box, region):
     assert near_edge > 5 * outside  # … but much more outside the inset one
     windowed = GoalRegion(box, region, a=100.0, inset=0.03)  # the fast path agrees
     assert torch.allclose(windowed(X), inset(X), rtol=0.02, atol=1e-4 * box.area)
+
+
+def _grid_points(body, step=0.002):
+    """Points of a fine grid inside ``body``'s footprint (body frame), ``(P, 2)``."""
+    lo, hi = body.shape.outline().min(0), body.shape.outline().max(0)
+    xs = torch.arange(lo[0] + step / 2, hi[0], step, dtype=F64)  # cell centres
+    ys = torch.arange(lo[1] + step / 2, hi[1], step, dtype=F64)
+    p = torch.cartesian_prod(xs, ys)
+    phi, _ = body.shape.sdf_and_grad(p)
+    return p[phi < 0]
+
+
+@pytest.mark.parametrize("name", ["box", "ell"])
+def test_pose_error_is_the_rms_displacement_of_the_footprint(name, request):
+    body = request.getfixturevalue(name)
+    goal = (0.3, -0.1, 0.7)
+    H = PoseError(body.shape.outline(), goal)
+    X = torch.tensor([[0.3, -0.1, 0.7], [0.32, -0.09, 0.9], [0.25, 0.0, -0.4]], dtype=F64)
+    r = H(X)
+    assert r[0].abs().max() < 1e-12  # zero at the target
+    p = _grid_points(body)
+
+    def world(pose):
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        return p @ torch.tensor([[c, s], [-s, c]], dtype=F64) + torch.tensor(pose[:2], dtype=F64)
+
+    for k in (1, 2):
+        msd = ((world(X[k].tolist()) - world(goal)) ** 2).sum(1).mean()
+        assert abs(float((r[k] ** 2).sum()) - float(msd)) < 0.01 * float(msd)
+
+
+def test_pose_error_jacobian_matches_finite_differences(ell):
+    H = PoseError(ell.shape.outline(), (0.1, 0.2, -0.3))
+    X = torch.tensor([[0.15, 0.0, 0.3], [0.1, 0.21, -0.25]], dtype=F64)
+    _, (J,) = H.jacobians(X)
+    fd = central_difference_jacobian(H, (X,), 0)
+    assert torch.allclose(J, fd, rtol=1e-6, atol=1e-10), (J - fd).abs().max()
+
+
+def test_pose_tolerance_bounds_the_share_moved_off_target(box):
+    """A translation of the tolerance along either axis uncovers at most the share."""
+    outline = box.shape.outline()
+    H = PoseError(outline, (0.0, 0.0, 0.0))
+    tol = H.tolerance(outline, 0.02)
+    p = _grid_points(box, 0.001)
+    for d in ((tol, 0.0), (0.0, tol), (tol / math.sqrt(2), tol / math.sqrt(2))):
+        moved = p + torch.tensor(d, dtype=F64)
+        phi, _ = box.shape.sdf_and_grad(moved)
+        assert float((phi > 0).double().mean()) <= 0.02
+    assert abs(gyration_radius(outline) - math.sqrt((0.2**2 + 0.12**2) / 12)) < 1e-9
