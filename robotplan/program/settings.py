@@ -45,7 +45,7 @@ class ProgramSettings:
     # and pybullet drags the object along (measured: docs/experiments.md#swept-clearance)
     swept_samples: int = 7
     swept_tolerance: float = 0.002
-    goal_tol: float = 0.003  # share of the object's area allowed outside the goal
+    goal_tol: float = 0.003  # share of the object's area allowed outside the goal (or off its pose)
     # plan into the region shrunk by this much (m), at most a third of the room the object
     # has when aligned (region inradius − half its longer side), so tight fits stay feasible
     goal_inset: float = 0.02

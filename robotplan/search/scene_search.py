@@ -284,7 +284,7 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
                                      max_pushes, workers, progress, exhaustive, quiet,
                                      time_budget)
         spaces.update({id(s): posed for s in result.candidates})
-        if result.solved or budget_spent(result, time_budget):
+        if result.candidates:  # the plain tier's pushes do not turn: it plans no pose goal
             return result, spaces
     for candidates, space in candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet):
         left = None if time_budget is None else max(0.0, time_budget - result.seconds)

@@ -2,6 +2,7 @@
 with the real planner, where open loop fails; its pieces one by one."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -20,6 +21,7 @@ from robotplan.execution.closed_loop import (
 from robotplan.execution.perturb import Perturbation
 from robotplan.execution.scene_world import Observation
 from robotplan.execution.sim import PHYSICS
+from robotplan.scene.schema import PoseGoal
 from tests.conftest import TASKS, assert_each_refused
 
 
@@ -65,6 +67,9 @@ def test_chains_re_plan_from_their_own_phase_end_departures(tmp_path):
     chained = loop_settings_for(chain)
     assert chained != LoopSettings()
     assert all(getattr(chained, k) == v for k, v in overlay.items())
+    posed = loop_settings_for(replace(single, goal=PoseGoal("box", (0.3, 0.1, 0.5))))
+    assert all(getattr(posed, k) == v for k, v in load_loop_overlays()["pose"].items())
+    assert posed.fresh_after_miss and not LoopSettings().fresh_after_miss
     assert_each_refused(load_loop_overlays.__wrapped__, tmp_path / "loop.yaml", (
         ("chains: {no_such: 1}", "loop.yaml: chains.no_such: not a closed-loop"),
         ("pets: {}", "pets: not a scene class"),

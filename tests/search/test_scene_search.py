@@ -137,3 +137,43 @@ def test_a_warm_started_search_plans_with_the_replan_overlay(monkeypatch):
         assert getattr(warm, key) == value, key
     assert any(getattr(fresh, key) != value for key, value in overlay.items())
     assert warm.good_rms_mm == fresh.good_rms_mm  # the scene's own overlays stay
+
+
+def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
+    """A pose goal's tier is the pushes fitted in closed form, each with its own guess in a
+    space of object-frame face normals; the plain tier follows only when no program of it
+    was solved (nothing fitted)."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from robotplan.program.solution import Solution
+    from robotplan.scene.schema import PoseGoal
+
+    calls = []
+
+    def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
+               time_budget, space, guesses=None):
+        calls.append((list(skeletons), space, guesses, settings))
+        tried = [Solution(sk, False, "snopt info 31", 0.5, 1.0, 1.0, np.zeros((1, 3)),
+                          np.zeros((1, 2))) for sk in skeletons[:1] if guesses]
+        return SearchResult(tried[0] if tried else None, tried, 1.0)
+
+    monkeypatch.setattr(search_module, "search_push", record)
+    scene = load_scene(TASKS / "box_push.yaml")
+    x, y, yaw = scene.objects[0].pose
+    scene = replace(scene, goal=PoseGoal(scene.objects[0].name, (x + 0.15, y, yaw + 0.8)))
+    model = TASKS.parent / "learned" / "push_rigid"
+    search_module.search_scene(scene, model, quiet=True, progress=False)
+    (fitted, space, guesses, settings), = calls  # an unsolved fitted plan: no plain tier
+    assert fitted and set(guesses) == set(fitted)
+    assert space.init_frame == "object" and space.steps_per_phase >= 10
+    for sk in fitted:
+        states = len(sk.phases) * space.steps_per_phase + 1
+        assert guesses[sk]["q_obj"].shape == (states, 3)
+        assert abs(guesses[sk]["q_obj"][-1, 2] - (yaw + 0.8)) < 0.02  # the guess turns
+    assert settings.turn_gain != 1.0 and settings.goal_tol == 0.02  # the pose overlay
+    monkeypatch.setattr(search_module, "pose_candidates", lambda *a, **k: (space, [], {}))
+    search_module.search_scene(scene, model, quiet=True, progress=False)
+    plain, plain_space, none, _ = calls[-1]
+    assert len(plain) > len(fitted) and none is None and plain_space.init_frame == "goal"
