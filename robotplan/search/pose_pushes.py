@@ -9,43 +9,36 @@ n_B (body frame) and the object turns κ = (r_B × n_B) / c² per metre, so the 
 follows a circular arc. A push is therefore three numbers, the face, the contact point's
 position along it and the length pushed, and the pose after K pushes is a closed-form
 composition of arcs. :func:`fit_pose_pushes` fits the lengths and contact points of every
-sequence of up to ``max_pushes`` faces to the target pose by least squares, and
-:func:`pose_candidates` turns the fits into skeletons with a full initial guess (the
-pusher circles to a standoff behind each contact point, steps in and follows the arc),
-which the kinematic stage then only polishes: from the circle-and-push guess, whose pushes
-translate without turning, SNOPT finds no plan of a turn of 30–90°
-(measured: docs/experiments.md#pose-goals).
+sequence of up to ``max_pushes`` faces to the target pose by least squares;
+:mod:`robotplan.search.pose_search` turns the fits into skeletons with a full initial guess.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import torch
 from scipy.optimize import least_squares
 
 from robotplan.functionals.sticking import centroid, limit_surface_radius
-from robotplan.program.settings import ProgramSettings
-from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
 from robotplan.scene import Scene
 from robotplan.sdf.footprint import support_corners
 
-__all__ = ["Face", "PosePushes", "faces_of", "fit_pose_pushes", "pose_candidates",
-           "pose_guess", "push_arc"]
+__all__ = ["FIT_TOLERANCE", "INIT_DIRECTIONS_DEG", "STANDOFF", "Face", "PosePushes", "TurningBody",
+           "faces_of", "fit_pose_pushes", "push_arc", "rotation"]
 
 MIN_FACE = 0.02  # m: shorter edges of the outline (a disc's facets) are not pushed
 FACE_MARGIN = 0.2  # share of a face kept free at either end: contacts nearer a corner slide
-MAX_STEPS_PER_PHASE = 30
 STANDOFF = 0.015  # m between the pusher and the face where a reach ends (≥ reach_clearance)
 FIT_TOLERANCE = 0.004  # m of pose error (yaw as c·Δθ) a fit may leave to the program
 LENGTH_WEIGHT = 0.05  # least-squares weight of each push's length: shorter pushes first
 MAX_LENGTH = 0.35  # m pushed at most in one push
 PUSH_COST = 0.1  # m of pushing one more push (its reach around the object) counts as
 ROOM_SAMPLES = 6  # points per push at which the object must leave the pusher room on the table
-INIT_DIRECTIONS_DEG = (0.0, 90.0, 180.0, 270.0)  # the face normals' classes in the object frame
+INIT_DIRECTIONS_DEG = (0.0, 90.0, 180.0, 270.0)  # face normal classes in the object frame
 
 
 @dataclass(frozen=True)
@@ -93,7 +86,8 @@ def faces_of(scene: Scene, obj: str, actor: str) -> list[Face]:
     return faces
 
 
-def _rot(yaw: float) -> np.ndarray:
+def rotation(yaw: float) -> np.ndarray:
+    """R(yaw) ``(2, 2)``."""
     c, s = math.cos(yaw), math.sin(yaw)
     return np.array([[c, -s], [s, c]])
 
@@ -111,7 +105,7 @@ def push_arc(c0: np.ndarray, yaw0: float, r_B: np.ndarray, n_B: np.ndarray, radi
     cos_term = np.where(small, ks / 2, (1.0 - np.cos(safe)) / safe) * s
     local = np.stack((sin_term * n_B[0] - cos_term * n_B[1],
                       cos_term * n_B[0] + sin_term * n_B[1]), -1)
-    return c0 + local @ _rot(yaw0).T, yaw0 + ks
+    return c0 + local @ rotation(yaw0).T, yaw0 + ks
 
 
 @dataclass(frozen=True)
@@ -129,7 +123,7 @@ class PosePushes:
         return float(sum(self.lengths))
 
 
-class _Object:
+class TurningBody:
     """The pushed object's quasi-static constants: centroid (body frame) and limit surface
     radius c over √turn_gain, as the program's turning law has them."""
 
@@ -146,7 +140,7 @@ class _Object:
                                np.sin(yaw) * cB[0] + np.cos(yaw) * cB[1]), -1)
 
 
-def _path(body: _Object, faces: tuple[Face, ...], c0: np.ndarray, yaw0: float,
+def _path(body: TurningBody, faces: tuple[Face, ...], c0: np.ndarray, yaw0: float,
           params: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
     """The end centroid and yaw after the pushes ``params`` (share, length per push) and
     the centroids ``(K · ROOM_SAMPLES, 2)`` passed on the way."""
@@ -168,10 +162,10 @@ def fit_pose_pushes(scene: Scene, obj: str, actor: str, goal: tuple[float, float
     ``goal`` and on the table; else the closest), one per sequence of face classes, of up
     to ``max_pushes`` pushes bringing ``obj`` to ``goal`` under the quasi-static push
     (turning law ``c² Δθ = turn_gain · r × Δc``)."""
-    body = _Object(scene, obj, turn_gain)
+    body = TurningBody(scene, obj, turn_gain)
     pose = np.asarray(scene.bodies[obj].pose, dtype=float)
-    c0 = pose[:2] + _rot(pose[2]) @ body.c_B
-    target_c = np.asarray(goal[:2], dtype=float) + _rot(goal[2]) @ body.c_B
+    c0 = pose[:2] + rotation(pose[2]) @ body.c_B
+    target_c = np.asarray(goal[:2], dtype=float) + rotation(goal[2]) @ body.c_B
     turn = (goal[2] - pose[2] + math.pi) % (2 * math.pi) - math.pi
     target_yaw = pose[2] + turn
     faces = faces_of(scene, obj, actor)
@@ -214,109 +208,3 @@ def _rank(fit: PosePushes) -> tuple[bool, float]:
     tolerance, the closest)."""
     within = fit.error <= FIT_TOLERANCE
     return (not within, fit.total_length + PUSH_COST * len(fit.faces) if within else fit.error)
-
-
-def _steps_for(body: _Object, fit: PosePushes, speed: float, max_turn: float) -> int:
-    """Steps per phase: the longest push at ``speed`` m per step (the pusher, which sweeps
-    faster than the centroid while the object turns) and ``max_turn`` rad per step, plus one
-    step into contact and one spare."""
-    need = 0
-    for face, share, length in zip(fit.faces, fit.shares, fit.lengths, strict=True):
-        r_B = face.point(share) - body.c_B
-        kappa = abs(r_B[0] * face.n[1] - r_B[1] * face.n[0]) / body.radius**2
-        sweep = 1.0 + kappa * float(np.linalg.norm(r_B))
-        need = max(need, math.ceil(length * sweep / speed), math.ceil(kappa * length / max_turn))
-    return min(MAX_STEPS_PER_PHASE, need + 2)
-
-
-def pose_guess(scene: Scene, obj: str, actor: str, fit: PosePushes, T: int,
-               turn_gain: float = 1.0) -> dict[str, np.ndarray]:
-    """The push program's initial guess for ``fit`` at ``T`` steps per phase: per push a
-    reach (the pusher circles the object clear of it to STANDOFF behind the contact point),
-    then a step into contact and the arc of the quasi-static push over the other T − 1."""
-    body = _Object(scene, obj, turn_gain)
-    shape = scene.bodies[obj].shape
-    rho = scene.bodies[actor].shape.radius
-    pose = np.asarray(scene.bodies[obj].pose, dtype=float)
-    c, yaw = pose[:2] + _rot(pose[2]) @ body.c_B, float(pose[2])
-    q_obj, q_pusher, contacts = [pose.copy()], [np.asarray(scene.bodies[actor].pose[:2])], []
-    circle = shape.bound_radius + float(np.linalg.norm(body.c_B)) + rho + STANDOFF
-    last_n = None  # the inward normal of the face pushed last (table frame)
-    for face, share, length in zip(fit.faces, fit.shares, fit.lengths, strict=True):
-        R = _rot(yaw)
-        p_W = c + R @ (face.point(share) - body.c_B)
-        n_W = R @ face.n
-        touching = p_W - rho * n_W
-        standoff = touching - STANDOFF * n_W
-        here = np.append(body.origin(c[None], np.array([yaw]))[0], yaw)
-        # reach: back off the face just pushed (or out from the centroid), round the
-        # centroid on a circle clear of the object, then in to the standoff
-        start = q_pusher[-1]
-        away = -last_n if last_n is not None else start - c
-        away = away / max(float(np.linalg.norm(away)), 1e-9)
-        out = start + circle * away
-        a0 = math.atan2(*(out - c)[::-1])
-        a1 = math.atan2(*(standoff - c)[::-1])
-        da = (a1 - a0 + math.pi) % (2 * math.pi) - math.pi
-        ring = max(circle, float(np.linalg.norm(out - c)))
-        entry = c + ring * np.array([math.cos(a1), math.sin(a1)])
-        for s in range(1, T + 1):
-            if s == 1:
-                q_pusher.append(out)
-            elif s <= T - 2:
-                u = (s - 1) / (T - 3)
-                a = a0 + u * da
-                rad = float(np.linalg.norm(out - c)) * (1 - u) + ring * u
-                q_pusher.append(c + rad * np.array([math.cos(a), math.sin(a)]))
-            else:
-                q_pusher.append(entry + (s - (T - 2)) / 2 * (standoff - entry))
-            q_obj.append(here)
-        # push: one step into contact, then the arc
-        q_pusher.append(touching)
-        q_obj.append(here)
-        contacts.append(p_W)
-        s_grid = length * np.arange(1, T) / (T - 1)
-        cs, ys = push_arc(c, yaw, face.point(share) - body.c_B, face.n, body.radius, s_grid)
-        origins = body.origin(cs, ys)
-        for cj, yj, oj in zip(cs, ys, origins, strict=True):
-            Rj = _rot(float(yj))
-            pj = cj + Rj @ (face.point(share) - body.c_B)
-            q_obj.append(np.append(oj, yj))
-            q_pusher.append(pj - rho * (Rj @ face.n))
-            contacts.append(pj)
-        c, yaw, last_n = cs[-1], float(ys[-1]), _rot(float(ys[-1])) @ face.n
-    return {"q_obj": np.array(q_obj), "q_pusher": np.array(q_pusher),
-            "p": np.array(contacts)}
-
-
-def pose_candidates(scene: Scene, obj: str, actor: str, space: SkeletonSpace,
-                    settings: ProgramSettings, max_pushes: int = 2
-                    ) -> tuple[SkeletonSpace, list[Skeleton], dict[Skeleton, dict]]:
-    """Skeletons of the fitted pushes (:func:`fit_pose_pushes`) to the scene's pose goal,
-    their initial guesses, and the space they need (init points at the object frame's face
-    normals, enough steps per phase for the longest push at the guess's speed and the
-    kinematic stage's turn per step); the turning law of ``settings``."""
-    goal, gain = scene.goal, settings.turn_gain
-    fits: list[PosePushes] = []
-    for pushes in (max_pushes, max_pushes + 1):  # one push more when none fits
-        fits = [f for f in fit_pose_pushes(scene, obj, actor, tuple(goal.pose), pushes,
-                                           turn_gain=gain)
-                if f.error <= FIT_TOLERANCE]
-        if fits:
-            break
-    if not fits:
-        return space, [], {}
-    body = _Object(scene, obj, gain)
-    T = max(space.steps_per_phase, max(_steps_for(body, f, settings.guess_speed,
-                                                  settings.warm_max_turn) for f in fits))
-    posed = replace(space, steps_per_phase=T, init_frame="object",
-                    init_directions_deg=INIT_DIRECTIONS_DEG)
-    skeletons, guesses = [], {}
-    for fit in fits:
-        phases: list[Phase] = []
-        for face in fit.faces:
-            phases += [Phase("reach", actor, obj, face.init), Phase("push", actor, obj, face.init)]
-        sk = Skeleton(tuple(phases))
-        skeletons.append(sk)
-        guesses[sk] = pose_guess(scene, obj, actor, fit, T, gain)
-    return posed, skeletons, guesses

@@ -31,7 +31,7 @@ from robotplan.program.skeleton import (
 from robotplan.program.solution import Solution
 from robotplan.scene import Scene
 from robotplan.search.planner import FEASIBLE, SearchResult, merge_results, search_push
-from robotplan.search.pose_pushes import pose_candidates
+from robotplan.search.pose_search import search_pose
 from robotplan.search.route import routed_candidates
 
 __all__ = ["DYNAMICS_CLASSES", "UnsupportedScene", "budget_spent", "candidate_table",
@@ -191,22 +191,6 @@ def _search_routes(scene: Scene, obj: str, actor: str, model_dir: Path,
                                progress, exhaustive, time_budget, routed)
 
 
-def _search_pose(scene: Scene, obj: str, actor: str, model_dir: Path,
-                 settings: ProgramSettings, space: SkeletonSpace, max_pushes: int,
-                 workers: int, progress: bool, exhaustive: bool, quiet: bool,
-                 time_budget: float | None) -> tuple[SkeletonSpace, SearchResult]:
-    """For a pose goal, first: the pushes fitted to the target pose in closed form
-    (robotplan.search.pose_pushes), each skeleton from its own initial guess."""
-    posed, skeletons, guesses = pose_candidates(scene, obj, actor, space, settings, max_pushes)
-    if not quiet:
-        print(f"pose goal: {len(skeletons)} fitted push sequences "
-              f"({posed.steps_per_phase} steps per phase)")
-    if not skeletons:
-        return posed, SearchResult(None)
-    return posed, search_push(scene, model_dir, skeletons, settings, workers, progress,
-                              exhaustive, time_budget, posed, guesses=guesses)
-
-
 def _margin_note(s: Solution) -> str:
     """Why a feasible plan around obstacles was not taken, if that is the reason."""
     if s.clearance >= OBSTACLE_MARGIN or s.violation > FEASIBLE:
@@ -280,7 +264,7 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     space = space_for(scene)
     if (scene.goal.type == "pose" and skeleton is None and not guesses and not scene.robots
             and _chain_target(scene) is None):
-        posed, result = _search_pose(scene, obj, actors[0], model_dir, settings, space,
+        posed, result = search_pose(scene, obj, actors[0], model_dir, settings, space,
                                      max_pushes, workers, progress, exhaustive, quiet,
                                      time_budget)
         spaces.update({id(s): posed for s in result.candidates})

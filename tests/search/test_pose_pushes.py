@@ -1,4 +1,4 @@
-"""Pose goals: quasi-static pushes fitted in closed form, their guess and the program."""
+"""Pose goals: quasi-static pushes along face normals, fitted in closed form."""
 
 import math
 
@@ -7,21 +7,16 @@ import pytest
 import torch
 
 from robotplan.functionals.sticking import QuasiStaticPush
-from robotplan.program.push_program import PushProgram
-from robotplan.program.skeleton import load_skeleton_space
-from robotplan.program.solution import FEASIBLE
 from robotplan.scene.loader import parse_scene
 from robotplan.search.pose_pushes import (
     FIT_TOLERANCE,
     PosePushes,
-    _Object,
+    TurningBody,
     faces_of,
     fit_pose_pushes,
-    pose_candidates,
-    pose_guess,
     push_arc,
 )
-from robotplan.search.scene_search import settings_for
+from robotplan.search.pose_search import pose_guess
 
 
 def scene_doc(shape: dict, goal_pose: list[float], radius: float = 0.03) -> dict:
@@ -86,29 +81,8 @@ def test_fit_reaches_a_pose_made_by_two_pushes(shape):
     scene = parse_scene(scene_doc(shape, goal))
     fits = fit_pose_pushes(scene, "object", "pusher", tuple(goal), max_pushes=2)
     assert fits and fits[0].error <= FIT_TOLERANCE
-    body = _Object(scene, "object", 1.0)
+    body = TurningBody(scene, "object", 1.0)
     for fit in fits:  # fewest pushes first, each within tolerance when the first is
         end = pose_guess(scene, "object", "pusher", fit, 20)["q_obj"][-1]
         miss = np.hypot(*(end[:2] - goal[:2])) + body.radius * abs(end[2] - goal[2])
         assert fit.error > FIT_TOLERANCE or miss < 2 * FIT_TOLERANCE
-
-
-def test_kinematic_program_solves_a_turn_from_the_fitted_guess():
-    """A box moved 12 cm and turned 60°: the fitted guess meets sticking, H_PoC and the pose
-    row exactly, and SNOPT's kinematic stage ends feasible from it."""
-    scene = parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)]))
-    settings = settings_for(scene)
-    space, skeletons, guesses = pose_candidates(scene, "object", "pusher",
-                                                load_skeleton_space(), settings)
-    assert skeletons
-    sk = skeletons[0]
-    prog = PushProgram(scene, sk, None, space, settings, guess=guesses[sk])
-    x = np.zeros(prog.prog.num_vars())
-    for V, value in prog._guess_pairs():
-        x[prog.prog.FindDecisionVariableIndices(V.ravel())] = value.ravel()
-    worst, _ = prog.evaluate(x)
-    assert worst["sticking"] < 1e-6 and worst["H_PoC"] < 1e-6 and worst["H_pose"] < 0.01
-    sol = prog.solve()
-    assert sol.violation <= FEASIBLE
-    turn = sol.q_obj[-1, 2] - sol.q_obj[0, 2]
-    assert abs(turn - math.radians(60)) < 0.02

@@ -147,6 +147,7 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
 
     import numpy as np
 
+    import robotplan.search.pose_search as pose_search
     from robotplan.program.solution import Solution
     from robotplan.scene.schema import PoseGoal
 
@@ -160,6 +161,7 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
         return SearchResult(tried[0] if tried else None, tried, 1.0)
 
     monkeypatch.setattr(search_module, "search_push", record)
+    monkeypatch.setattr(pose_search, "search_push", record)
     scene = load_scene(TASKS / "box_push.yaml")
     x, y, yaw = scene.objects[0].pose
     scene = replace(scene, goal=PoseGoal(scene.objects[0].name, (x + 0.15, y, yaw + 0.8)))
@@ -173,7 +175,7 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
         assert guesses[sk]["q_obj"].shape == (states, 3)
         assert abs(guesses[sk]["q_obj"][-1, 2] - (yaw + 0.8)) < 0.02  # the guess turns
     assert settings.turn_gain != 1.0 and settings.goal_tol == 0.02  # the pose overlay
-    monkeypatch.setattr(search_module, "pose_candidates", lambda *a, **k: (space, [], {}))
+    monkeypatch.setattr(pose_search, "pose_candidates", lambda *a, **k: (space, [], {}))
     search_module.search_scene(scene, model, quiet=True, progress=False)
     plain, plain_space, none, _ = calls[-1]
     assert len(plain) > len(fitted) and none is None and plain_space.init_frame == "goal"

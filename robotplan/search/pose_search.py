@@ -1,0 +1,156 @@
+"""The pose goal's tier of the skeleton search: the pushes fitted in closed form
+(:mod:`robotplan.search.pose_pushes`) as skeletons, each with a full initial guess (the
+pusher backs off, circles the object to a standoff behind the contact point, steps in and
+follows the arc), which the kinematic stage then only polishes: from the circle-and-push
+guess, whose pushes translate without turning, SNOPT finds no plan of a turn of 30–90°
+(measured: docs/experiments.md#pose-goals).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from robotplan.program.settings import ProgramSettings
+from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
+from robotplan.scene import Scene
+from robotplan.search.planner import SearchResult, search_push
+from robotplan.search.pose_pushes import (
+    FIT_TOLERANCE,
+    INIT_DIRECTIONS_DEG,
+    STANDOFF,
+    PosePushes,
+    TurningBody,
+    fit_pose_pushes,
+    push_arc,
+    rotation,
+)
+
+__all__ = ["pose_candidates", "pose_guess", "search_pose"]
+
+MAX_STEPS_PER_PHASE = 30
+
+
+def _steps_for(body: TurningBody, fit: PosePushes, speed: float, max_turn: float) -> int:
+    """Steps per phase: the longest push at ``speed`` m per step (the pusher, which sweeps
+    faster than the centroid while the object turns) and ``max_turn`` rad per step, plus one
+    step into contact and one spare."""
+    need = 0
+    for face, share, length in zip(fit.faces, fit.shares, fit.lengths, strict=True):
+        r_B = face.point(share) - body.c_B
+        kappa = abs(r_B[0] * face.n[1] - r_B[1] * face.n[0]) / body.radius**2
+        sweep = 1.0 + kappa * float(np.linalg.norm(r_B))
+        need = max(need, math.ceil(length * sweep / speed), math.ceil(kappa * length / max_turn))
+    return min(MAX_STEPS_PER_PHASE, need + 2)
+
+
+def pose_guess(scene: Scene, obj: str, actor: str, fit: PosePushes, T: int,
+               turn_gain: float = 1.0) -> dict[str, np.ndarray]:
+    """The push program's initial guess for ``fit`` at ``T`` steps per phase: per push a
+    reach (the pusher circles the object clear of it to STANDOFF behind the contact point),
+    then a step into contact and the arc of the quasi-static push over the other T − 1."""
+    body = TurningBody(scene, obj, turn_gain)
+    shape = scene.bodies[obj].shape
+    rho = scene.bodies[actor].shape.radius
+    pose = np.asarray(scene.bodies[obj].pose, dtype=float)
+    c, yaw = pose[:2] + rotation(pose[2]) @ body.c_B, float(pose[2])
+    q_obj, q_pusher, contacts = [pose.copy()], [np.asarray(scene.bodies[actor].pose[:2])], []
+    circle = shape.bound_radius + float(np.linalg.norm(body.c_B)) + rho + STANDOFF
+    last_n = None  # the inward normal of the face pushed last (table frame)
+    for face, share, length in zip(fit.faces, fit.shares, fit.lengths, strict=True):
+        R = rotation(yaw)
+        p_W = c + R @ (face.point(share) - body.c_B)
+        n_W = R @ face.n
+        touching = p_W - rho * n_W
+        standoff = touching - STANDOFF * n_W
+        here = np.append(body.origin(c[None], np.array([yaw]))[0], yaw)
+        # reach: back off the face just pushed (or out from the centroid), round the
+        # centroid on a circle clear of the object, then in to the standoff
+        start = q_pusher[-1]
+        away = -last_n if last_n is not None else start - c
+        away = away / max(float(np.linalg.norm(away)), 1e-9)
+        out = start + circle * away
+        a0 = math.atan2(*(out - c)[::-1])
+        a1 = math.atan2(*(standoff - c)[::-1])
+        da = (a1 - a0 + math.pi) % (2 * math.pi) - math.pi
+        ring = max(circle, float(np.linalg.norm(out - c)))
+        entry = c + ring * np.array([math.cos(a1), math.sin(a1)])
+        for s in range(1, T + 1):
+            if s == 1:
+                q_pusher.append(out)
+            elif s <= T - 2:
+                u = (s - 1) / (T - 3)
+                a = a0 + u * da
+                rad = float(np.linalg.norm(out - c)) * (1 - u) + ring * u
+                q_pusher.append(c + rad * np.array([math.cos(a), math.sin(a)]))
+            else:
+                q_pusher.append(entry + (s - (T - 2)) / 2 * (standoff - entry))
+            q_obj.append(here)
+        # push: one step into contact, then the arc
+        q_pusher.append(touching)
+        q_obj.append(here)
+        contacts.append(p_W)
+        s_grid = length * np.arange(1, T) / (T - 1)
+        cs, ys = push_arc(c, yaw, face.point(share) - body.c_B, face.n, body.radius, s_grid)
+        origins = body.origin(cs, ys)
+        for cj, yj, oj in zip(cs, ys, origins, strict=True):
+            Rj = rotation(float(yj))
+            pj = cj + Rj @ (face.point(share) - body.c_B)
+            q_obj.append(np.append(oj, yj))
+            q_pusher.append(pj - rho * (Rj @ face.n))
+            contacts.append(pj)
+        c, yaw, last_n = cs[-1], float(ys[-1]), rotation(float(ys[-1])) @ face.n
+    return {"q_obj": np.array(q_obj), "q_pusher": np.array(q_pusher),
+            "p": np.array(contacts)}
+
+
+def pose_candidates(scene: Scene, obj: str, actor: str, space: SkeletonSpace,
+                    settings: ProgramSettings, max_pushes: int = 2
+                    ) -> tuple[SkeletonSpace, list[Skeleton], dict[Skeleton, dict]]:
+    """Skeletons of the fitted pushes (:func:`fit_pose_pushes`) to the scene's pose goal,
+    their initial guesses, and the space they need (init points at the object frame's face
+    normals, enough steps per phase for the longest push at the guess's speed and the
+    kinematic stage's turn per step); the turning law of ``settings``."""
+    goal, gain = scene.goal, settings.turn_gain
+    fits: list[PosePushes] = []
+    for pushes in (max_pushes, max_pushes + 1):  # one push more when none fits
+        fits = [f for f in fit_pose_pushes(scene, obj, actor, tuple(goal.pose), pushes,
+                                           turn_gain=gain)
+                if f.error <= FIT_TOLERANCE]
+        if fits:
+            break
+    if not fits:
+        return space, [], {}
+    body = TurningBody(scene, obj, gain)
+    T = max(space.steps_per_phase, max(_steps_for(body, f, settings.guess_speed,
+                                                  settings.warm_max_turn) for f in fits))
+    posed = replace(space, steps_per_phase=T, init_frame="object",
+                    init_directions_deg=INIT_DIRECTIONS_DEG)
+    skeletons, guesses = [], {}
+    for fit in fits:
+        phases: list[Phase] = []
+        for face in fit.faces:
+            phases += [Phase("reach", actor, obj, face.init), Phase("push", actor, obj, face.init)]
+        sk = Skeleton(tuple(phases))
+        skeletons.append(sk)
+        guesses[sk] = pose_guess(scene, obj, actor, fit, T, gain)
+    return posed, skeletons, guesses
+
+
+def search_pose(scene: Scene, obj: str, actor: str, model_dir: Path,
+                settings: ProgramSettings, space: SkeletonSpace, max_pushes: int,
+                workers: int, progress: bool, exhaustive: bool, quiet: bool,
+                time_budget: float | None) -> tuple[SkeletonSpace, SearchResult]:
+    """Solve the pose goal's fitted skeletons (:func:`pose_candidates`), each from its own
+    guess; the space they were solved in and the result."""
+    posed, skeletons, guesses = pose_candidates(scene, obj, actor, space, settings, max_pushes)
+    if not quiet:
+        print(f"pose goal: {len(skeletons)} fitted push sequences "
+              f"({posed.steps_per_phase} steps per phase)")
+    if not skeletons:
+        return posed, SearchResult(None)
+    return posed, search_push(scene, model_dir, skeletons, settings, workers, progress,
+                              exhaustive, time_budget, posed, guesses=guesses)
