@@ -25,6 +25,7 @@ from robotplan.search.pose_pushes import (
     PosePushes,
     TurningBody,
     fit_pose_pushes,
+    fit_rank,
     push_arc,
     rotation,
 )
@@ -32,6 +33,10 @@ from robotplan.search.pose_pushes import (
 __all__ = ["pose_candidates", "pose_guess", "search_pose"]
 
 MAX_STEPS_PER_PHASE = 30
+KEEP = 4  # fitted sequences solved as programs
+# rad the best fit may turn the object back and forth before one push more is tried: a T
+# turned +143° then −83° for +60° executed at coverage 0.33
+TURNED_BACK = 0.3
 
 
 def _steps_for(body: TurningBody, fit: PosePushes, speed: float, max_turn: float) -> int:
@@ -108,19 +113,27 @@ def pose_guess(scene: Scene, obj: str, actor: str, fit: PosePushes, T: int,
 
 
 def pose_candidates(scene: Scene, obj: str, actor: str, space: SkeletonSpace,
-                    settings: ProgramSettings, max_pushes: int = 2
+                    settings: ProgramSettings, max_pushes: int = 2,
+                    given: Skeleton | None = None
                     ) -> tuple[SkeletonSpace, list[Skeleton], dict[Skeleton, dict]]:
     """Skeletons of the fitted pushes (:func:`fit_pose_pushes`) to the scene's pose goal,
     their initial guesses, and the space they need (init points at the object frame's face
     normals, enough steps per phase for the longest push at the guess's speed and the
-    kinematic stage's turn per step); the turning law of ``settings``."""
+    kinematic stage's turn per step); the turning law of ``settings``. A ``given``
+    skeleton fixes the faces' classes (its pushes' init points, object frame) and is
+    fitted as well as it can be."""
     goal, gain = scene.goal, settings.turn_gain
     fits: list[PosePushes] = []
-    for pushes in (max_pushes, max_pushes + 1):  # one push more when none fits
-        fits = [f for f in fit_pose_pushes(scene, obj, actor, tuple(goal.pose), pushes,
-                                           turn_gain=gain)
-                if f.error <= FIT_TOLERANCE]
-        if fits:
+    if given is not None:
+        classes = tuple(p.init for p in given.phases if p.mode == "push")
+        fits = fit_pose_pushes(scene, obj, actor, tuple(goal.pose), len(classes),
+                               turn_gain=gain, classes=classes)
+    for pushes in () if given is not None else (max_pushes, max_pushes + 1):
+        fits = sorted(fits + [f for f in fit_pose_pushes(scene, obj, actor, tuple(goal.pose),
+                                                         pushes, turn_gain=gain)
+                              if f.error <= FIT_TOLERANCE], key=fit_rank)[:KEEP]
+        # one push more only when none fits, or the best turns the object back and forth
+        if fits and fits[0].turned_back <= TURNED_BACK:
             break
     if not fits:
         return space, [], {}
@@ -143,10 +156,13 @@ def pose_candidates(scene: Scene, obj: str, actor: str, space: SkeletonSpace,
 def search_pose(scene: Scene, obj: str, actor: str, model_dir: Path,
                 settings: ProgramSettings, space: SkeletonSpace, max_pushes: int,
                 workers: int, progress: bool, exhaustive: bool, quiet: bool,
-                time_budget: float | None) -> tuple[SkeletonSpace, SearchResult]:
-    """Solve the pose goal's fitted skeletons (:func:`pose_candidates`), each from its own
-    guess; the space they were solved in and the result."""
-    posed, skeletons, guesses = pose_candidates(scene, obj, actor, space, settings, max_pushes)
+                time_budget: float | None, given: Skeleton | None = None
+                ) -> tuple[SkeletonSpace, SearchResult]:
+    """Solve the pose goal's fitted skeletons (:func:`pose_candidates`; ``given``: that
+    skeleton's faces only), each from its own guess; the space they were solved in and the
+    result."""
+    posed, skeletons, guesses = pose_candidates(scene, obj, actor, space, settings, max_pushes,
+                                                given)
     if not quiet:
         print(f"pose goal: {len(skeletons)} fitted push sequences "
               f"({posed.steps_per_phase} steps per phase)")

@@ -262,11 +262,13 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
         settings = program_settings("replan", base=settings)
     result, spaces = SearchResult(None), {}  # spaces: a skeleton may recur in two tiers
     space = space_for(scene)
-    if (scene.goal.type == "pose" and skeleton is None and not guesses and not scene.robots
+    if (scene.goal.type == "pose" and not guesses and not scene.robots
             and _chain_target(scene) is None):
+        given = (parse_skeleton(skeleton, actors[0], obj) if isinstance(skeleton, str)
+                 else skeleton)
         posed, result = search_pose(scene, obj, actors[0], model_dir, settings, space,
-                                     max_pushes, workers, progress, exhaustive, quiet,
-                                     time_budget)
+                                    max_pushes, workers, progress, exhaustive, quiet,
+                                    time_budget, given)
         spaces.update({id(s): posed for s in result.candidates})
         if result.candidates:  # the plain tier's pushes do not turn: it plans no pose goal
             return result, spaces

@@ -32,3 +32,19 @@ def test_kinematic_program_solves_a_turn_from_the_fitted_guess():
     assert sol.violation <= FEASIBLE
     turn = sol.q_obj[-1, 2] - sol.q_obj[0, 2]
     assert abs(turn - math.radians(60)) < 0.02
+
+
+def test_a_given_skeleton_fixes_the_faces_of_the_fit():
+    """``--skeleton push@1,push@2`` for a pose goal: the fit of exactly those face classes
+    (object frame), with its guess, even when another sequence would fit better."""
+    from robotplan.program.skeleton import parse_skeleton
+
+    scene = parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)]))
+    settings = settings_for(scene)
+    given = parse_skeleton("push@1,push@2", "pusher", "object")
+    space, skeletons, guesses = pose_candidates(scene, "object", "pusher",
+                                                load_skeleton_space(), settings, given=given)
+    assert skeletons == [given] and space.init_frame == "object"
+    g = guesses[given]
+    assert g["q_obj"].shape == (4 * space.steps_per_phase + 1, 3)
+    assert not np.allclose(g["q_obj"][-1], g["q_obj"][0])  # it pushes
