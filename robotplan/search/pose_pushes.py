@@ -35,12 +35,8 @@ FACE_MARGIN = 0.2  # share of a face kept free at either end: contacts nearer a 
 STANDOFF = 0.015  # m between the pusher and the face where a reach ends (≥ reach_clearance)
 FIT_TOLERANCE = 0.004  # m of pose error (yaw as c·Δθ) a fit may leave to the program
 LENGTH_WEIGHT = 0.05  # least-squares weight of each push's length: shorter pushes first
-# and of each push's turn (as c·Δθ): no push turns the object past the target for the next
-# to turn it back (a T turned +143° then −83° for +60° executes at coverage 0.33)
-TURN_WEIGHT = 0.3
 MAX_LENGTH = 0.35  # m pushed at most in one push
 PUSH_COST = 0.1  # m of pushing one more push (its reach around the object) counts as
-TURN_COST = 0.3  # m of pushing a radian of turn counts as (the kinematic stage's turn_length)
 ROOM_SAMPLES = 6  # points per push at which the object must leave the pusher room on the table
 INIT_DIRECTIONS_DEG = (0.0, 90.0, 180.0, 270.0)  # face normal classes in the object frame
 
@@ -128,11 +124,6 @@ class PosePushes:
     def total_length(self) -> float:
         return float(sum(self.lengths))
 
-    @property
-    def turned_back(self) -> float:
-        """How far (rad) its pushes turn against each other: Σ|Δθ_k| − |Σ Δθ_k|."""
-        return float(np.abs(self.turns).sum() - abs(sum(self.turns)))
-
 
 class TurningBody:
     """The pushed object's quasi-static constants: centroid (body frame) and limit surface
@@ -197,23 +188,16 @@ def fit_pose_pushes(scene: Scene, obj: str, actor: str, goal: tuple[float, float
             lo = np.tile([FACE_MARGIN, 0.0], k)
             hi = np.tile([1 - FACE_MARGIN, MAX_LENGTH], k)
 
-            def residual(params: np.ndarray, seq: tuple[Face, ...] = seq,
-                         weight: float = 1.0) -> np.ndarray:
-                """Pose miss, room on the table and (``weight`` > 0) the regularisers."""
-                c, yaw, passed, turns = _path(body, seq, c0, pose[2], params)
+            def residual(params: np.ndarray, seq: tuple[Face, ...] = seq) -> np.ndarray:
+                c, yaw, passed, _turns = _path(body, seq, c0, pose[2], params)
                 miss = np.array([*(c - target_c), body.radius * (yaw - target_yaw)])
                 off = np.maximum(passed - hi_xy, 0.0) + np.maximum(lo_xy - passed, 0.0)
-                return np.concatenate((miss, off.ravel(), weight * LENGTH_WEIGHT * params[1::2],
-                                       weight * TURN_WEIGHT * body.radius * turns))
+                return np.concatenate((miss, off.ravel(), LENGTH_WEIGHT * params[1::2]))
 
-            # the regularised fit picks the basin (short pushes, no turning back), the
-            # plain one then closes the pose
-            starts = (0.25, 0.5, 0.75) if k <= 2 else (0.5,)  # many sequences of three
-            best = min((least_squares(residual, np.tile([u, 0.1], k), bounds=(lo, hi))
-                        for u in starts), key=lambda res: res.cost)
-            best = least_squares(residual, best.x, bounds=(lo, hi), xtol=1e-10,
-                                 kwargs={"weight": 0.0})
-            miss = float(np.linalg.norm(best.fun))  # the pose and the room on the table
+            best = min((least_squares(residual, np.tile([u, 0.1], k), bounds=(lo, hi),
+                                      xtol=1e-10) for u in (0.25, 0.5, 0.75)),
+                       key=lambda res: res.cost)
+            miss = float(np.linalg.norm(best.fun[:-k]))  # the pose and the room on the table
             turns = _path(body, seq, c0, pose[2], best.x)[3]
             fit = PosePushes(seq, tuple(best.x[0::2]), tuple(best.x[1::2]), miss,
                              tuple(float(t) for t in turns))
@@ -224,9 +208,7 @@ def fit_pose_pushes(scene: Scene, obj: str, actor: str, goal: tuple[float, float
 
 
 def fit_rank(fit: PosePushes) -> tuple[bool, float]:
-    """Within tolerance first, then the least pushing (PUSH_COST per push, TURN_COST per
-    radian turned; or, outside the tolerance, the closest)."""
+    """Within tolerance first, then the least pushing (PUSH_COST per push; or, outside the
+    tolerance, the closest)."""
     within = fit.error <= FIT_TOLERANCE
-    effort = (fit.total_length + PUSH_COST * len(fit.faces)
-              + TURN_COST * float(np.abs(fit.turns).sum()))
-    return (not within, effort if within else fit.error)
+    return (not within, fit.total_length + PUSH_COST * len(fit.faces) if within else fit.error)

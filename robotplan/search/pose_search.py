@@ -25,7 +25,6 @@ from robotplan.search.pose_pushes import (
     PosePushes,
     TurningBody,
     fit_pose_pushes,
-    fit_rank,
     push_arc,
     rotation,
 )
@@ -33,10 +32,6 @@ from robotplan.search.pose_pushes import (
 __all__ = ["pose_candidates", "pose_guess", "search_pose"]
 
 MAX_STEPS_PER_PHASE = 30
-KEEP = 4  # fitted sequences solved as programs
-# rad the best fit may turn the object back and forth before one push more is tried: a T
-# turned +143° then −83° for +60° executed at coverage 0.33
-TURNED_BACK = 0.3
 
 
 def _steps_for(body: TurningBody, fit: PosePushes, speed: float, max_turn: float) -> int:
@@ -129,11 +124,10 @@ def pose_candidates(scene: Scene, obj: str, actor: str, space: SkeletonSpace,
         fits = fit_pose_pushes(scene, obj, actor, tuple(goal.pose), len(classes),
                                turn_gain=gain, classes=classes)
     for pushes in () if given is not None else (max_pushes, max_pushes + 1):
-        fits = sorted(fits + [f for f in fit_pose_pushes(scene, obj, actor, tuple(goal.pose),
-                                                         pushes, turn_gain=gain)
-                              if f.error <= FIT_TOLERANCE], key=fit_rank)[:KEEP]
-        # one push more only when none fits, or the best turns the object back and forth
-        if fits and fits[0].turned_back <= TURNED_BACK:
+        fits = [f for f in fit_pose_pushes(scene, obj, actor, tuple(goal.pose), pushes,
+                                           turn_gain=gain)
+                if f.error <= FIT_TOLERANCE]
+        if fits:  # one push more only when none fits
             break
     if not fits:
         return space, [], {}
