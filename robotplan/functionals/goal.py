@@ -11,6 +11,8 @@ from torch import Tensor
 from robotplan.functionals.base import Functional, Quadrature, sdf_pose_gradients
 from robotplan.functionals.sticking import centroid
 from robotplan.functionals.windows import body_aabb, margin, window_bound_gradients, window_points
+from robotplan.geometry.polygons import signed_area
+from robotplan.geometry.transforms import planar_to_world
 from robotplan.scene.bodies import Body
 
 __all__ = ["GoalRegion", "PoseError", "gyration_radius"]
@@ -97,14 +99,10 @@ class PoseError(Functional):
         self.rho = gyration_radius(outline_B)
         self.X_WG = torch.as_tensor(np.asarray(X_WG, dtype=float))
 
-    def _centroid(self, X: Tensor) -> Tensor:
-        c, s = torch.cos(X[..., 2]), torch.sin(X[..., 2])
-        cB = self.c_B.to(X)
-        return X[..., :2] + torch.stack((c * cB[0] - s * cB[1], s * cB[0] + c * cB[1]), -1)
-
     def residual(self, X_WB: Tensor) -> Tensor:
         goal = self.X_WG.to(X_WB)
-        d = self._centroid(X_WB) - self._centroid(goal[None])
+        c_B = self.c_B.to(X_WB)[None]
+        d = (planar_to_world(c_B, X_WB) - planar_to_world(c_B, goal))[:, 0]
         turn = 2 * self.rho * torch.sin((X_WB[:, 2] - goal[2]) / 2)
         return torch.cat((d, turn[:, None]), -1)
 
@@ -112,6 +110,4 @@ class PoseError(Functional):
         """The RMS displacement (m) that moves at most ``share`` of the footprint's area off
         its target by translation: share · 2A / P (a translation δ uncovers at most δ·P/2)."""
         edges = np.linalg.norm(np.roll(outline_B, -1, axis=0) - outline_B, axis=1)
-        x, y = outline_B[:, 0], outline_B[:, 1]
-        area = abs((x * np.roll(y, -1) - np.roll(x, -1) * y).sum()) / 2
-        return float(share * 2 * area / edges.sum())
+        return float(share * 2 * abs(signed_area(outline_B)) / edges.sum())

@@ -15,10 +15,11 @@ import torch
 from torch import Tensor
 
 from robotplan.functionals.base import Functional
+from robotplan.sdf.footprint import support_corners
 
 __all__ = ["CornerClearance", "PushLever", "PushingDirection", "QuasiStaticObjectPush",
            "QuasiStaticPush", "StickingContact", "centroid", "convex_corners",
-           "limit_surface_radius"]
+           "limit_surface_radius", "turning_radius"]
 
 
 def centroid(outline: np.ndarray) -> np.ndarray:
@@ -35,6 +36,14 @@ def limit_surface_radius(support_B: np.ndarray, centroid_B: np.ndarray) -> float
     object resting on the points ``support_B (K, 2)`` with equal loads: their mean distance
     from the centroid."""
     return float(np.linalg.norm(np.asarray(support_B) - centroid_B, axis=1).mean())
+
+
+def turning_radius(shape, turn_gain: float = 1.0) -> float:
+    """The c of the turning law ``c² Δθ = r × Δc`` for ``shape`` with the gain g folded in
+    (``c² Δθ = g · r × Δc`` ⟺ c' = c/√g): the limit surface radius of its support points
+    (:func:`limit_surface_radius`) over √turn_gain."""
+    c = limit_surface_radius(support_corners(shape), centroid(shape.outline()))
+    return c / float(np.sqrt(turn_gain))
 
 
 def _in_body_frame(X_WB: Tensor, p_W: Tensor) -> Tensor:

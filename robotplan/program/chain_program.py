@@ -30,6 +30,7 @@ from robotplan.functionals.collision import FixedCollision, SweptClearance, face
 from robotplan.functionals.sticking import (
     QuasiStaticObjectPush,
     StickingContact,
+    turning_radius,
 )
 from robotplan.models.dynamics import PushDynamics
 from robotplan.program.guess import guess_goal, initial_guess
@@ -145,7 +146,7 @@ class ChainPushProgram(PushProgram):
     def _add_object_push(self, turn: bool) -> None:
         """QuasiStaticObjectPush rows of the target at ``p_chain`` in chained push steps."""
         target, k = self.target, self.chain_steps
-        radius = self._turning_radius(target.shape)
+        radius = turning_radius(target.shape, self.settings.turn_gain)
         H = QuasiStaticObjectPush(target, radius, self.settings.push_friction, turn=turn)
         self._add_quasi_static_rows(H, [self.Q3[k - 1], self.Q3[k], self.P3], "_chain")
 

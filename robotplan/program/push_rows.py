@@ -17,12 +17,11 @@ from robotplan.functionals.sticking import (
     StickingContact,
     centroid,
     convex_corners,
-    limit_surface_radius,
+    turning_radius,
 )
 from robotplan.program.bridge import bridge, stepwise
 from robotplan.program.dynamics_rows import DynamicsRows
 from robotplan.program.row_table import RowSpec
-from robotplan.sdf.footprint import support_corners
 
 __all__ = ["ROW_BUILDERS", "PushRows"]
 
@@ -168,17 +167,11 @@ class PushRows(DynamicsRows):
         ``turn_in_learned``; otherwise the learned stage keeps the cone only and H_F alone
         decides how the object turns)."""
         c_B = centroid(self.obj.shape.outline())
-        radius = self._turning_radius(self.obj.shape)
+        radius = turning_radius(self.obj.shape, self.settings.turn_gain)
         H = QuasiStaticPush(c_B, radius, self.settings.push_friction, turn=turn)
         k = self.push_steps
         self._add_quasi_static_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P],
                                     scale=scale)
-
-    def _turning_radius(self, shape) -> float:
-        """The limit surface radius c of ``shape`` over √turn_gain: c² Δθ = g · r × Δc."""
-        c_B = centroid(shape.outline())
-        return limit_surface_radius(support_corners(shape), c_B) / np.sqrt(
-            self.settings.turn_gain)
 
     def _add_quasi_static_rows(self, H: QuasiStaticPush, blocks: list[np.ndarray],
                                suffix: str = "", scale: float = 100.0) -> None:

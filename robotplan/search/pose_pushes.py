@@ -23,9 +23,9 @@ import numpy as np
 import torch
 from scipy.optimize import least_squares
 
-from robotplan.functionals.sticking import centroid, limit_surface_radius
+from robotplan.functionals.sticking import centroid, turning_radius
+from robotplan.geometry.transforms import wrap_angle
 from robotplan.scene import Scene
-from robotplan.sdf.footprint import support_corners
 
 __all__ = ["FIT_TOLERANCE", "INIT_DIRECTIONS_DEG", "STANDOFF", "Face", "PosePushes", "TurningBody",
            "faces_of", "fit_pose_pushes", "fit_rank", "push_arc", "rotation"]
@@ -132,8 +132,7 @@ class TurningBody:
     def __init__(self, scene: Scene, obj: str, turn_gain: float) -> None:
         shape = scene.bodies[obj].shape
         self.c_B = centroid(shape.outline())
-        self.radius = limit_surface_radius(support_corners(shape), self.c_B) / math.sqrt(
-            turn_gain)
+        self.radius = turning_radius(shape, turn_gain)
 
     def origin(self, c_W: np.ndarray, yaw: np.ndarray) -> np.ndarray:
         """Object-frame origins ``(S, 2)`` of centroids ``c_W (S, 2)`` at ``yaw (S,)``."""
@@ -170,7 +169,7 @@ def fit_pose_pushes(scene: Scene, obj: str, actor: str, goal: tuple[float, float
     pose = np.asarray(scene.bodies[obj].pose, dtype=float)
     c0 = pose[:2] + rotation(pose[2]) @ body.c_B
     target_c = np.asarray(goal[:2], dtype=float) + rotation(goal[2]) @ body.c_B
-    turn = (goal[2] - pose[2] + math.pi) % (2 * math.pi) - math.pi
+    turn = wrap_angle(goal[2] - pose[2])
     target_yaw = pose[2] + turn
     faces = faces_of(scene, obj, actor)
     # the centroid keeps the object's reach plus a pusher's width and standoff from the

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robotplan.geometry.transforms import wrap_angle
 from robotplan.program.settings import ProgramSettings
 from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
 from robotplan.scene import Scene
@@ -75,7 +76,7 @@ def pose_guess(scene: Scene, obj: str, actor: str, fit: PosePushes, T: int,
         out = start + circle * away
         a0 = math.atan2(*(out - c)[::-1])
         a1 = math.atan2(*(standoff - c)[::-1])
-        da = (a1 - a0 + math.pi) % (2 * math.pi) - math.pi
+        da = wrap_angle(a1 - a0)
         ring = max(circle, float(np.linalg.norm(out - c)))
         entry = c + ring * np.array([math.cos(a1), math.sin(a1)])
         for s in range(1, T + 1):
