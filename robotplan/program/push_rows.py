@@ -22,8 +22,10 @@ from robotplan.functionals.sticking import (
 from robotplan.program.bridge import bridge, stepwise
 from robotplan.program.dynamics_rows import DynamicsRows
 from robotplan.program.row_table import RowSpec
+from robotplan.program.settings import ProgramSettings
+from robotplan.scene.bodies import Body
 
-__all__ = ["ROW_BUILDERS", "PushRows"]
+__all__ = ["ROW_BUILDERS", "PushRows", "region_goal"]
 
 ROW_BUILDERS = {  # a row of skeletons/rows.yaml → the PushRows method that adds it
     "hold_object": "_hold_object_while_reaching",
@@ -43,6 +45,18 @@ ROW_BUILDERS = {  # a row of skeletons/rows.yaml → the PushRows method that ad
     "lever": "_add_lever_cost",
     "corner": "_add_corner_clearance",
 }
+
+
+def region_goal(body: Body, region: Body, settings: ProgramSettings) -> GoalRegion:
+    """H_g of ``body`` in the goal ``region`` as the program's goal row has it: the region
+    shrunk by ``goal_inset`` (at most a third of the room the body has at its centre), so
+    that a plan ends deeper inside and tolerates execution error; the row bounds H_g over
+    the body's area by ``goal_tol``."""
+    origin = torch.zeros(1, 2, dtype=torch.float64)
+    extent = np.ptp(body.shape.outline(), axis=0).max() / 2
+    room = -float(region.shape.sdf(origin)[0]) - extent
+    inset = min(settings.goal_inset, max(0.0, room / 3))
+    return GoalRegion(body, region, a=settings.a_goal, inset=inset)
 
 
 class PushRows(DynamicsRows):
@@ -220,12 +234,8 @@ class PushRows(DynamicsRows):
             return
         if self.region is None:
             return
-        origin = torch.zeros(1, 2, dtype=torch.float64)
         body = self.goal_body
-        extent = np.ptp(body.shape.outline(), axis=0).max() / 2
-        room = -float(self.region.shape.sdf(origin)[0]) - extent
-        inset = min(self.settings.goal_inset, max(0.0, room / 3))
-        H = GoalRegion(body, self.region, a=self.settings.a_goal, inset=inset)
+        H = region_goal(body, self.region, self.settings)
         scale = 1.0 / body.area
 
         def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:

@@ -147,20 +147,21 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
                 time_budget: float | None = None,
                 space: SkeletonSpace | None = None,
                 patience: float = PATIENCE_S,
-                guesses: dict[Skeleton, dict] | None = None) -> SearchResult:
+                guesses: dict[Skeleton, dict] | None = None,
+                ordered: bool = False) -> SearchResult:
     """Solve the skeletons (a process per core), most promising first, and pick the best;
     unless ``exhaustive``, stop at the first good-enough plan (``settings.good_rms_mm``)
     or, after ``patience`` seconds, at the first program collected while a solved plan is in
     hand; start no program after ``time_budget`` seconds (the best so far wins).
     ``guesses``: the learned program's initial guess by skeleton (a warm start skips the
-    kinematic stage)."""
+    kinematic stage). ``ordered``: the skeletons come most promising first already."""
     from tqdm import tqdm
 
     settings = settings or ProgramSettings()
     t0 = time.time()
     space = space or space_for(scene)
     args = (scene, str(model_dir), settings, space, guesses)
-    queue = order_candidates(scene, skeletons, space)
+    queue = list(skeletons) if ordered else order_candidates(scene, skeletons, space)
     solutions: list[Solution] = []
     holds_solved = False
     bar = tqdm(total=len(queue), unit="program", desc="skeletons", disable=not progress)

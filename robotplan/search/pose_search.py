@@ -1,9 +1,14 @@
-"""The pose goal's tier of the skeleton search: the pushes fitted in closed form
-(:mod:`robotplan.search.pose_pushes`) as skeletons, each with a full initial guess (the
-pusher backs off, circles the object to a standoff behind the contact point, steps in and
-follows the arc), which the kinematic stage then only polishes: from the circle-and-push
-guess, whose pushes translate without turning, SNOPT finds no plan of a turn of 30–90°
-(measured: docs/experiments.md#pose-goals).
+"""The fitted pushes' tier of the skeleton search: the pushes fitted in closed form
+(:mod:`robotplan.search.pose_pushes`) to a target pose as skeletons, each with a full
+initial guess (the pusher backs off, circles the object to a standoff behind the contact
+point, steps in and follows the arc), which the kinematic stage then only polishes: from the
+circle-and-push guess, whose pushes translate without turning, SNOPT finds no plan of a turn
+of 30–90° (measured: docs/experiments.md#pose-goals).
+
+A pose goal's target is its pose. A region goal the plain tier does not plan gets one too
+(:func:`region_target`): its footprint centred in the region, turned from its start by the
+least angle at which it meets the program's goal row with room to spare
+(measured: docs/experiments.md#fitted-region).
 """
 
 from __future__ import annotations
@@ -13,8 +18,11 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import torch
 
+from robotplan.functionals.sticking import centroid
 from robotplan.geometry.transforms import wrap_angle
+from robotplan.program.push_rows import region_goal
 from robotplan.program.settings import ProgramSettings
 from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
 from robotplan.scene import Scene
@@ -30,9 +38,35 @@ from robotplan.search.pose_pushes import (
     rotation,
 )
 
-__all__ = ["pose_candidates", "pose_guess", "search_pose"]
+__all__ = ["pose_candidates", "pose_guess", "region_target", "search_pose"]
 
 MAX_STEPS_PER_PHASE = 30
+YAW_STEP_DEG = 5.0  # the turns tried for a region goal's target
+REGION_SLACK = 0.5  # share of goal_tol that H_g may reach at a region goal's target
+
+
+def region_target(scene: Scene, obj: str, settings: ProgramSettings
+                  ) -> tuple[float, float, float] | None:
+    """A target pose ``(x, y, yaw)`` of ``obj`` for the region goal's fitted pushes: its
+    footprint's centroid on the region's, turned from its start yaw by the least multiple
+    of YAW_STEP_DEG at which the program's goal row (H_g over the area, eq. 8) is at most
+    REGION_SLACK of ``goal_tol`` (else within 10 % of its least); None for a footprint
+    that covers the region's centroid at no turn less than half outside."""
+    region, body = scene.goal_region, scene.bodies[obj]
+    c_B, c_R = centroid(body.shape.outline()), centroid(region.outline_world())
+    yaw0 = float(body.pose[2])
+    yaws = yaw0 + np.array(sorted(np.radians(np.arange(-180.0, 180.0, YAW_STEP_DEG)), key=abs))
+    cos, sin = np.cos(yaws), np.sin(yaws)
+    origins = c_R - np.stack((cos * c_B[0] - sin * c_B[1], sin * c_B[0] + cos * c_B[1]), -1)
+    X = torch.from_numpy(np.column_stack((origins, yaws)))
+    outside = region_goal(body, region, settings)(X)[:, 0].numpy() / body.area
+    if outside.min() >= 0.5:
+        return None
+    # the least turn within the slack, or within 10 % of the least outside share (a box's
+    # half turn and quarter turns leave it about the same)
+    fits = outside <= max(REGION_SLACK * settings.goal_tol, 1.1 * float(outside.min()))
+    i = int(np.argmax(fits))
+    return float(origins[i, 0]), float(origins[i, 1]), float(wrap_angle(float(yaws[i])))
 
 
 def _steps_for(body: TurningBody, fit: PosePushes, speed: float, max_turn: float) -> int:
@@ -110,22 +144,24 @@ def pose_guess(scene: Scene, obj: str, actor: str, fit: PosePushes, T: int,
 
 def pose_candidates(scene: Scene, obj: str, actor: str, space: SkeletonSpace,
                     settings: ProgramSettings, max_pushes: int = 2,
-                    given: Skeleton | None = None
+                    given: Skeleton | None = None,
+                    target: tuple[float, float, float] | None = None
                     ) -> tuple[SkeletonSpace, list[Skeleton], dict[Skeleton, dict]]:
-    """Skeletons of the fitted pushes (:func:`fit_pose_pushes`) to the scene's pose goal,
-    their initial guesses, and the space they need (init points at the object frame's face
-    normals, enough steps per phase for the longest push at the guess's speed and the
-    kinematic stage's turn per step); the turning law of ``settings``. A ``given``
-    skeleton fixes the faces' classes (its pushes' init points, object frame) and is
-    fitted as well as it can be."""
-    goal, gain = scene.goal, settings.turn_gain
+    """Skeletons of the fitted pushes (:func:`fit_pose_pushes`) to ``target`` (default:
+    the scene's pose goal), their initial guesses, and the space they need (init points at
+    the object frame's face normals, enough steps per phase for the longest push at the
+    guess's speed and the kinematic stage's turn per step); the turning law of
+    ``settings``. A ``given`` skeleton fixes the faces' classes (its pushes' init points,
+    object frame) and is fitted as well as it can be."""
+    gain = settings.turn_gain
+    target = tuple(scene.goal.pose) if target is None else target
     fits: list[PosePushes] = []
     if given is not None:
         classes = tuple(p.init for p in given.phases if p.mode == "push")
-        fits = fit_pose_pushes(scene, obj, actor, tuple(goal.pose), len(classes),
+        fits = fit_pose_pushes(scene, obj, actor, target, len(classes),
                                turn_gain=gain, classes=classes)
     for pushes in () if given is not None else (max_pushes, max_pushes + 1):
-        fits = [f for f in fit_pose_pushes(scene, obj, actor, tuple(goal.pose), pushes,
+        fits = [f for f in fit_pose_pushes(scene, obj, actor, target, pushes,
                                            turn_gain=gain)
                 if f.error <= FIT_TOLERANCE]
         if fits:  # one push more only when none fits
@@ -151,17 +187,22 @@ def pose_candidates(scene: Scene, obj: str, actor: str, space: SkeletonSpace,
 def search_pose(scene: Scene, obj: str, actor: str, model_dir: Path,
                 settings: ProgramSettings, space: SkeletonSpace, max_pushes: int,
                 workers: int, progress: bool, exhaustive: bool, quiet: bool,
-                time_budget: float | None, given: Skeleton | None = None
+                time_budget: float | None, given: Skeleton | None = None,
+                target: tuple[float, float, float] | None = None
                 ) -> tuple[SkeletonSpace, SearchResult]:
-    """Solve the pose goal's fitted skeletons (:func:`pose_candidates`; ``given``: that
-    skeleton's faces only), each from its own guess; the space they were solved in and the
-    result."""
+    """Solve the skeletons fitted to ``target`` (default: the pose goal's pose;
+    :func:`pose_candidates`; ``given``: that skeleton's faces only), each from its own
+    guess; the space they were solved in and the result."""
     posed, skeletons, guesses = pose_candidates(scene, obj, actor, space, settings, max_pushes,
-                                                given)
+                                                given, target)
     if not quiet:
-        print(f"pose goal: {len(skeletons)} fitted push sequences "
+        where = "pose goal" if target is None else (
+            f"pushes fitted to ({target[0]:.3f}, {target[1]:.3f}, "
+            f"{math.degrees(target[2]):.0f}°) in the goal region")
+        print(f"{where}: {len(skeletons)} fitted push sequences "
               f"({posed.steps_per_phase} steps per phase)")
     if not skeletons:
         return posed, SearchResult(None)
+    # the fits' own order: the least pushing first
     return posed, search_push(scene, model_dir, skeletons, settings, workers, progress,
-                              exhaustive, time_budget, posed, guesses=guesses)
+                              exhaustive, time_budget, posed, guesses=guesses, ordered=True)

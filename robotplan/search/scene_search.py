@@ -1,6 +1,7 @@
 """The skeleton search over a whole scene: candidate tiers (a given skeleton, a chain, the
-free pusher, or each arm init frame pruned by reach), then routes around obstacles; one
-Drake program per candidate (:func:`robotplan.search.planner.search_push`)."""
+free pusher, or each arm init frame pruned by reach), then routes around obstacles, or for a
+free pusher's region goal pushes fitted to a pose inside the region; one Drake program per
+candidate (:func:`robotplan.search.planner.search_push`)."""
 
 from __future__ import annotations
 
@@ -31,7 +32,7 @@ from robotplan.program.skeleton import (
 from robotplan.program.solution import Solution
 from robotplan.scene import Scene
 from robotplan.search.planner import FEASIBLE, SearchResult, merge_results, search_push
-from robotplan.search.pose_search import search_pose
+from robotplan.search.pose_search import region_target, search_pose
 from robotplan.search.route import routed_candidates
 
 __all__ = ["DYNAMICS_CLASSES", "UnsupportedScene", "budget_spent", "candidate_table",
@@ -246,6 +247,22 @@ def _settings_of(candidates: list[Skeleton], settings: ProgramSettings) -> Progr
     return settings
 
 
+def _fitted_region_tier(scene: Scene, obj: str, actor: str, model_dir: Path,
+                        settings: ProgramSettings, space: SkeletonSpace, max_pushes: int,
+                        workers: int, progress: bool, exhaustive: bool, quiet: bool
+                        ) -> tuple[SkeletonSpace, SearchResult]:
+    """A free pusher's region goal the plain tier did not plan: pushes fitted in closed form
+    to a pose inside the region (:func:`region_target`), planned with the turning gain the
+    pose goals measured in pybullet (the `pose` overlay's ``turn_gain``). No time budget:
+    the tier has at most four programs, and without it nothing plans."""
+    fitted = replace(settings, turn_gain=program_settings("pose").turn_gain)
+    target = region_target(scene, obj, fitted)
+    if target is None:
+        return space, SearchResult(None)
+    return search_pose(scene, obj, actor, model_dir, fitted, space, max_pushes, workers,
+                       progress, exhaustive, quiet, None, target=target)
+
+
 def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: int = 2,
                  skeleton: str | Skeleton | None = None, max_pushes: int = 2,
                  progress: bool = True,
@@ -255,7 +272,9 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
                  ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
     """Search the scene's candidates tier by tier, then routes around obstacles when nothing
     plans; the result and each candidate's skeleton space (by ``id`` of its solution).
-    ``guesses``: initial guesses of the learned program by skeleton (warm starts)."""
+    ``guesses``: initial guesses of the learned program by skeleton (warm starts). A free
+    pusher's region goal without obstacles that the plain tier does not plan gets the
+    fitted pushes' tier, even past ``time_budget`` (at most four programs)."""
     obj, actors = check_supported(scene)
     settings = settings_for(scene, solver, dynamics_kind(model_dir))
     if guesses:  # a re-plan from an earlier plan: the `replan` overlay's budget
@@ -287,5 +306,11 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
         routed, extra = _search_routes(scene, obj, actors[0], model_dir, settings, space,
                                        max_pushes, workers, progress, exhaustive, quiet, left)
         spaces.update({id(s): routed for s in extra.candidates})
+        result = merge_results(result, extra)
+    if (not result.solved and scene.goal.type == "region" and skeleton is None and not guesses
+            and not scene.robots and not scene.obstacles and _chain_target(scene) is None):
+        fitted, extra = _fitted_region_tier(scene, obj, actors[0], model_dir, settings, space,
+                                            max_pushes, workers, progress, exhaustive, quiet)
+        spaces.update({id(s): fitted for s in extra.candidates})
         result = merge_results(result, extra)
     return result, spaces

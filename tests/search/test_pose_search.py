@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pytest
 
 from robotplan.program.push_program import PushProgram
 from robotplan.program.skeleton import load_skeleton_space
@@ -48,3 +49,64 @@ def test_a_given_skeleton_fixes_the_faces_of_the_fit():
     g = guesses[given]
     assert g["q_obj"].shape == (4 * space.steps_per_phase + 1, 3)
     assert not np.allclose(g["q_obj"][-1], g["q_obj"][0])  # it pushes
+
+
+def region_doc(size: list[float], yaw: float, region: list[float]) -> dict:
+    """A box of ``size`` at ``yaw`` and a box region of ``region`` 35 cm east of it."""
+    doc = scene_doc({"type": "box", "size": size}, [0.0, 0.0, 0.0])
+    doc["objects"][0]["pose"] = [0.0, 0.0, yaw]
+    doc["goal"] = {"type": "region", "object": "object",
+                   "region": {"shape": {"type": "box", "size": region},
+                              "pose": [0.35, 0.02, 0.0]}}
+    return doc
+
+
+def _outside_share(scene, pose, settings) -> float:
+    import torch
+
+    from robotplan.program.push_rows import region_goal
+
+    body = scene.bodies["object"]
+    H = region_goal(body, scene.goal_region, settings)
+    return float(H(torch.tensor([pose], dtype=torch.float64))[0, 0]) / body.area
+
+
+def test_a_region_target_meets_the_goal_row_with_the_least_turn():
+    """A 22 x 16 cm box turned 29° into a 40 x 40 cm region: at its start yaw the program's
+    goal row (H_g, inset) leaves too much outside, so the target turns it, by the least
+    5° step that leaves at most half of goal_tol outside, with the centroid on the region's."""
+    from robotplan.search.pose_search import REGION_SLACK, YAW_STEP_DEG, region_target
+
+    scene = parse_scene(region_doc([0.22, 0.16], 0.5, [0.4, 0.4]))
+    settings = settings_for(scene)
+    x, y, yaw = region_target(scene, "object", settings)
+    assert np.allclose([x, y], [0.35, 0.02], atol=1e-9)  # a box's centroid is its origin
+    bound = REGION_SLACK * settings.goal_tol
+    assert _outside_share(scene, (x, y, yaw), settings) <= bound
+    assert _outside_share(scene, (x, y, 0.5), settings) > bound
+    turn = yaw - 0.5
+    assert -0.5 < turn < 0.0  # towards the region's axes
+    less = turn + math.radians(YAW_STEP_DEG)
+    assert _outside_share(scene, (x, y, 0.5 + less), settings) > bound
+
+
+def test_a_region_target_without_room_to_spare_takes_the_least_turn_to_the_best_fit():
+    """A 26 x 18 cm box turned 29° in a 40 x 40 cm region leaves more than the slack outside
+    at any yaw: the target is the least turn whose share is near the least (about 0°, not a
+    quarter or half turn to the same fit)."""
+    from robotplan.search.pose_search import region_target
+
+    scene = parse_scene(region_doc([0.26, 0.18], 0.5, [0.4, 0.4]))
+    yaw = region_target(scene, "object", settings_for(scene))[2]
+    assert abs(yaw) < math.radians(5.0)
+
+
+def test_a_region_target_keeps_a_fitting_yaw_and_refuses_a_region_too_small():
+    from robotplan.search.pose_search import region_target
+
+    small = parse_scene(region_doc([0.1, 0.06], 0.37, [0.4, 0.4]))
+    settings = settings_for(small)
+    assert region_target(small, "object", settings)[2] == pytest.approx(0.37)  # fits as is
+    # larger than the 7 cm wide region in every direction: more than half outside at any yaw
+    narrow = parse_scene(region_doc([0.18, 0.18], 0.0, [0.5, 0.07]))
+    assert region_target(narrow, "object", settings) is None

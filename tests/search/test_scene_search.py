@@ -16,7 +16,7 @@ def test_arm_search_tries_init_points_seen_from_the_goal_when_face_pushes_fail(
     calls = []
 
     def no_plan(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-                time_budget, space, guesses=None):
+                time_budget, space, guesses=None, ordered=False):
         calls.append((list(skeletons), space))
         return SearchResult(None, [], 1.0)
 
@@ -73,7 +73,7 @@ def test_a_warm_start_along_a_route_keeps_its_steps_and_the_routes_settings(monk
     calls = []
 
     def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-               time_budget, space, guesses=None):
+               time_budget, space, guesses=None, ordered=False):
         calls.append((settings, space))
         return SearchResult(None, [], 1.0)
 
@@ -118,7 +118,7 @@ def test_a_warm_started_search_plans_with_the_replan_overlay(monkeypatch):
     calls = []
 
     def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-               time_budget, space, guesses=None):
+               time_budget, space, guesses=None, ordered=False):
         calls.append(settings)
         return SearchResult(None, [], 1.0)
 
@@ -154,7 +154,7 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
     calls = []
 
     def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-               time_budget, space, guesses=None):
+               time_budget, space, guesses=None, ordered=False):
         calls.append((list(skeletons), space, guesses, settings))
         tried = [Solution(sk, False, "snopt info 31", 0.5, 1.0, 1.0, np.zeros((1, 3)),
                           np.zeros((1, 2))) for sk in skeletons[:1] if guesses]
@@ -179,3 +179,52 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
     search_module.search_scene(scene, model, quiet=True, progress=False)
     plain, plain_space, none, _ = calls[-1]
     assert len(plain) > len(fitted) and none is None and plain_space.init_frame == "goal"
+
+
+def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(monkeypatch):
+    """A free pusher's region goal whose plain tier solves nothing: a second search of the
+    pushes fitted to a pose inside the region (each with its guess ending there, the pose
+    goals' turning gain, the region's own goal tolerance). None when the plain tier
+    solves."""
+    import numpy as np
+    import torch
+
+    import robotplan.search.pose_search as pose_search
+    from robotplan.program.push_rows import region_goal
+    from robotplan.program.settings import settings_for as overlay
+    from robotplan.program.solution import Solution
+
+    calls, budgets, solve_plain = [], [], [False]
+
+    def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
+               time_budget, space, guesses=None, ordered=False):
+        calls.append((list(skeletons), space, guesses, settings))
+        budgets.append((time_budget, ordered))
+        solved = solve_plain[0] and not guesses
+        tried = [Solution(sk, solved, "snopt info 31", 0.0 if solved else 0.5, 1.0, 1.0,
+                          np.zeros((1, 3)), np.zeros((1, 2))) for sk in skeletons[:1]]
+        return SearchResult(tried[0] if tried else None, tried, 1.0)
+
+    monkeypatch.setattr(search_module, "search_push", record)
+    monkeypatch.setattr(pose_search, "search_push", record)
+    scene = load_scene(TASKS / "box_push.yaml")
+    model = TASKS.parent / "learned" / "push_rigid"
+    result, spaces = search_module.search_scene(scene, model, quiet=True, progress=False,
+                                                time_budget=0.5)
+    (plain, _, none, _), (fitted, space, guesses, settings) = calls
+    assert budgets[1] == (None, True)  # past the budget, the fits in their own order
+    assert plain and none is None and fitted and set(guesses) == set(fitted)
+    assert space.init_frame == "object"
+    assert settings.turn_gain == overlay("pose").turn_gain != 1.0
+    assert settings.goal_tol == search_module.settings_for(scene).goal_tol  # the region's
+    body = scene.bodies[scene.objects[0].name]
+    H = region_goal(body, scene.goal_region, settings)
+    for sk in fitted:
+        end = torch.from_numpy(guesses[sk]["q_obj"][-1:].copy())
+        assert float(H(end)[0, 0]) / body.area <= settings.goal_tol  # ends in the region
+    assert all(id(s) in spaces for s in result.candidates)
+
+    calls.clear()
+    solve_plain[0] = True
+    search_module.search_scene(scene, model, quiet=True, progress=False)
+    assert len(calls) == 1 and calls[0][2] is None  # solved: no fitted tier
