@@ -5,7 +5,8 @@ After each planned step t the executor observes every movable object's pose (as 
 perception system delivers it: optionally noisy) and the actors' state. It re-plans the
 phases not yet finished (:func:`robotplan.program.tail.solution_tail`, a shrinking
 horizon, warm started from the current plan's tail; with ``fresh_after_miss`` a fresh
-skeleton search when that does not plan) when an object is further than
+skeleton search when that does not plan; at a phase's end with ``fresh_beyond_drift`` also
+when the object is beyond ``drift`` / ``drift_yaw``) when an object is further than
 ``drift`` / ``drift_yaw`` from the plan's state t, or further than the tighter
 ``phase_drift`` / ``phase_drift_yaw`` at the end of a phase; when the plan has run out and
 the goal is not met it plans afresh from the observed scene. A re-plan is taken only if its
@@ -219,8 +220,10 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
             if reason is not None:
                 where = "at the end of a phase" if at_boundary else "mid-phase"
                 tail = solution_tail(loop.plan, loop.t)
+                gross = at_boundary and settings.fresh_beyond_drift and departure(
+                    loop.planned_poses(), seen.poses, settings.drift, settings.drift_yaw)
                 if not _ask(loop, scene, seen, tail, f"{reason} {where}", replan, settings,
-                            report, fresh=settings.fresh_after_miss):
+                            report, fresh=settings.fresh_after_miss or bool(gross)):
                     loop.calm_until = (loop.t // loop.T + 1) * loop.T
         ex = recorded(scene, obj, truth, world.obstacle_contact, sorted(world.forbidden),
                       loop.executed, physics)

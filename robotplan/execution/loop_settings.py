@@ -34,6 +34,10 @@ class LoopSettings:
     # plan finds plans that drift off again, at 30-110 s a search (measured:
     # docs/experiments.md#closed-loop)
     fresh_after_miss: bool = False
+    # at a phase's end, an object beyond drift / drift_yaw whose tail does not plan gets a
+    # fresh search at once: the stale plan pushes where the object is not and drove it
+    # 17-48 cm off on the push benchmark (measured: docs/experiments.md#closed-loop)
+    fresh_beyond_drift: bool = True
     # off by default: carrying the pusher with a turned object turns the push with it, which
     # can drive the object further off (measured: docs/experiments.md#closed-loop)
     follow_object: bool = False

@@ -118,11 +118,15 @@ class PushRows(DynamicsRows):
         self._add_rows(H, [self.Q1[1:], self.Q2[1:]], 1, k, 0.0, ub * k, spec.row)
 
     def _add_swept(self, spec: RowSpec) -> None:
-        """Along each free move of a free pusher, its gap to the object at a few points."""
+        """Along each free move of a free pusher, its gap to the object at a few points; each
+        move at most ``swept_max_step`` per axis, so that the points are dense enough to
+        see the object between them."""
         s, scale = self.settings, spec.scale
         pushing = set(self.push_steps.tolist())
         free = np.array([t for t in range(1, self.N + 1) if t not in pushing], dtype=int)
         if self.planar_pusher and s.swept_samples > 0 and len(free):
+            if s.swept_max_step is not None:
+                self._limit_steps(self.Q2, free, [s.swept_max_step] * 2)
             # the object holds still in these steps (hold_while_reaching): its pose at t
             k = s.swept_samples
             self._add_rows(SweptClearance(self.obj, self.pusher, k),

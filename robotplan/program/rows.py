@@ -38,24 +38,24 @@ class ProgramRows:
             self.prog.AddQuadraticCost(2 * w * D.T @ D, np.zeros(6),
                                        np.concatenate((Q[t], Q[t - 1])), is_convex=True)
 
+    def _limit_steps(self, Q: np.ndarray, steps: np.ndarray, limits: list[float]) -> None:
+        """|Q[t] − Q[t − 1]| ≤ ``limits`` per column for every t of ``steps`` (linear)."""
+        d, n = len(limits), len(steps)
+        D = np.zeros((d * n, d * (self.N + 1)))
+        for i, t in enumerate(steps):
+            for k in range(d):
+                D[d * i + k, d * t + k], D[d * i + k, d * (t - 1) + k] = 1.0, -1.0
+        lim = np.tile(limits, n)
+        self.prog.AddLinearConstraint(D, -lim, lim, Q.ravel())
+
     def _add_step_limits(self, max_step: float | None, max_turn: float | None) -> None:
         """Pusher travel per push step and axis ≤ ``max_step`` (the speeds of the push data)
         and object rotation per push step ≤ ``max_turn``. Reach steps move through free space
-        and are not limited."""
-
-        def differences(Q: np.ndarray, limits: list[float]) -> None:
-            d, n = len(limits), len(self.push_steps)
-            D = np.zeros((d * n, d * (self.N + 1)))
-            for i, t in enumerate(self.push_steps):
-                for k in range(d):
-                    D[d * i + k, d * t + k], D[d * i + k, d * (t - 1) + k] = 1.0, -1.0
-            lim = np.tile(limits, n)
-            self.prog.AddLinearConstraint(D, -lim, lim, Q.ravel())
-
+        and are limited only by the swept clearance's ``swept_max_step``."""
         if len(self.push_steps) and max_step is not None:
-            differences(self.Q2, [max_step] * 2)
+            self._limit_steps(self.Q2, self.push_steps, [max_step] * 2)
         if len(self.push_steps) and max_turn is not None:
-            differences(self.Q1[:, 2:], [max_turn])
+            self._limit_steps(self.Q1[:, 2:], self.push_steps, [max_turn])
 
     def _add_rows(self, H, blocks: list[np.ndarray], m: int, scale: float,
                   lb: float | np.ndarray, ub: float | np.ndarray, name: str) -> None:

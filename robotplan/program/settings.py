@@ -45,6 +45,10 @@ class ProgramSettings:
     # and pybullet drags the object along (measured: docs/experiments.md#swept-clearance)
     swept_samples: int = 7
     swept_tolerance: float = 0.002
+    # m per axis a free move may cover: the samples of a longer one (up to 1.2 m in one step
+    # of a reach) let it cross the object between them
+    # (measured: docs/experiments.md#swept-clearance)
+    swept_max_step: float | None = 0.35
     goal_tol: float = 0.003  # share of the object's area allowed outside the goal (or off its pose)
     # plan into the region shrunk by this much (m), at most a third of the room the object
     # has when aligned (region inradius − half its longer side), so tight fits stay feasible

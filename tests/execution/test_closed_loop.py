@@ -184,3 +184,23 @@ def test_closed_loop_reaches_a_pose_goal_that_open_loop_misses():
     closed = robotplan.execute(planned)
     assert closed.coverage >= max(0.95, open_loop.coverage)
     assert closed.replans and all(r.step > 0 for r in closed.replans)
+
+
+@pytest.mark.parametrize("fresh_beyond_drift", [True, False])
+def test_a_gross_departure_at_a_phase_end_asks_for_a_fresh_search(box_plan,
+                                                                  fresh_beyond_drift):
+    """The box 6 cm off (beyond ``drift``): the mid-phase re-plan asks for the tail alone;
+    at the reach's end, still 6 cm off, a fresh search follows the tail at once only with
+    ``fresh_beyond_drift``."""
+    calls = []
+
+    def nothing_plans(observed, tail, fresh):
+        calls.append((len(calls), tail is not None, fresh))
+        return robotplan.Plan(observed, "box", None, False)
+
+    scene = box_plan.scene
+    x, y, yaw = scene.bodies["box"].pose
+    moved = scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+    settings = LoopSettings(fresh_beyond_drift=fresh_beyond_drift, max_replans=2)
+    execute_closed_loop(moved, "box", box_plan.best, nothing_plans, settings)
+    assert calls == [(0, True, False), (1, True, fresh_beyond_drift)]

@@ -210,3 +210,25 @@ def test_corner_clearance_rows_when_asked_for():
     prog.prog.SetInitialGuess(prog.P[-1], corner)
     x = prog.prog.GetInitialGuess(prog.prog.decision_variables())
     assert abs(prog.evaluate(x)[0]["corner"] - 1.0) < 1e-6
+
+
+def _at_guess(prog: PushProgram) -> np.ndarray:
+    x = np.zeros(prog.prog.num_vars())
+    for V, value in prog._guess_pairs():
+        x[prog.prog.FindDecisionVariableIndices(V.ravel())] = value.ravel()
+    return x
+
+
+def test_free_moves_are_limited_so_that_the_swept_samples_see_the_object():
+    """Each free move of the pusher covers at most ``swept_max_step`` per axis (a linear
+    row): the guess's reach violates a limit of half its longest step by that half, and
+    nothing without the limit."""
+    prog = build(kinematic=True, swept_max_step=None)
+    reach = np.setdiff1d(np.arange(1, prog.N + 1), prog.push_steps)
+    steps = np.abs(np.diff(prog.guess["q_pusher"], axis=0))[reach - 1].max()
+    assert steps > 0.005
+    worst, _ = prog.evaluate(_at_guess(prog))
+    assert worst.get("linear", 0.0) < 1e-9
+    limited = build(kinematic=True, swept_max_step=steps / 2)
+    worst, _ = limited.evaluate(_at_guess(limited))
+    assert worst["linear"] == pytest.approx(steps / 2, abs=1e-9)
