@@ -50,8 +50,8 @@ def region_target(scene: Scene, obj: str, settings: ProgramSettings
     """A target pose ``(x, y, yaw)`` of ``obj`` for the region goal's fitted pushes: its
     footprint's centroid on the region's, turned from its start yaw by the least multiple
     of YAW_STEP_DEG at which the program's goal row (H_g over the area, eq. 8) is at most
-    REGION_SLACK of ``goal_tol`` (else within 10 % of its least); None for a footprint
-    that covers the region's centroid at no turn less than half outside."""
+    REGION_SLACK of ``goal_tol`` (else within 10 % of its least); None when at every turn
+    half the footprint or more lies outside."""
     region, body = scene.goal_region, scene.bodies[obj]
     c_B, c_R = centroid(body.shape.outline()), centroid(region.outline_world())
     yaw0 = float(body.pose[2])
