@@ -214,7 +214,8 @@ class PushProgram(PushRows):
 
     def evaluate(self, x: np.ndarray) -> tuple[dict[str, float], float]:
         """At the full decision vector ``x``: the largest violation of each named constraint
-        (linear ones under "linear"), each in its own scaled units, and the total cost."""
+        (linear ones under "linear"; the swept row checked densely too), each in its own
+        scaled units, and the total cost."""
         worst: dict[str, float] = {}
         cost = sum(float(self.prog.EvalBinding(b, x)[0]) for b in self.prog.GetAllCosts())
         for binding in self.prog.GetAllConstraints():
@@ -225,4 +226,7 @@ class PushProgram(PushRows):
             worst[name] = max(worst.get(name, 0.0),
                               float(np.max(np.maximum(lb - v, 0.0), initial=0.0)),
                               float(np.max(np.maximum(v - ub, 0.0), initial=0.0)))
+        if "swept" in worst:
+            q1, q2 = self._values(x, self.Q1), self._values(x, self.Q2)
+            worst["swept"] = max(worst["swept"], self.swept_shortfall(q1, q2))
         return worst, cost if np.isfinite(cost) else float("inf")

@@ -118,20 +118,35 @@ class PushRows(DynamicsRows):
         self._add_rows(H, [self.Q1[1:], self.Q2[1:]], 1, k, 0.0, ub * k, spec.row)
 
     def _add_swept(self, spec: RowSpec) -> None:
-        """Along each free move of a free pusher, its gap to the object at a few points; each
-        move at most ``swept_max_step`` per axis, so that the points are dense enough to
-        see the object between them."""
+        """Along each free move of a free pusher, its gap to the object at a few points (and
+        after the solve at points ``swept_check_spacing`` apart: :meth:`swept_shortfall`)."""
         s, scale = self.settings, spec.scale
         pushing = set(self.push_steps.tolist())
         free = np.array([t for t in range(1, self.N + 1) if t not in pushing], dtype=int)
         if self.planar_pusher and s.swept_samples > 0 and len(free):
-            if s.swept_max_step is not None:
-                self._limit_steps(self.Q2, free, [s.swept_max_step] * 2)
+            self._swept_check = (free, scale)
             # the object holds still in these steps (hold_while_reaching): its pose at t
             k = s.swept_samples
             self._add_rows(SweptClearance(self.obj, self.pusher, k),
                            [self.Q1[free], self.Q2[free - 1], self.Q2[free]], k, scale,
                            -scale * s.swept_tolerance, np.inf, spec.row)
+
+    def swept_shortfall(self, q_obj: np.ndarray, q_pusher: np.ndarray) -> float:
+        """How far (in the swept row's scaled units) the plan's free moves come closer to the
+        object than −swept_tolerance, checked at points ``swept_check_spacing`` apart: the
+        row's few samples cannot see the object inside a long move (0 without the row)."""
+        check = getattr(self, "_swept_check", None)
+        if check is None or self.settings.swept_check_spacing is None:
+            return 0.0
+        free, scale = check
+        longest = float(np.linalg.norm(q_pusher[free] - q_pusher[free - 1], axis=1).max())
+        samples = max(self.settings.swept_samples,
+                      int(np.ceil(longest / self.settings.swept_check_spacing)))
+        H = SweptClearance(self.obj, self.pusher, samples)
+        gaps = H(torch.from_numpy(q_obj[free]), torch.from_numpy(q_pusher[free - 1]),
+                 torch.from_numpy(q_pusher[free]))
+        deepest = float(gaps.min())
+        return scale * max(0.0, -deepest - self.settings.swept_tolerance)
 
     def _add_obstacle_collision(self, spec: RowSpec) -> None:
         """H_coll of the object and of the actor with every obstacle, in every step."""

@@ -45,10 +45,11 @@ class ProgramSettings:
     # and pybullet drags the object along (measured: docs/experiments.md#swept-clearance)
     swept_samples: int = 7
     swept_tolerance: float = 0.002
-    # m per axis a free move may cover: the samples of a longer one (up to 1.2 m in one step
-    # of a reach) let it cross the object between them
-    # (measured: docs/experiments.md#swept-clearance)
-    swept_max_step: float | None = 0.35
+    # m between the points at which a solved plan's free moves are checked again: the
+    # samples of a long move (up to 1.2 m in one step of a reach) let it cross the object
+    # between them; a bound on the step in the program instead changed SNOPT's path where
+    # it did not bind (measured: docs/experiments.md#swept-clearance)
+    swept_check_spacing: float | None = 0.01
     goal_tol: float = 0.003  # share of the object's area allowed outside the goal (or off its pose)
     # plan into the region shrunk by this much (m), at most a third of the room the object
     # has when aligned (region inradius − half its longer side), so tight fits stay feasible

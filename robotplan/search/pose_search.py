@@ -24,6 +24,7 @@ from robotplan.functionals.sticking import centroid
 from robotplan.geometry.transforms import wrap_angle
 from robotplan.program.push_rows import region_goal
 from robotplan.program.settings import ProgramSettings
+from robotplan.program.settings import settings_for as program_settings
 from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
 from robotplan.scene import Scene
 from robotplan.search.planner import SearchResult, search_push
@@ -38,7 +39,8 @@ from robotplan.search.pose_pushes import (
     rotation,
 )
 
-__all__ = ["pose_candidates", "pose_guess", "region_target", "search_pose"]
+__all__ = ["pose_candidates", "pose_guess", "region_target", "search_pose",
+           "search_region_fits"]
 
 MAX_STEPS_PER_PHASE = 30
 YAW_STEP_DEG = 5.0  # the turns tried for a region goal's target
@@ -206,3 +208,19 @@ def search_pose(scene: Scene, obj: str, actor: str, model_dir: Path,
     # the fits' own order: the least pushing first
     return posed, search_push(scene, model_dir, skeletons, settings, workers, progress,
                               exhaustive, time_budget, posed, guesses=guesses, ordered=True)
+
+
+def search_region_fits(scene: Scene, obj: str, actor: str, model_dir: Path,
+                       settings: ProgramSettings, space: SkeletonSpace, max_pushes: int,
+                       workers: int, progress: bool, exhaustive: bool, quiet: bool
+                       ) -> tuple[SkeletonSpace, SearchResult]:
+    """A free pusher's region goal the plain tier did not plan: pushes fitted in closed form
+    to a pose inside the region (:func:`region_target`), planned with the turning gain the
+    pose goals measured in pybullet (the `pose` overlay's ``turn_gain``). No time budget:
+    the tier has at most four programs, and without it nothing plans."""
+    fitted = replace(settings, turn_gain=program_settings("pose").turn_gain)
+    target = region_target(scene, obj, fitted)
+    if target is None:
+        return space, SearchResult(None)
+    return search_pose(scene, obj, actor, model_dir, fitted, space, max_pushes, workers,
+                       progress, exhaustive, quiet, None, target=target)

@@ -32,7 +32,7 @@ from robotplan.program.skeleton import (
 from robotplan.program.solution import Solution
 from robotplan.scene import Scene
 from robotplan.search.planner import FEASIBLE, SearchResult, merge_results, search_push
-from robotplan.search.pose_search import region_target, search_pose
+from robotplan.search.pose_search import search_pose, search_region_fits
 from robotplan.search.route import routed_candidates
 
 __all__ = ["DYNAMICS_CLASSES", "UnsupportedScene", "budget_spent", "candidate_table",
@@ -247,22 +247,6 @@ def _settings_of(candidates: list[Skeleton], settings: ProgramSettings) -> Progr
     return settings
 
 
-def _fitted_region_tier(scene: Scene, obj: str, actor: str, model_dir: Path,
-                        settings: ProgramSettings, space: SkeletonSpace, max_pushes: int,
-                        workers: int, progress: bool, exhaustive: bool, quiet: bool
-                        ) -> tuple[SkeletonSpace, SearchResult]:
-    """A free pusher's region goal the plain tier did not plan: pushes fitted in closed form
-    to a pose inside the region (:func:`region_target`), planned with the turning gain the
-    pose goals measured in pybullet (the `pose` overlay's ``turn_gain``). No time budget:
-    the tier has at most four programs, and without it nothing plans."""
-    fitted = replace(settings, turn_gain=program_settings("pose").turn_gain)
-    target = region_target(scene, obj, fitted)
-    if target is None:
-        return space, SearchResult(None)
-    return search_pose(scene, obj, actor, model_dir, fitted, space, max_pushes, workers,
-                       progress, exhaustive, quiet, None, target=target)
-
-
 def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: int = 2,
                  skeleton: str | Skeleton | None = None, max_pushes: int = 2,
                  progress: bool = True,
@@ -309,7 +293,7 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
         result = merge_results(result, extra)
     if (not result.solved and scene.goal.type == "region" and skeleton is None and not guesses
             and not scene.robots and not scene.obstacles and _chain_target(scene) is None):
-        fitted, extra = _fitted_region_tier(scene, obj, actors[0], model_dir, settings, space,
+        fitted, extra = search_region_fits(scene, obj, actors[0], model_dir, settings, space,
                                             max_pushes, workers, progress, exhaustive, quiet)
         spaces.update({id(s): fitted for s in extra.candidates})
         result = merge_results(result, extra)

@@ -219,16 +219,21 @@ def _at_guess(prog: PushProgram) -> np.ndarray:
     return x
 
 
-def test_free_moves_are_limited_so_that_the_swept_samples_see_the_object():
-    """Each free move of the pusher covers at most ``swept_max_step`` per axis (a linear
-    row): the guess's reach violates a limit of half its longest step by that half, and
-    nothing without the limit."""
-    prog = build(kinematic=True, swept_max_step=None)
-    reach = np.setdiff1d(np.arange(1, prog.N + 1), prog.push_steps)
-    steps = np.abs(np.diff(prog.guess["q_pusher"], axis=0))[reach - 1].max()
-    assert steps > 0.005
-    worst, _ = prog.evaluate(_at_guess(prog))
-    assert worst.get("linear", 0.0) < 1e-9
-    limited = build(kinematic=True, swept_max_step=steps / 2)
-    worst, _ = limited.evaluate(_at_guess(limited))
-    assert worst["linear"] == pytest.approx(steps / 2, abs=1e-9)
+def test_a_free_move_through_the_object_is_seen_by_the_dense_check():
+    """The plan's free moves are checked again at 1 cm: a reach step from one side of the
+    box to the other falls short of −swept_tolerance by the box's half height plus the
+    pusher's radius (in the row's units, ×100); the guess's own reach none; no check
+    without ``swept_check_spacing``."""
+    prog = build(kinematic=True)
+    q_obj, q_pusher = prog.guess["q_obj"].copy(), prog.guess["q_pusher"].copy()
+    assert prog.swept_shortfall(q_obj, q_pusher) == 0.0
+    x, y, _yaw = prog.obj.pose
+    q_pusher[4], q_pusher[5] = (x - 0.3, y), (x + 0.3, y)
+    deep = 0.06 + prog.pusher.shape.radius - prog.settings.swept_tolerance
+    assert prog.swept_shortfall(q_obj, q_pusher) == pytest.approx(100 * deep, rel=0.05)
+    x_guess = _at_guess(prog)
+    x_guess[prog.prog.FindDecisionVariableIndices(prog.Q2.ravel())] = q_pusher.ravel()
+    worst, _ = prog.evaluate(x_guess)
+    assert worst["swept"] >= prog.swept_shortfall(q_obj, q_pusher)
+    unchecked = build(kinematic=True, swept_check_spacing=None)
+    assert unchecked.swept_shortfall(q_obj, q_pusher) == 0.0
