@@ -132,21 +132,20 @@ class PushRows(DynamicsRows):
                            -scale * s.swept_tolerance, np.inf, spec.row)
 
     def swept_shortfall(self, q_obj: np.ndarray, q_pusher: np.ndarray) -> float:
-        """How far (in the swept row's scaled units) the plan's free moves come closer to the
-        object than −swept_tolerance, checked at points ``swept_check_spacing`` apart: the
-        row's few samples cannot see the object inside a long move (0 without the row)."""
+        """How far (in the swept row's scaled units) the plan's free moves cross the object
+        deeper than ``swept_check_depth``, checked at points ``swept_check_spacing`` apart:
+        the row's few samples cannot see the object inside a long move (0 without the row)."""
         check = getattr(self, "_swept_check", None)
-        if check is None or self.settings.swept_check_spacing is None:
+        s = self.settings
+        if check is None or s.swept_check_spacing is None:
             return 0.0
         free, scale = check
         longest = float(np.linalg.norm(q_pusher[free] - q_pusher[free - 1], axis=1).max())
-        samples = max(self.settings.swept_samples,
-                      int(np.ceil(longest / self.settings.swept_check_spacing)))
+        samples = max(s.swept_samples, int(np.ceil(longest / s.swept_check_spacing)))
         H = SweptClearance(self.obj, self.pusher, samples)
         gaps = H(torch.from_numpy(q_obj[free]), torch.from_numpy(q_pusher[free - 1]),
                  torch.from_numpy(q_pusher[free]))
-        deepest = float(gaps.min())
-        return scale * max(0.0, -deepest - self.settings.swept_tolerance)
+        return scale * max(0.0, -float(gaps.min()) - s.swept_check_depth)
 
     def _add_obstacle_collision(self, spec: RowSpec) -> None:
         """H_coll of the object and of the actor with every obstacle, in every step."""

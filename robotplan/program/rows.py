@@ -51,7 +51,8 @@ class ProgramRows:
     def _add_step_limits(self, max_step: float | None, max_turn: float | None) -> None:
         """Pusher travel per push step and axis ≤ ``max_step`` (the speeds of the push data)
         and object rotation per push step ≤ ``max_turn``. Reach steps move through free space
-        and are limited only by the swept clearance's ``swept_max_step``."""
+        and are not limited (a bound there changes SNOPT's path: the swept clearance checks
+        long moves after the solve instead)."""
         if len(self.push_steps) and max_step is not None:
             self._limit_steps(self.Q2, self.push_steps, [max_step] * 2)
         if len(self.push_steps) and max_turn is not None:

@@ -45,11 +45,15 @@ class ProgramSettings:
     # and pybullet drags the object along (measured: docs/experiments.md#swept-clearance)
     swept_samples: int = 7
     swept_tolerance: float = 0.002
-    # m between the points at which a solved plan's free moves are checked again: the
+    # a solved plan's free moves are checked again at points ``swept_check_spacing`` (m)
+    # apart, and a crossing deeper than ``swept_check_depth`` (m) fails the swept row: the
     # samples of a long move (up to 1.2 m in one step of a reach) let it cross the object
-    # between them; a bound on the step in the program instead changed SNOPT's path where
-    # it did not bind (measured: docs/experiments.md#swept-clearance)
+    # 4.5–5.7 cm deep between them, and pybullet drags the object along; a bound on the
+    # step in the program instead changed SNOPT's path where it did not bind, and rows at
+    # this spacing added after the solve did not repair a crossing (measured:
+    # docs/experiments.md#swept-clearance)
     swept_check_spacing: float | None = 0.01
+    swept_check_depth: float = 0.01
     goal_tol: float = 0.003  # share of the object's area allowed outside the goal (or off its pose)
     # plan into the region shrunk by this much (m), at most a third of the room the object
     # has when aligned (region inradius − half its longer side), so tight fits stay feasible

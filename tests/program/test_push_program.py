@@ -221,16 +221,24 @@ def _at_guess(prog: PushProgram) -> np.ndarray:
 
 def test_a_free_move_through_the_object_is_seen_by_the_dense_check():
     """The plan's free moves are checked again at 1 cm: a reach step from one side of the
-    box to the other falls short of −swept_tolerance by the box's half height plus the
-    pusher's radius (in the row's units, ×100); the guess's own reach none; no check
-    without ``swept_check_spacing``."""
+    box to the other crosses it deeper than ``swept_check_depth`` by the box's half height
+    plus the pusher's radius less that depth (in the row's units, ×100); a move grazing the
+    box 5 mm deep, and the guess's own reach, not at all; no check without
+    ``swept_check_spacing``."""
     prog = build(kinematic=True)
     q_obj, q_pusher = prog.guess["q_obj"].copy(), prog.guess["q_pusher"].copy()
     assert prog.swept_shortfall(q_obj, q_pusher) == 0.0
     x, y, _yaw = prog.obj.pose
     q_pusher[4], q_pusher[5] = (x - 0.3, y), (x + 0.3, y)
-    deep = 0.06 + prog.pusher.shape.radius - prog.settings.swept_tolerance
+    deep = 0.06 + prog.pusher.shape.radius - prog.settings.swept_check_depth
     assert prog.swept_shortfall(q_obj, q_pusher) == pytest.approx(100 * deep, rel=0.05)
+    grazing = q_pusher.copy()  # along the box's long face, in its frame B
+    x_obj, y_obj, yaw = q_obj[5]
+    R_WB = np.array([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
+    graze_B = prog.obj.shape.size[1] / 2 + prog.pusher.shape.radius - 0.005
+    for t, along in ((4, -0.3), (5, 0.3)):
+        grazing[t] = (x_obj, y_obj) + R_WB @ (along, graze_B)
+    assert prog.swept_shortfall(q_obj, grazing) == 0.0
     x_guess = _at_guess(prog)
     x_guess[prog.prog.FindDecisionVariableIndices(prog.Q2.ravel())] = q_pusher.ravel()
     worst, _ = prog.evaluate(x_guess)
