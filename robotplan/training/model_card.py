@@ -6,7 +6,7 @@ import json
 import os
 from pathlib import Path
 
-__all__ = ["record_heldout", "write_model_card"]
+__all__ = ["earlier_stages", "record_heldout", "stage_summary", "write_model_card"]
 
 
 def _read(path: Path) -> dict:
@@ -17,6 +17,42 @@ def _write(path: Path, text: str) -> None:
     tmp = path.with_name(f".{path.name}.tmp")
     tmp.write_text(text)
     os.replace(tmp, path)
+
+
+def stage_summary(training: dict) -> dict:
+    """One training run as a later run's card lists it: command, steps, epochs, minutes and
+    the hardware, from that run's ``training.json``."""
+    last = (training.get("history") or [{}])[-1]
+    hw = training.get("hardware", {})
+    return {"command": training.get("config", {}).get("command", "?"),
+            "steps": last.get("step"), "epoch": last.get("epoch"),
+            "minutes": last.get("minutes"),
+            "hardware": hw.get("gpu") or f"{hw.get('device', '?')}, {hw.get('threads', '?')} "
+                                         f"threads",
+            "torch": hw.get("torch")}
+
+
+def earlier_stages(init_weights: str | None) -> list[dict]:
+    """The runs that made ``init_weights``, oldest first: the stages recorded beside those
+    weights plus the run that wrote them, so a model fine-tuned from another keeps the whole
+    recipe. Empty for weights without a ``training.json`` beside them."""
+    if not init_weights:
+        return []
+    parent = _read(Path(init_weights).with_name("training.json"))
+    if not parent:
+        return []
+    return [*parent.get("stages", []), stage_summary(parent)]
+
+
+def _stage_lines(stages: list[dict]) -> list[str]:
+    if not stages:
+        return []
+    lines = [f"- trained in {len(stages) + 1} runs, each from the weights of the one before"
+             " (`--init-weights`); the earlier ones:"]
+    for i, st in enumerate(stages, 1):
+        lines.append(f"  {i}. `{st['command']}`: {st['steps']} steps ({st['epoch']} epochs),"
+                     f" {st['minutes']} min on {st['hardware']} (torch {st['torch']})")
+    return lines
 
 
 def record_heldout(model_dir: Path, result: dict) -> None:
@@ -58,7 +94,9 @@ def write_model_card(model_dir: Path) -> None:
         f"- scene ranges: {json.dumps(data_meta.get('spec', {}))}",
         "",
         "## Training",
-        f"- command: `{cfg.get('command', '?')}`",
+        *_stage_lines(training.get("stages", [])),
+        f"- command{' of the last run' if training.get('stages') else ''}: "
+        f"`{cfg.get('command', '?')}`",
         f"- steps {last.get('step', '?')} of {cfg.get('steps', '?')}, batch {cfg.get('batch')},"
         f" Adam lr {cfg.get('lr')} (warm-up, cosine to {cfg.get('lr_min')}),"
         f" {cfg.get('points')} query points per sample, seed {cfg.get('seed')}",
@@ -99,8 +137,17 @@ def write_model_card(model_dir: Path) -> None:
             "| --- | --- | --- | --- | --- | --- |",
             *(f"| {k} | {v['samples']} | {v['translation_error_mm']} | {v['yaw_error_deg']} | "
               f"{v['true_turn_deg']} | {v['turn_gain']} |"
-              for k, v in fit.items() if isinstance(v, dict)),
+              for k, v in fit.items() if isinstance(v, dict) and "turn_gain" in v),
         ]
+        dq = fit.get("delta_q_error")
+        if dq:
+            lines += ["", "The fitted step read as a turn about the footprint's centroid then a"
+                      " shift, |Δq error| mean ± std (paper Tab. 5 for F_q: 2.1, 2.1 mm,"
+                      " 0.63°): " + ", ".join(f"{name} {dq[key][0]} ± {dq[key][1]}{unit}"
+                                               for name, key, unit in (("x", "x_mm", " mm"),
+                                                                       ("y", "y_mm", " mm"),
+                                                                       ("α", "alpha_deg", "°")))
+                      + "."]
     lines += [
         "",
         "## Known failure modes",

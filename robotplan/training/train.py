@@ -24,6 +24,7 @@ import torch
 from robotplan.models.dynamics import DynamicsSpec, PushDynamics, save_model
 from robotplan.sdf import Workspace
 from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
+from robotplan.training.model_card import earlier_stages
 from robotplan.training.samples import PushSamples, SampleBatch
 
 __all__ = ["AUGMENTS", "TrainConfig", "augmented", "grid_rmse", "hardware", "query_points",
@@ -146,6 +147,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
         model.load_state_dict(torch.load(cfg.init_weights, map_location=device,
                                          weights_only=True))
     run = load_checkpoint(ckpt_path, model, opt, device) if resume else Run()
+    stages = earlier_stages(cfg.init_weights)  # read before this run overwrites that folder
     samples = PushSamples(cfg.data, cfg.scenes)
     train_idx, val_idx = samples.split_by_scene(cfg.val_fraction, cfg.seed)
     val_batch = samples.batch(validation_indices(samples, val_idx, cfg.val_samples, cfg.seed),
@@ -170,7 +172,8 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
                                    "free": round(1e3 * float(base[~c].mean()), 3)}}
         run.history.append(row)
         save_model(model, out)
-        write_json(out / "training.json", {"config": asdict(cfg), "history": run.history,
+        write_json(out / "training.json", {"config": asdict(cfg), "stages": stages,
+                                             "history": run.history,
                                              "samples": {"train": len(train_idx),
                                                          "val": len(val_idx)},
                                              "hardware": hardware(device)})

@@ -77,3 +77,36 @@ def test_init_weights_starts_from_a_previous_run(tiny_push_data, tmp_path):
     a, b = load_model(tmp_path / "a"), load_model(tmp_path / "b")
     for va, vb in zip(a.state_dict().values(), b.state_dict().values(), strict=True):
         assert torch.allclose(va, vb, atol=1e-6)
+
+
+def test_fine_tuned_model_keeps_the_recipe_of_its_parents(tiny_push_data, tmp_path):
+    a_cfg = config(tiny_push_data, tmp_path / "a", 4)
+    a_cfg.command = "train a"
+    train(a_cfg, progress=False)
+    for parent, child, steps in (("a", "b", 3), ("b", "c", 2)):
+        cfg = config(tiny_push_data, tmp_path / child, steps)
+        cfg.init_weights = str(tmp_path / parent / "weights.pt")
+        cfg.command = f"train {child}"
+        train(cfg, progress=False)
+    record = json.loads((tmp_path / "c" / "training.json").read_text())
+    assert [(s["command"], s["steps"]) for s in record["stages"]] == [("train a", 4),
+                                                                      ("train b", 3)]
+    write_model_card(tmp_path / "c")
+    card = (tmp_path / "c" / "MODEL_CARD.md").read_text()
+    assert "trained in 3 runs" in card
+    assert card.index("`train a`") < card.index("`train b`") < card.index("`train c`")
+
+
+def test_model_card_lists_the_pose_fit_by_shape_and_in_tab5_terms(tiny_push_data, tmp_path):
+    out = tmp_path / "m"
+    train(config(tiny_push_data, out, 2), progress=False)
+    result = evaluate_push(out, tiny_push_data, per_scene=2, progress=False)
+    row = {"samples": 3, "translation_error_mm": 2.5, "yaw_error_deg": 1.5,
+           "true_turn_deg": 2.0, "turn_gain": 0.25}
+    result["pose_fit"] = {"samples": 3, "box": row, "all": row, "seconds": 1.0,
+                          "delta_q_error": {"x_mm": [2.4, 2.2], "y_mm": [2.3, 1.5],
+                                            "alpha_deg": [1.8, 1.7]}}
+    record_heldout(out, result)
+    card = (out / "MODEL_CARD.md").read_text()
+    assert "| box | 3 | 2.5 | 1.5 | 2.0 | 0.25 |" in card
+    assert "x 2.4 ± 2.2 mm, y 2.3 ± 1.5 mm, α 1.8 ± 1.7°" in card
