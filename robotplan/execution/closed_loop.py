@@ -10,8 +10,10 @@ when the object is beyond ``drift`` / ``drift_yaw``) when an object is further t
 ``drift`` / ``drift_yaw`` from the plan's state t, or further than the tighter
 ``phase_drift`` / ``phase_drift_yaw`` at the end of a phase; when the plan has run out and
 the goal is not met it plans afresh from the observed scene. A re-plan is taken only if its
-plan meets every constraint; otherwise the current plan goes on, and mid-phase drift does
-not trigger another re-plan before the next phase boundary.
+plan is solved (every constraint met, plausible under the learned dynamics; at the plan's
+end, with ``adopt_feasible_at_end``, every constraint met is enough); otherwise the current
+plan goes on, and mid-phase drift does not trigger another re-plan before the next phase
+boundary.
 
 The thresholds are :class:`LoopSettings`, with overlays per scene class in
 ``skeletons/loop.yaml`` (:func:`loop_settings_for`: a chain re-plans from larger departures
@@ -45,6 +47,7 @@ from robotplan.execution.sim import PHYSICS, Physics
 from robotplan.program.solution import Solution
 from robotplan.program.tail import solution_tail
 from robotplan.scene import Scene
+from robotplan.search.planner import meets_constraints
 
 __all__ = ["LOOP_CLASSES", "LoopSettings", "Replan", "departure", "execute_closed_loop",
            "follow_object", "load_loop_overlays", "loop_settings_for", "steer_pusher"]
@@ -63,6 +66,9 @@ class Replan:
     skeleton: str
     # seconds of the best program's stages and functionals (Solution.timings)
     timings: dict | None = None
+    # whether the loop went on with it: a solved plan, or at the plan's end one that meets
+    # the constraints (LoopSettings.adopt_feasible_at_end)
+    adopted: bool = False
 
     def as_dict(self) -> dict:
         out = asdict(self)
@@ -191,7 +197,8 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
             if loop.t == len(loop.substeps):
                 if _goal_met(scene, obj, seen, settings) or not _ask(
                         loop, scene, seen, _last_push(loop), "goal not met at the plan's end",
-                        replan, settings, report, fresh=True):
+                        replan, settings, report, fresh=True,
+                        last_resort=settings.adopt_feasible_at_end):
                     break
                 continue
             target = {k: v[loop.t + 1] for k, v in loop.drive.items()}
@@ -240,24 +247,29 @@ def _last_push(loop: _Loop) -> Solution | None:
 
 
 def _ask(loop: _Loop, scene: Scene, seen: Observation, tail: Solution | None, reason: str,
-         replan: Replanner, settings: LoopSettings, report, fresh: bool = False) -> bool:
+         replan: Replanner, settings: LoopSettings, report, fresh: bool = False,
+         last_resort: bool = False) -> bool:
     """Re-plan from ``seen`` (a fresh search after ``tail`` only if ``fresh``); adopt the
-    new plan when it is solved. Whether it was."""
+    new plan when it is solved or, as a ``last_resort``, when it meets the constraints.
+    Whether it was adopted."""
     if len(loop.replans) >= settings.max_replans:
         return False
     t0 = time.perf_counter()
     result = replan(_observed_scene(scene, seen), tail, fresh)
     best = getattr(result, "best", None)
     solved = bool(getattr(result, "solved", False)) and best is not None
+    adopted = solved or (last_resort and best is not None and meets_constraints(best))
     record = Replan(loop.now(), len(loop.executed), reason, solved,
                     float(best.violation) if best is not None else None,
                     time.perf_counter() - t0, best.skeleton.describe() if best else "",
-                    dict(best.timings) if best is not None and best.timings else None)
+                    dict(best.timings) if best is not None and best.timings else None,
+                    adopted)
     loop.replans.append(record)
     if report is not None:
-        outcome_text = "solved" if solved else "not solved: the current plan goes on"
+        outcome_text = ("solved" if solved else "meets the constraints, taken at the plan's end"
+                        if adopted else "not solved: the current plan goes on")
         report(f"re-plan {len(loop.replans)} at step {record.step} ({record.time:.1f} s): "
                f"{reason}; {outcome_text} in {record.seconds:.1f} s")
-    if solved:
+    if adopted:
         loop.adopt(best)
-    return solved
+    return adopted

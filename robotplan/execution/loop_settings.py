@@ -38,6 +38,11 @@ class LoopSettings:
     # fresh search at once: the stale plan pushes where the object is not and drove it
     # 17-48 cm off on the push benchmark (measured: docs/experiments.md#closed-loop)
     fresh_beyond_drift: bool = True
+    # at the plan's end with the goal not met, a re-plan that meets every constraint is taken
+    # even when the learned dynamics call it implausible (residual beyond 10 mm): the loop
+    # would otherwise stop short of the goal, and it re-plans again if pybullet departs
+    # (measured: docs/experiments.md#closed-loop)
+    adopt_feasible_at_end: bool = True
     # off by default: carrying the pusher with a turned object turns the push with it, which
     # can drive the object further off (measured: docs/experiments.md#closed-loop)
     follow_object: bool = False

@@ -28,8 +28,8 @@ from robotplan.program.solution import FEASIBLE, Solution
 from robotplan.program.solve import solve_skeleton
 from robotplan.scene import Scene
 
-__all__ = ["PATIENCE_S", "SearchResult", "is_solved", "merge_results", "search_push",
-           "stops_search"]
+__all__ = ["PATIENCE_S", "SearchResult", "is_solved", "meets_constraints", "merge_results",
+           "search_push", "stops_search"]
 
 # residual RMS (mm) below which plans rank alike, and the default good-enough residual
 GOOD_RMS_MM = ProgramSettings.good_rms_mm
@@ -93,11 +93,16 @@ def plan_rank(s: Solution) -> tuple[float, float, float, float]:
     return (max(s.violation, FEASIBLE), _clearance_short(s), max(rms, GOOD_RMS_MM), s.cost)
 
 
+def meets_constraints(s: Solution) -> bool:
+    """Every constraint met and the obstacle margin kept, whatever the learned dynamics say
+    of the plan."""
+    return s.violation <= FEASIBLE and _clearance_short(s) == 0.0
+
+
 def is_solved(s: Solution) -> bool:
     """Meets the constraints, is plausible under the learned dynamics and keeps the
     obstacle margin (what :attr:`SearchResult.solved` asks of the best plan)."""
-    return (s.violation <= FEASIBLE and s.dynamics_rms_mm <= PLAUSIBLE_RMS_MM
-            and _clearance_short(s) == 0.0)
+    return meets_constraints(s) and s.dynamics_rms_mm <= PLAUSIBLE_RMS_MM
 
 
 def good_enough(s: Solution, good_rms_mm: float = GOOD_RMS_MM) -> bool:

@@ -22,6 +22,7 @@ from robotplan.execution.perturb import Perturbation
 from robotplan.execution.scene_world import Observation
 from robotplan.execution.sim import PHYSICS
 from robotplan.scene.schema import PoseGoal
+from robotplan.search.planner import meets_constraints
 from tests.conftest import TASKS, assert_each_refused
 
 
@@ -204,3 +205,32 @@ def test_a_gross_departure_at_a_phase_end_asks_for_a_fresh_search(box_plan,
     settings = LoopSettings(fresh_beyond_drift=fresh_beyond_drift, max_replans=2)
     execute_closed_loop(moved, "box", box_plan.best, nothing_plans, settings)
     assert calls == [(0, True, False), (1, True, fresh_beyond_drift)]
+
+
+def test_at_the_plan_end_a_re_plan_that_meets_the_constraints_is_taken(box_plan):
+    """The box 6 cm off and turned: re-plans on the way plan nothing; at the plan's end the
+    re-planner returns a real plan from the observed scene that meets every constraint,
+    flagged not solved (as one the learned dynamics call implausible). With
+    ``adopt_feasible_at_end`` the loop goes on with it and ends nearer the goal than without,
+    where it stops short."""
+    def only_at_the_end(observed, tail, fresh):
+        if not fresh:  # mid-phase and phase-end re-plans (no fresh searches in settings)
+            return robotplan.Plan(observed, "box", None, False)
+        real = robotplan.plan(observed, workers=1, progress=False, quiet=True)
+        assert real.best is not None and meets_constraints(real.best)
+        return robotplan.Plan(observed, "box", real.best, False)
+
+    scene = box_plan.scene
+    x, y, yaw = scene.bodies["box"].pose
+    moved = scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+    runs = {}
+    for adopt in (False, True):
+        settings = LoopSettings(fresh_beyond_drift=False, adopt_feasible_at_end=adopt,
+                                max_replans=5)
+        ex = execute_closed_loop(moved, "box", box_plan.best, only_at_the_end, settings)
+        end = [r for r in ex.replans if r.reason == "goal not met at the plan's end"]
+        assert end and not any(r.solved for r in ex.replans)
+        assert end[0].adopted == adopt and len(ex.plans) == 1 + sum(r.adopted
+                                                                    for r in ex.replans)
+        runs[adopt] = ex.coverage
+    assert runs[False] < 0.9 and runs[True] > runs[False] + 0.1
