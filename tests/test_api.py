@@ -57,8 +57,9 @@ def test_solve_records_the_mode_every_replan_and_both_executions(tmp_path):
     assert saved["execution"]["mode"] == "closed_loop" == doc["execution"]["mode"]
     assert isinstance(saved["execution"]["replans"], list)
     for r in saved["execution"]["replans"]:
-        assert {"time", "step", "reason", "solved", "violation", "seconds", "skeleton",
-                "timings"} <= set(r)
+        assert {"time", "step", "reason", "solved", "adopted", "violation", "seconds",
+                "skeleton", "timings"} <= set(r)
+        assert r["adopted"] or not r["solved"]  # a solved re-plan is always taken
         if r["violation"] is not None:  # a program ran: its stages' seconds are there
             assert sum(r["timings"].values()) > 0
     executed = saved["executed"]

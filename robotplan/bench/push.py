@@ -65,10 +65,11 @@ def time_profile(rows: list[dict]) -> dict:
 
 def summarize(rows: list[dict]) -> dict:
     """Quartiles per shape type: coverage closed loop (``coverage``) and open loop, plan
-    time, wall time of plan + execution each way, re-plans per scene and their seconds."""
+    time, wall time of plan + execution each way, re-plans per scene, how many of them the
+    loop went on with, and their seconds."""
     out: dict = {"scenes": len(rows), "coverage": {}, "open_loop_coverage": {},
                  "plan_seconds": {}, "closed_loop_seconds": {}, "open_loop_seconds": {},
-                 "replans": {}, "replan_seconds": {}, "below_0_9": {}}
+                 "replans": {}, "replans_adopted": {}, "replan_seconds": {}, "below_0_9": {}}
     for kind in sorted({r["shape"] for r in rows}):
         sel = [r for r in rows if r["shape"] == kind]
         out["coverage"][kind] = _quartiles([r["coverage"] for r in sel])
@@ -83,6 +84,10 @@ def summarize(rows: list[dict]) -> dict:
         out["open_loop_seconds"][kind] = _quartiles(
             [r["plan_seconds"] + r.get("open_loop_seconds", 0.0) for r in sel])
         out["replans"][kind] = _quartiles([len(r.get("replans", [])) for r in sel])
+        every = [x for r in sel for x in r.get("replans", [])]
+        out["replans_adopted"][kind] = {
+            "adopted": sum(bool(x.get("adopted", x.get("solved"))) for x in every),
+            "of": len(every)}
         out["replan_seconds"][kind] = _quartiles([x["seconds"] for r in sel
                                                   for x in r.get("replans", [])])
     out["plan_seconds"]["all"] = _quartiles([r["plan_seconds"] for r in rows])

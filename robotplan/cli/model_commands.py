@@ -180,12 +180,13 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
         for kind, q in summary["coverage"].items():
             o = summary["open_loop_coverage"][kind]
             t = summary["plan_seconds"][kind]
-            r = summary["replans"][kind]
+            r, a = summary["replans"][kind], summary["replans_adopted"][kind]
             c, w = summary["closed_loop_seconds"][kind], summary["open_loop_seconds"][kind]
             print(f"{kind:>7}: coverage median closed loop {q['median']:.3f} (quartiles "
                   f"{q['q1']:.3f}–{q['q3']:.3f}, min {q['min']:.3f}), open loop "
                   f"{o['median']:.3f} ({o['q1']:.3f}–{o['q3']:.3f}, min {o['min']:.3f}), "
-                  f"n={q['n']}; re-plans per scene median {r['median']:.0f}; plan time median "
+                  f"n={q['n']}; re-plans per scene median {r['median']:.0f} ({a['adopted']} "
+                  f"of {a['of']} adopted); plan time median "
                   f"{t['median']:.1f} s; plan + execution median {c['median']:.1f} s closed, "
                   f"{w['median']:.1f} s open loop")
         prof = summary["time_profile"]

@@ -54,6 +54,17 @@ def test_summary_quartiles():
     assert s["plan_seconds"]["all"]["median"] == pytest.approx(20.0)
 
 
+def test_summary_counts_the_re_plans_the_loop_went_on_with():
+    replans = [{"solved": True, "adopted": True, "seconds": 1.0},
+               {"solved": False, "adopted": True, "seconds": 2.0},
+               {"solved": False, "adopted": False, "seconds": 3.0}]
+    rows = [{"shape": "box", "coverage": 1.0, "plan_seconds": 1.0, "replans": replans},
+            {"shape": "box", "coverage": 1.0, "plan_seconds": 1.0, "replans": []}]
+    s = summarize(rows)
+    assert s["replans_adopted"]["box"] == {"adopted": 2, "of": 3}
+    assert s["replans"]["box"]["median"] == pytest.approx(1.5)
+
+
 def test_time_profile_sums_the_candidates_timers_over_scenes():
     a = candidate_timings([
         {"seconds": 3.0, "timings": {"H_F": 2.0, "solver": 1.0}},
