@@ -230,7 +230,8 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
                 gross = at_boundary and settings.fresh_beyond_drift and departure(
                     loop.planned_poses(), seen.poses, settings.drift, settings.drift_yaw)
                 if not _ask(loop, scene, seen, tail, f"{reason} {where}", replan, settings,
-                            report, fresh=settings.fresh_after_miss or bool(gross)):
+                            report, fresh=settings.fresh_after_miss or bool(gross),
+                            last_resort=settings.last_resort_beyond_drift and bool(gross)):
                     loop.calm_until = (loop.t // loop.T + 1) * loop.T
         ex = recorded(scene, obj, truth, world.obstacle_contact, sorted(world.forbidden),
                       loop.executed, physics)
@@ -258,7 +259,8 @@ def _ask(loop: _Loop, scene: Scene, seen: Observation, tail: Solution | None, re
     result = replan(_observed_scene(scene, seen), tail, fresh)
     best = getattr(result, "best", None)
     solved = bool(getattr(result, "solved", False)) and best is not None
-    adopted = solved or (last_resort and best is not None and meets_constraints(best))
+    adopted = solved or (last_resort and best is not None
+                         and meets_constraints(best, settings.last_resort_violation))
     record = Replan(loop.now(), len(loop.executed), reason, solved,
                     float(best.violation) if best is not None else None,
                     time.perf_counter() - t0, best.skeleton.describe() if best else "",
@@ -266,7 +268,7 @@ def _ask(loop: _Loop, scene: Scene, seen: Observation, tail: Solution | None, re
                     adopted)
     loop.replans.append(record)
     if report is not None:
-        outcome_text = ("solved" if solved else "meets the constraints, taken at the plan's end"
+        outcome_text = ("solved" if solved else "meets the constraints, taken as a last resort"
                         if adopted else "not solved: the current plan goes on")
         report(f"re-plan {len(loop.replans)} at step {record.step} ({record.time:.1f} s): "
                f"{reason}; {outcome_text} in {record.seconds:.1f} s")

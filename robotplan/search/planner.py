@@ -93,10 +93,10 @@ def plan_rank(s: Solution) -> tuple[float, float, float, float]:
     return (max(s.violation, FEASIBLE), _clearance_short(s), max(rms, GOOD_RMS_MM), s.cost)
 
 
-def meets_constraints(s: Solution) -> bool:
-    """Every constraint met and the obstacle margin kept, whatever the learned dynamics say
-    of the plan."""
-    return s.violation <= FEASIBLE and _clearance_short(s) == 0.0
+def meets_constraints(s: Solution, violation: float = FEASIBLE) -> bool:
+    """Every constraint met (scaled violation at most ``violation``) and the obstacle margin
+    kept, whatever the learned dynamics say of the plan."""
+    return s.violation <= violation and _clearance_short(s) == 0.0
 
 
 def is_solved(s: Solution) -> bool:

@@ -234,3 +234,26 @@ def test_at_the_plan_end_a_re_plan_that_meets_the_constraints_is_taken(box_plan)
                                                                     for r in ex.replans)
         runs[adopt] = ex.coverage
     assert runs[False] < 0.9 and runs[True] > runs[False] + 0.1
+
+
+@pytest.mark.parametrize("beyond_drift", [True, False])
+def test_a_gross_phase_end_departure_takes_a_last_resort_plan_only_when_asked(box_plan,
+                                                                             beyond_drift):
+    """The box 6 cm off: at the reach's end the fresh search returns a real plan from the
+    observed scene that meets the constraints, flagged not solved. The loop goes on with it
+    there only with ``last_resort_beyond_drift``."""
+    def fresh_only(observed, tail, fresh):
+        if not fresh:
+            return robotplan.Plan(observed, "box", None, False)
+        real = robotplan.plan(observed, workers=1, progress=False, quiet=True)
+        assert real.best is not None and meets_constraints(real.best)
+        return robotplan.Plan(observed, "box", real.best, False)
+
+    scene = box_plan.scene
+    x, y, yaw = scene.bodies["box"].pose
+    moved = scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+    settings = LoopSettings(last_resort_beyond_drift=beyond_drift, max_replans=2)
+    ex = execute_closed_loop(moved, "box", box_plan.best, fresh_only, settings)
+    at_phase_end = [r for r in ex.replans if r.reason.endswith("at the end of a phase")]
+    assert at_phase_end and not at_phase_end[0].solved
+    assert at_phase_end[0].adopted == beyond_drift
