@@ -10,8 +10,9 @@ when the object is beyond ``drift`` / ``drift_yaw``) when an object is further t
 ``drift`` / ``drift_yaw`` from the plan's state t, or further than the tighter
 ``phase_drift`` / ``phase_drift_yaw`` at the end of a phase; when the plan has run out and
 the goal is not met it plans afresh from the observed scene. A re-plan is taken only if its
-plan is solved (every constraint met, plausible under the learned dynamics; at the plan's
-end, with ``adopt_feasible_at_end``, every constraint met is enough); otherwise the current
+plan is solved (every constraint met, plausible under the learned dynamics; as a last
+resort every constraint met is enough: at the plan's end with ``adopt_feasible_at_end``, at a
+gross phase-end departure with ``last_resort_beyond_drift``); otherwise the current
 plan goes on, and mid-phase drift does not trigger another re-plan before the next phase
 boundary.
 
@@ -66,8 +67,8 @@ class Replan:
     skeleton: str
     # seconds of the best program's stages and functionals (Solution.timings)
     timings: dict | None = None
-    # whether the loop went on with it: a solved plan, or at the plan's end one that meets
-    # the constraints (LoopSettings.adopt_feasible_at_end)
+    # whether the loop went on with it: a solved plan, or as a last resort one that meets
+    # the constraints (LoopSettings.adopt_feasible_at_end, last_resort_beyond_drift)
     adopted: bool = False
 
     def as_dict(self) -> dict:
