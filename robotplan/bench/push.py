@@ -88,8 +88,7 @@ def summarize(rows: list[dict]) -> dict:
         out["replans_adopted"][kind] = {
             "adopted": sum(bool(x.get("adopted", x.get("solved"))) for x in every),
             "of": len(every)}
-        out["replan_seconds"][kind] = _quartiles([x["seconds"] for r in sel
-                                                  for x in r.get("replans", [])])
+        out["replan_seconds"][kind] = _quartiles([x["seconds"] for x in every])
     out["plan_seconds"]["all"] = _quartiles([r["plan_seconds"] for r in rows])
     mixed = [r for r in rows if r["shape"] in ("ood", "pose")]
     if mixed:

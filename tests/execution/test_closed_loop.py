@@ -99,13 +99,29 @@ def box_plan():
     return robotplan.plan(scene, skeleton="push@0", workers=1, progress=False, quiet=True)
 
 
+def _box_moved(planned):
+    """The plan's scene with the box 6 cm back and turned 0.3 rad (17°) from where the plan
+    expects it."""
+    x, y, yaw = planned.scene.bodies["box"].pose
+    return planned.scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+
+
+def _implausible_when_fresh(observed, tail, fresh):
+    """A re-planner that plans nothing from a tail alone; asked for a fresh search it returns
+    a real plan from the observed scene that meets every constraint, flagged not solved (as
+    one the learned dynamics call implausible)."""
+    if not fresh:
+        return robotplan.Plan(observed, "box", None, False)
+    real = robotplan.plan(observed, workers=1, progress=False, quiet=True)
+    assert real.best is not None and meets_constraints(real.best)
+    return robotplan.Plan(observed, "box", real.best, False)
+
+
 def test_closed_loop_recovers_a_box_that_is_not_where_it_was_planned(box_plan):
     """The box is 6 cm and 17° from where the plan expects it: the plan pushes past it open
     loop; closed loop sees that after the first step and re-plans from there."""
     assert box_plan.solved
-    scene = box_plan.scene
-    x, y, yaw = scene.bodies["box"].pose
-    moved = scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+    moved = _box_moved(box_plan)
     open_loop = robotplan.execute(box_plan, moved, mode="open_loop")
     assert open_loop.coverage < 0.5
     closed = robotplan.execute(box_plan, moved)
@@ -138,9 +154,7 @@ def test_a_departure_whose_tail_does_not_plan_asks_for_a_fresh_search(box_plan,
         calls.append((tail is not None, fresh))
         return robotplan.Plan(observed, "box", None, False)
 
-    scene = box_plan.scene
-    x, y, yaw = scene.bodies["box"].pose
-    moved = scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+    moved = _box_moved(box_plan)
     settings = LoopSettings(fresh_after_miss=fresh_after_miss, max_replans=3)
     ex = execute_closed_loop(moved, "box", box_plan.best, nothing_plans, settings)
     assert calls[0] == (True, fresh_after_miss)
@@ -199,9 +213,7 @@ def test_a_gross_departure_at_a_phase_end_asks_for_a_fresh_search(box_plan,
         calls.append((len(calls), tail is not None, fresh))
         return robotplan.Plan(observed, "box", None, False)
 
-    scene = box_plan.scene
-    x, y, yaw = scene.bodies["box"].pose
-    moved = scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+    moved = _box_moved(box_plan)
     settings = LoopSettings(fresh_beyond_drift=fresh_beyond_drift, max_replans=2)
     execute_closed_loop(moved, "box", box_plan.best, nothing_plans, settings)
     assert calls == [(0, True, False), (1, True, fresh_beyond_drift)]
@@ -213,21 +225,13 @@ def test_at_the_plan_end_a_re_plan_that_meets_the_constraints_is_taken(box_plan)
     flagged not solved (as one the learned dynamics call implausible). With
     ``adopt_feasible_at_end`` the loop goes on with it and ends nearer the goal than without,
     where it stops short."""
-    def only_at_the_end(observed, tail, fresh):
-        if not fresh:  # mid-phase and phase-end re-plans (no fresh searches in settings)
-            return robotplan.Plan(observed, "box", None, False)
-        real = robotplan.plan(observed, workers=1, progress=False, quiet=True)
-        assert real.best is not None and meets_constraints(real.best)
-        return robotplan.Plan(observed, "box", real.best, False)
-
-    scene = box_plan.scene
-    x, y, yaw = scene.bodies["box"].pose
-    moved = scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+    moved = _box_moved(box_plan)
     runs = {}
     for adopt in (False, True):
         settings = LoopSettings(fresh_beyond_drift=False, adopt_feasible_at_end=adopt,
                                 max_replans=5)
-        ex = execute_closed_loop(moved, "box", box_plan.best, only_at_the_end, settings)
+        ex = execute_closed_loop(moved, "box", box_plan.best, _implausible_when_fresh,
+                                 settings)
         end = [r for r in ex.replans if r.reason == "goal not met at the plan's end"]
         assert end and not any(r.solved for r in ex.replans)
         assert end[0].adopted == adopt and len(ex.plans) == 1 + sum(r.adopted
@@ -242,18 +246,9 @@ def test_a_gross_phase_end_departure_takes_a_last_resort_plan_only_when_asked(bo
     """The box 6 cm off: at the reach's end the fresh search returns a real plan from the
     observed scene that meets the constraints, flagged not solved. The loop goes on with it
     there only with ``last_resort_beyond_drift``."""
-    def fresh_only(observed, tail, fresh):
-        if not fresh:
-            return robotplan.Plan(observed, "box", None, False)
-        real = robotplan.plan(observed, workers=1, progress=False, quiet=True)
-        assert real.best is not None and meets_constraints(real.best)
-        return robotplan.Plan(observed, "box", real.best, False)
-
-    scene = box_plan.scene
-    x, y, yaw = scene.bodies["box"].pose
-    moved = scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+    moved = _box_moved(box_plan)
     settings = LoopSettings(last_resort_beyond_drift=beyond_drift, max_replans=2)
-    ex = execute_closed_loop(moved, "box", box_plan.best, fresh_only, settings)
+    ex = execute_closed_loop(moved, "box", box_plan.best, _implausible_when_fresh, settings)
     at_phase_end = [r for r in ex.replans if r.reason.endswith("at the end of a phase")]
     assert at_phase_end and not at_phase_end[0].solved
     assert at_phase_end[0].adopted == beyond_drift
