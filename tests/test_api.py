@@ -52,9 +52,10 @@ def test_solve_records_the_mode_every_replan_and_both_executions(tmp_path):
 
     scene = load_scene(TASKS / "box_push.yaml")
     doc = robotplan.solve(scene, tmp_path, skeleton="push@0", workers=1, progress=False,
-                          quiet=True, compare_open_loop=True)
+                          quiet=True, compare_open_loop=True, loop={"max_replans": 8})
     saved = json.loads((tmp_path / "result.json").read_text())
     assert saved["execution"]["mode"] == "closed_loop" == doc["execution"]["mode"]
+    assert saved["execution"]["loop_settings"] == {"max_replans": 8}  # the user's, recorded
     assert isinstance(saved["execution"]["replans"], list)
     for r in saved["execution"]["replans"]:
         assert {"time", "step", "reason", "solved", "adopted", "violation", "seconds",

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,7 +28,7 @@ from robotplan.api.hang import (
 from robotplan.api.results import execution_summary
 from robotplan.base.files import write_atomically
 from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
-from robotplan.execution.closed_loop import LoopSettings, execute_closed_loop
+from robotplan.execution.closed_loop import LoopSettings, execute_closed_loop, loop_settings_for
 from robotplan.execution.execute import Execution, plan_substeps, run_open_loop
 from robotplan.execution.perturb import Perturbation
 from robotplan.execution.scene_world import actuation
@@ -217,11 +218,14 @@ def write_playback(planned: Plan, executed: Execution, path: Path) -> None:
 
 def solve(scene: Scene, out: Path, model: str | Path | None = None, *, quiet: bool = False,
           mode: str = "closed_loop", perturb: Perturbation | None = None,
-          compare_open_loop: bool = False, **options: object) -> dict:
+          compare_open_loop: bool = False, loop: Mapping[str, object] | None = None,
+          **options: object) -> dict:
     """Plan, execute the best plan (``mode``, in a world perturbed by ``perturb``), write
     ``out/playback.html`` and ``out/result.json`` (whole or not at all); the result
     document. ``compare_open_loop`` also runs the same plan open loop and records its
-    outcome under ``open_loop``. ``options``: those of :func:`plan`."""
+    outcome under ``open_loop``. ``loop``: closed-loop settings that replace those of the
+    scene's class (:class:`~robotplan.execution.closed_loop.LoopSettings` fields, recorded
+    in the result). ``options``: those of :func:`plan`."""
     out = Path(out)
     if isinstance(scene.goal, HangGoal):
         return solve_hang(scene, out, model)
@@ -233,8 +237,11 @@ def solve(scene: Scene, out: Path, model: str | Path | None = None, *, quiet: bo
             print(f"plan: {' and '.join([planned.obj, *best.q_others])} pushed by "
                   f"{best.skeleton.phases[0].actor}; executing in pybullet")
         t0 = time.perf_counter()
-        executed = execute(planned, mode=mode, perturb=perturb, quiet=quiet)
+        settings = loop_settings_for(scene, overrides=loop) if loop else None
+        executed = execute(planned, mode=mode, perturb=perturb, loop=settings, quiet=quiet)
         doc.update(execution_summary(planned, executed, perturb))
+        if loop:
+            doc["execution"]["loop_settings"] = dict(loop)
         doc["execution"]["seconds"] = round(time.perf_counter() - t0, 2)
         if compare_open_loop:
             t0 = time.perf_counter()

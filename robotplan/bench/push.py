@@ -151,10 +151,12 @@ def _box_plot(rows: list[dict], path: Path, model: str) -> None:
 def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | None,
                    workers: int = 2,
                    shapes: tuple[str, ...] = ("box", "lshape"), exhaustive: bool = False,
-                   time_budget: float | None = None, perturb: int | None = None) -> dict:
+                   time_budget: float | None = None, perturb: int | None = None,
+                   loop: dict | None = None) -> dict:
     """Solve and execute ``scenes`` scenes per shape type; returns the summary.
     ``model_dir``: the learned dynamics' folder, None for each scene's default.
-    ``perturb``: the seed of the perturbed worlds (one per scene), None for the nominal."""
+    ``perturb``: the seed of the perturbed worlds (one per scene), None for the nominal.
+    ``loop``: closed-loop settings in place of each scene class's (``LoopSettings`` fields)."""
     from robotplan.api import solve
     from robotplan.execution.perturb import Perturbation
 
@@ -181,7 +183,8 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
                  if perturb is not None else None)
         result = solve(scene, out / "solutions" / name, model_dir, workers=workers,
                        progress=False, exhaustive=exhaustive, quiet=True,
-                       time_budget=time_budget, perturb=world, compare_open_loop=True)
+                       time_budget=time_budget, perturb=world, compare_open_loop=True,
+                       loop=loop)
         ex = result.get("execution") or {}
         open_loop = result.get("open_loop") or {}
         row = {"scene": name, "shape": kind, "family": family_of(i, kind),
@@ -209,7 +212,8 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
     summary = summarize(rows)
     summary.update({"seed": seed, "model": str(model_dir) if model_dir else "auto",
                     "exhaustive": exhaustive,
-                    "time_budget_s": time_budget, "perturb": perturb})
+                    "time_budget_s": time_budget, "perturb": perturb,
+                    "loop_settings": loop or {}})
     buf = io.StringIO()
     flat = [{**{k: v for k, v in r.items() if k not in ("timings", "replans")},
              "replans": len(r.get("replans", []))} for r in rows]

@@ -116,6 +116,26 @@ def add_execution_options(parser) -> None:
                         metavar="SEED", help="execute in a perturbed world: friction and "
                         "mass ±20 %%, observation noise 1 mm / 0.5°, drawn from SEED "
                         "(default 0)")
+    add_loop_option(parser)
+
+
+def add_loop_option(parser) -> None:
+    """``--loop NAME=VALUE``: closed-loop settings in place of the scene class's."""
+    parser.add_argument("--loop", action="append", default=[], metavar="NAME=VALUE",
+                        help="a closed-loop setting in place of the scene class's (a field "
+                        "of LoopSettings, e.g. last_resort_violation=0.03; repeatable)")
+
+
+def loop_overrides(args) -> dict | None:
+    """The ``--loop`` settings as LoopSettings fields; None after printing one line on a
+    bad item (the caller exits with status 2)."""
+    from robotplan.execution.loop_settings import parse_loop_overrides
+
+    try:
+        return parse_loop_overrides(args.loop)
+    except ValueError as err:
+        print(f"error: --loop: {err}", file=sys.stderr)
+        return None
 
 
 def perturbation(seed: int | None):

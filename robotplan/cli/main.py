@@ -12,7 +12,12 @@ import sys
 
 from robotplan.base.memory import keep_freed_memory
 from robotplan.base.resources import learned_dir, tasks_dir
-from robotplan.cli.common import EXIT_BAD_INPUT, add_dynamics_options, add_execution_options
+from robotplan.cli.common import (
+    EXIT_BAD_INPUT,
+    add_dynamics_options,
+    add_execution_options,
+    add_loop_option,
+)
 from robotplan.cli.hang_commands import (
     cmd_bench_hang,
     cmd_data_hang,
@@ -85,6 +90,7 @@ def _parser() -> argparse.ArgumentParser:
     bp.add_argument("--perturb", type=int, nargs="?", const=0, default=None, metavar="SEED",
                     help="execute in a perturbed world (friction and mass ±20 %%, observation "
                     "noise 1 mm / 0.5°), drawn per scene from SEED (default 0)")
+    add_loop_option(bp)
     bp.set_defaults(run=cmd_bench_push)
     bh = bsub.add_parser("hang", help="find hanging poses on random mug-and-hook scenes and "
                          "drop them in pybullet (paper Tab. 3)")

@@ -13,6 +13,7 @@ from robotplan.cli.common import (
     EXIT_BAD_INPUT,
     device_name,
     load_footprint_scene,
+    loop_overrides,
     model_folder,
     not_a_model,
     print_result,
@@ -147,6 +148,9 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
     if problem:
         print(f"error: --dynamics: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    args.loop = loop_overrides(args)
+    if args.loop is None:
+        return EXIT_BAD_INPUT
     if len(kinds) == 1:
         args.model = model_folder(args)
     if not_a_model(args.model):
@@ -173,7 +177,7 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
             (out / name).unlink(missing_ok=True)
     summary = run_bench_push(args.scenes, args.seed, out, args.model, args.workers,
                              tuple(args.shapes.split(",")), args.exhaustive, args.time_budget,
-                             args.perturb)
+                             args.perturb, args.loop)
     if args.json:
         print(json.dumps(summary))
     else:
@@ -212,7 +216,7 @@ def _bench_compare(args: argparse.Namespace, kinds: list[str], out: Path) -> int
                 (out / kind / name).unlink(missing_ok=True)
     result = run_bench_compare(kinds, args.scenes, args.seed, out, args.workers,
                                tuple(args.shapes.split(",")), args.exhaustive,
-                               args.time_budget, args.perturb)
+                               args.time_budget, args.perturb, args.loop)
     if args.json:
         print(json.dumps(result))
         return 0

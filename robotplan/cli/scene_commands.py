@@ -10,6 +10,7 @@ from pathlib import Path
 from robotplan.cli.common import (
     EXIT_BAD_INPUT,
     load_footprint_scene,
+    loop_overrides,
     model_folder,
     not_a_model,
     perturbation,
@@ -63,6 +64,9 @@ def cmd_solve(args: argparse.Namespace) -> int:
     from robotplan.api import UnsupportedScene, solve
 
     scene = load_scene(args.scene)
+    loop = loop_overrides(args)
+    if loop is None:
+        return EXIT_BAD_INPUT
     out = Path(args.out)
     if out.exists() and any(out.iterdir()) and not args.overwrite:
         print(f"error: {out}: --out: the folder is not empty; pass --overwrite to replace "
@@ -79,7 +83,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
                     skeleton=args.skeleton, max_pushes=args.max_pushes,
                     exhaustive=args.exhaustive, time_budget=args.time_budget,
                     mode="open_loop" if args.open_loop else "closed_loop",
-                    perturb=perturbation(args.perturb))
+                    perturb=perturbation(args.perturb), loop=loop)
     except UnsupportedScene as err:
         print(f"error: {args.scene}: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT

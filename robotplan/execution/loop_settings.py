@@ -5,7 +5,8 @@ and their overlays per scene class in ``skeletons/loop.yaml``."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, fields, replace
 from functools import cache
 from pathlib import Path
 
@@ -14,7 +15,8 @@ from robotplan.base.resources import skeletons_dir
 from robotplan.scene import Scene
 from robotplan.search.scene_search import scene_classes
 
-__all__ = ["LOOP_CLASSES", "LoopSettings", "load_loop_overlays", "loop_settings_for"]
+__all__ = ["LOOP_CLASSES", "LoopSettings", "load_loop_overlays", "loop_settings_for",
+           "parse_loop_overrides"]
 
 
 @dataclass(frozen=True)
@@ -71,8 +73,48 @@ def load_loop_overlays(path: Path | None = None) -> dict[str, dict]:
                          "closed-loop setting")
 
 
-def loop_settings_for(scene: Scene, base: LoopSettings | None = None) -> LoopSettings:
+def loop_settings_for(scene: Scene, base: LoopSettings | None = None,
+                      overrides: Mapping[str, object] | None = None) -> LoopSettings:
     """``base`` (default :class:`LoopSettings`) with the overlays of the classes ``scene``
-    belongs to (:func:`~robotplan.search.scene_search.scene_classes`)."""
+    belongs to (:func:`~robotplan.search.scene_search.scene_classes`), then ``overrides``
+    (a user's settings win over the scene class's)."""
     classes = tuple(c for c in scene_classes(scene) if c in LOOP_CLASSES)
-    return apply_overlays(base or LoopSettings(), load_loop_overlays(), classes)
+    settings = apply_overlays(base or LoopSettings(), load_loop_overlays(), classes)
+    return replace(settings, **overrides) if overrides else settings
+
+
+_TRUE, _FALSE = ("true", "on", "yes", "1"), ("false", "off", "no", "0")
+
+
+def parse_loop_overrides(items: Sequence[str]) -> dict[str, object]:
+    """``NAME=VALUE`` items (the CLI's ``--loop``) as :class:`LoopSettings` fields with
+    values of their types: booleans as true/false (on/off, yes/no, 1/0), numbers as written.
+    Raises ValueError naming the item that is not a setting or not of its type."""
+    defaults = {f.name: getattr(LoopSettings(), f.name) for f in fields(LoopSettings)}
+    out: dict[str, object] = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        name, text = name.strip(), text.strip()
+        if not sep or not text:
+            raise ValueError(f"{item!r}: expected NAME=VALUE")
+        if name not in defaults:
+            raise ValueError(f"{name}: not a closed-loop setting; one of "
+                             f"{', '.join(sorted(defaults))}")
+        default = defaults[name]
+        try:
+            if isinstance(default, bool):
+                if text.lower() not in _TRUE + _FALSE:
+                    raise ValueError
+                value: object = text.lower() in _TRUE
+            elif isinstance(default, int):
+                value = int(text)
+            else:
+                value = float(text)
+                if not math.isfinite(value):
+                    raise ValueError
+        except ValueError:
+            raise ValueError(f"{name}: {text!r} is not a {type(default).__name__}") from None
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and value < 0:
+            raise ValueError(f"{name}: must not be negative")
+        out[name] = value
+    return out

@@ -2,6 +2,7 @@
 with the real planner, where open loop fails; its pieces one by one."""
 
 import math
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -18,6 +19,7 @@ from robotplan.execution.closed_loop import (
     loop_settings_for,
     steer_pusher,
 )
+from robotplan.execution.loop_settings import parse_loop_overrides
 from robotplan.execution.perturb import Perturbation
 from robotplan.execution.scene_world import Observation
 from robotplan.execution.sim import PHYSICS
@@ -75,6 +77,31 @@ def test_chains_re_plan_from_their_own_phase_end_departures(tmp_path):
         ("chains: {no_such: 1}", "loop.yaml: chains.no_such: not a closed-loop"),
         ("pets: {}", "pets: not a scene class"),
         ("chains: {phase_drift: yes}", "chains.phase_drift: must be a float")))
+
+
+def test_a_users_loop_settings_are_typed_and_win_over_the_scene_class():
+    """``--loop NAME=VALUE`` items become LoopSettings fields of their own types and replace
+    the scene class's overlay; a wrong name, type or form is refused naming the item."""
+    items = ["last_resort_beyond_drift=on", "last_resort_violation=0.03", "max_replans=4",
+             "phase_drift = 0.02"]
+    overrides = parse_loop_overrides(items)
+    assert overrides == {"last_resort_beyond_drift": True, "last_resort_violation": 0.03,
+                         "max_replans": 4, "phase_drift": 0.02}
+    assert type(overrides["max_replans"]) is int and type(overrides["phase_drift"]) is float
+    chain = load_scene(TASKS / "three_objects.yaml")
+    settings = loop_settings_for(chain, overrides=overrides)
+    assert settings.phase_drift == 0.02 != loop_settings_for(chain).phase_drift
+    assert settings.phase_drift_yaw == loop_settings_for(chain).phase_drift_yaw  # the class's
+    assert settings.last_resort_beyond_drift and settings.max_replans == 4
+    assert parse_loop_overrides([]) == {}
+    for item, says in (("no_such=1", "no_such: not a closed-loop setting"),
+                       ("max_replans=2.5", "max_replans: '2.5' is not a int"),
+                       ("follow_object=maybe", "follow_object: 'maybe' is not a bool"),
+                       ("drift=nan", "drift: 'nan' is not a float"),
+                       ("drift=-0.1", "drift: must not be negative"),
+                       ("drift", "expected NAME=VALUE"), ("drift=", "expected NAME=VALUE")):
+        with pytest.raises(ValueError, match=re.escape(says)):
+            parse_loop_overrides([item])
 
 
 def test_a_perturbed_world_is_seeded_and_within_its_spread():
