@@ -95,12 +95,26 @@ class PushProgram(PushRows):
         return initial_guess(self)
 
     # ------------------------------------------------------------------ solve
+    def _set_start(self) -> None:
+        for V, value in self._guess_pairs():
+            if V.size:
+                self.prog.SetInitialGuess(V, value)
+
+    def start_solution(self) -> Solution:
+        """The program's initial guess as a solution, measured by this program's rows and
+        residual without solving (a start good enough to keep needs no solver:
+        ``ProgramSettings.accept_good_start``)."""
+        self._set_start()
+        t0 = time.perf_counter()
+        x = self.prog.GetInitialGuess(self.prog.decision_variables())
+        violations, cost = self._evaluate_untimed(x)
+        return self._solution(x, violations, cost, "the start, not solved",
+                              time.perf_counter() - t0, {})
+
     def solve(self) -> Solution:
         s = self.settings
         prog = self.prog
-        for V, value in self._guess_pairs():
-            if V.size:
-                prog.SetInitialGuess(V, value)
+        self._set_start()
         iterations = s.iterations if self.dynamics is not None else s.warm_iterations
         opts = SolverOptions()
         if s.solver == "snopt":
@@ -144,6 +158,11 @@ class PushProgram(PushRows):
             if rank(start_violations, start_cost) < rank(violations, cost):
                 x, violations, cost = start, start_violations, start_cost
                 status += ", kept the start"
+        return self._solution(x, violations, cost, status, seconds, timings)
+
+    def _solution(self, x: np.ndarray, violations: dict[str, float], cost: float, status: str,
+                  seconds: float, timings: dict) -> Solution:
+        """The full decision vector ``x`` with its worst violations and cost as a Solution."""
         q1, q2, p = (self._values(x, V) for V in (self.Q1, self.Q2, self.P))
         violation = max(violations.values(), default=0.0)
         touch = None if self.P_touch is None else self._values(x, self.P_touch)

@@ -87,6 +87,10 @@ class ProgramSettings:
     warm_start: bool = True
     # with a given guess (a re-plan from an earlier plan), the kinematic stage starts from it
     warm_from_guess: bool = True
+    # and the learned stage is not run when its start (the repaired guess) already meets
+    # every row with a residual of at most good_rms_mm: such a solve mostly keeps its start
+    # (the `replan` overlay turns it on; measured: docs/experiments.md#good-start)
+    accept_good_start: bool = False
     warm_iterations: int = 300
     # a kinematic solve that ends above this violation (but usable, ≤ WARM_USABLE) is solved
     # again from where it ended (a fresh quasi-Newton model): it rescues SNOPT's

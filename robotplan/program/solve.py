@@ -33,14 +33,16 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
                    guess: dict[str, np.ndarray] | None = None) -> Solution:
     """Solve one skeleton: the kinematic program first (``warm_start``), then the learned
     program from its solution; seconds and timings cover both (``"warm_start"``: stage 1).
-    A given ``guess`` (an earlier plan of the same skeleton) starts the learned program
-    directly."""
+    A given ``guess`` (an earlier plan of the same skeleton) is repaired by the kinematic
+    program (``warm_from_guess``) and starts the learned program, which is not run when
+    ``accept_good_start`` and that start already meets every row within ``good_rms_mm``."""
     program = program_class(scene, skeleton)
     states = len(skeleton.phases) * space.steps_per_phase + 1
     if guess is not None and len(guess["q_obj"]) != states:
         raise ValueError(f"a guess of {len(guess['q_obj'])} states for {skeleton.describe()} "
                          f"at {space.steps_per_phase} steps per phase ({states} states)")
     warm_seconds = 0.0
+    given = guess is not None
     if settings.warm_start and guess is None:
         kin = program(scene, skeleton, None, space, settings)
         warm = kin.solve()
@@ -59,7 +61,16 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
         warm_seconds = warm.seconds
         if warm.violation <= WARM_USABLE:
             guess = kin.as_guess(warm)
-    sol = program(scene, skeleton, model, space, settings, guess=guess).solve()
+    learned = program(scene, skeleton, model, space, settings, guess=guess)
+    sol = None
+    if settings.accept_good_start and given:
+        # a repaired re-plan the learned rows already accept needs no learned solve
+        start = learned.start_solution()
+        if start.success and start.dynamics_rms_mm <= settings.good_rms_mm:
+            start.status = (f"learned stage not run: its start meets every row, residual "
+                            f"{start.dynamics_rms_mm:.1f} mm")
+            sol = start
+    sol = sol or learned.solve()
     if settings.warm_start and warm_seconds:
         sol.seconds += warm_seconds
         sol.timings = {"warm_start": round(warm_seconds, 3), **sol.timings}

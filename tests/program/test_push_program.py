@@ -160,6 +160,43 @@ def test_learned_program_never_ends_worse_than_its_warm_start():
     assert sol.q_obj.shape == (learned.N + 1, 3) and sol.contact.shape == (10, 2)
 
 
+def test_a_start_the_learned_rows_accept_is_kept_without_a_learned_solve():
+    """``start_solution`` measures the guess by the program's own rows; with
+    ``accept_good_start`` a re-plan whose repaired guess meets every row within
+    ``good_rms_mm`` returns it unsolved, and one beyond it goes on to the learned solve."""
+    from robotplan.program.solution import FEASIBLE
+    from robotplan.program.solve import solve_skeleton
+
+    kin = build(kinematic=True, scene_file=DATA / "box_push_near.yaml")
+    warm = kin.solve()
+    assert warm.violation <= FEASIBLE
+    torch.manual_seed(0)
+    model = PushDynamics(DynamicsSpec(**TINY))
+    learned = PushProgram(kin.scene, kin.skeleton, model, kin.space, ProgramSettings(),
+                          guess=kin.as_guess(warm))
+    start = learned.start_solution()
+    x = learned.prog.GetInitialGuess(learned.prog.decision_variables())
+    violations, cost = learned.evaluate(x)
+    assert start.violations == violations and start.cost == cost
+    assert np.array_equal(start.q_obj, warm.q_obj) and start.dynamics_mm2.size == learned.N
+    assert start.violation == max(violations.values())
+
+    def replan(good_rms_mm: float):
+        settings = ProgramSettings(iterations=3, accept_good_start=True,
+                                   good_rms_mm=good_rms_mm)
+        torch.manual_seed(0)
+        return solve_skeleton(kin.scene, kin.skeleton, model, kin.space, settings,
+                              guess=kin.as_guess(warm))
+
+    kept = replan(good_rms_mm=1e6)
+    assert kept.status.startswith("learned stage not run") and kept.success
+    assert np.abs(kept.q_obj - warm.q_obj).max() < 1e-3  # the kinematic repair's, kept
+    assert "warm_start" in kept.timings and "H_F" not in kept.timings  # no learned solve
+    solved = replan(good_rms_mm=start.dynamics_rms_mm / 2)
+    assert not solved.status.startswith("learned stage not run")
+    assert solved.timings.get("H_F", 0.0) > 0.0
+
+
 def test_arm_touch_program_ends_in_contact_and_hands_its_touch_point_on():
     """The touch goal's last state is a contact (H_coll allows touching there, not the
     reach clearance that contradicted H_touch), the kinematic stage of left-push,
