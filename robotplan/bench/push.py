@@ -117,21 +117,34 @@ def _box_plot(rows: list[dict], path: Path, model: str) -> None:
     import matplotlib.pyplot as plt
 
     kinds = sorted({r["shape"] for r in rows})
-    fig, ax = plt.subplots(figsize=(5.5, 3.6), dpi=120)
-    for offset, key, color, label in ((-0.18, "open_loop_coverage", "#999999", "open loop"),
-                                      (0.18, "coverage", "#2a7ab9", "closed loop")):
+    fig, ax = plt.subplots(figsize=(5.5, 3.9), dpi=120)
+    jitter = np.random.default_rng(0)  # the dots' spread only: the same picture every run
+    for offset, key, color, dots, label in (
+            (-0.18, "open_loop_coverage", "#bbbbbb", "#555555", "open loop"),
+            (0.18, "coverage", "#8fc0e6", "#1d5f93", "closed loop")):
         data = [[r.get(key, 0.0) for r in rows if r["shape"] == k] for k in kinds]
-        box = ax.boxplot(data, positions=np.arange(1, len(kinds) + 1) + offset, widths=0.3,
-                         showfliers=True, patch_artist=True)
+        positions = np.arange(1, len(kinds) + 1) + offset
+        box = ax.boxplot(data, positions=positions, widths=0.3, showfliers=False,
+                         patch_artist=True)
         for patch in box["boxes"]:
             patch.set_facecolor(color)
+        # every scene as a dot: a box of all-equal values is a line, the dots still show n
+        for x, values in zip(positions, data, strict=True):
+            ax.scatter(x + jitter.uniform(-0.09, 0.09, len(values)), values, s=9,
+                       color=dots, alpha=0.8, linewidths=0, zorder=3)
         ax.plot([], [], color=color, linewidth=8, label=label)
-    counts = [sum(r["shape"] == k for r in rows) for k in kinds]
-    ax.set_xticks(range(1, len(kinds) + 1), [f"{k}\n(n={n})" for k, n in zip(kinds, counts,
-                                                                             strict=True)])
+
+    def label(kind: str) -> str:
+        sel = [r for r in rows if r["shape"] == kind]
+        below = [sum(r.get(key, 0.0) < 0.9 for r in sel)
+                 for key in ("open_loop_coverage", "coverage")]
+        return f"{kind} (n={len(sel)})\nbelow 0.9: {below[0]} open, {below[1]} closed"
+
+    ax.set_xticks(range(1, len(kinds) + 1), [label(k) for k in kinds], fontsize=8)
     ax.set_ylabel("coverage of the object inside the goal")
     ax.set_ylim(-0.02, 1.02)
-    ax.legend(loc="lower left", fontsize=8)
+    ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.08), ncol=2, fontsize=8,
+              frameon=False)
     if model == "auto":
         used = sorted({r["model"] for r in rows if r.get("model")})
         model = ", ".join(MODEL_NAMES.get(m, m) for m in used) or "auto"

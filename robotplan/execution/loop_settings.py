@@ -45,12 +45,14 @@ class LoopSettings:
     # would otherwise stop short of the goal, and it re-plans again if pybullet departs
     # (measured: docs/experiments.md#last-resort)
     adopt_feasible_at_end: bool = True
-    # the largest scaled constraint violation such a last-resort plan may have
-    last_resort_violation: float = 0.01
-    # off by default, not yet measured on the benchmark: a gross departure at a phase end
-    # whose re-plans do not solve also takes a last-resort plan rather than the stale one
-    # (docs/experiments.md#last-resort)
-    last_resort_beyond_drift: bool = False
+    # the largest scaled constraint violation such a last-resort plan may have: three times
+    # the bound of a solved plan; the re-plans that ended L-shapes below 0.9 at 0.01
+    # violated by 0.011-0.017 (measured: docs/experiments.md#last-resort)
+    last_resort_violation: float = 0.03
+    # a gross departure at a phase end whose re-plans do not solve also takes a last-resort
+    # plan rather than the stale one, which pushes where the object is not
+    # (measured: docs/experiments.md#last-resort)
+    last_resort_beyond_drift: bool = True
     # off by default: carrying the pusher with a turned object turns the push with it, which
     # can drive the object further off (measured: docs/experiments.md#closed-loop)
     follow_object: bool = False

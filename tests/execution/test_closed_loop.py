@@ -256,7 +256,7 @@ def test_at_the_plan_end_a_re_plan_that_meets_the_constraints_is_taken(box_plan)
     runs = {}
     for adopt in (False, True):
         settings = LoopSettings(fresh_beyond_drift=False, adopt_feasible_at_end=adopt,
-                                max_replans=5)
+                                last_resort_beyond_drift=False, max_replans=5)
         ex = execute_closed_loop(moved, "box", box_plan.best, _implausible_when_fresh,
                                  settings)
         end = [r for r in ex.replans if r.reason == "goal not met at the plan's end"]
