@@ -11,10 +11,12 @@ from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
 __all__ = [
     "EXIT_BAD_INPUT",
     "add_dynamics_options",
+    "add_ray_option",
     "device_name",
     "load_footprint_scene",
     "model_folder",
     "not_a_model",
+    "positive_ints",
     "print_result",
     "training_folders_problem",
 ]
@@ -95,6 +97,29 @@ def model_folder(args) -> str | None:
     if args.model:
         return args.model
     return None if args.dynamics == "auto" else str(learned_dir(DYNAMICS_FOLDERS[args.dynamics]))
+
+
+def add_ray_option(parser) -> None:
+    """``--ray``: run the command's units (shards, scenes) as Ray tasks."""
+    parser.add_argument("--ray", default=None, metavar="ADDRESS",
+                        help="run the units as Ray tasks: 'local' starts Ray on this machine "
+                             "with --workers CPUs; 'auto' or HOST:PORT joins a running "
+                             "cluster (needs the ray package); the files are the same as "
+                             "without it, where and how long the units ran goes to run.json")
+
+
+def positive_ints(text: str) -> tuple[int, ...]:
+    """An argparse type: ``"8,16,16"`` → ``(8, 16, 16)``, every item a positive integer."""
+    import argparse
+
+    try:
+        values = tuple(int(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if not values or min(values) < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected positive integers separated "
+                                         "by commas, e.g. 8,16,16")
+    return values
 
 
 def device_name(name: str) -> str:

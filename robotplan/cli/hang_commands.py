@@ -32,7 +32,7 @@ def cmd_data_hang(args: argparse.Namespace) -> int:
     try:
         summary = generate_hang(Path(args.out), args.scenes, args.seed, workers=args.workers,
                                 shard_size=args.shard_size,
-                                spec=HangDataSpec(per_scene=args.per_scene))
+                                spec=HangDataSpec(per_scene=args.per_scene), ray=args.ray)
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -60,7 +60,7 @@ def cmd_mine_hang(args: argparse.Namespace) -> int:
     try:
         summary = mine_hang(Path(args.data), Path(model), Path(args.out), args.seed,
                             args.scenes, MiningSpec(starts=args.starts), workers=args.workers,
-                            first=args.first)
+                            first=args.first, ray=args.ray)
     except (ValueError, FileNotFoundError) as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT

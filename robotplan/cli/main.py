@@ -12,11 +12,14 @@ import sys
 
 from robotplan.base.memory import keep_freed_memory
 from robotplan.base.resources import learned_dir, tasks_dir
+from robotplan.base.units import RayMissing
 from robotplan.cli.common import (
     EXIT_BAD_INPUT,
     add_dynamics_options,
     add_execution_options,
     add_loop_option,
+    add_ray_option,
+    positive_ints,
 )
 from robotplan.cli.hang_commands import (
     cmd_bench_hang,
@@ -170,6 +173,7 @@ def _parser() -> argparse.ArgumentParser:
     dm.add_argument("--starts", type=int, default=2, help="program solves per scene")
     dm.add_argument("--seed", type=int, default=0, help="draws the start poses")
     dm.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    add_ray_option(dm)
     dm.set_defaults(run=cmd_mine_hang)
 
     t = sub.add_parser("train", help="train learned functionals")
@@ -183,6 +187,12 @@ def _parser() -> argparse.ArgumentParser:
                     help="shared: the paper's (one encoder per SDF, shared weights); "
                          "joint: one encoder over the three SDFs stacked as channels")
     tp.add_argument("--out", required=True, metavar="DIR", help="e.g. learned/push_flow")
+    tp.add_argument("--channels", type=positive_ints, default=None, metavar="C1,C2,C3",
+                    help="the SDF encoder's convolution channels (default 3,5,5, app. I.1)")
+    tp.add_argument("--sdf-features", type=int, default=None, metavar="N",
+                    help="features per SDF after the encoder's linear layer (default 200)")
+    tp.add_argument("--hidden", type=positive_ints, default=None, metavar="H1,H2",
+                    help="the MLP's hidden widths (default 300,300)")
     tp.add_argument("--steps", type=int, default=60_000, help="total optimiser steps")
     tp.add_argument("--batch", type=int, default=32)
     tp.add_argument("--lr", type=float, default=5e-4)
@@ -281,6 +291,7 @@ def _add_data_options(parser: argparse.ArgumentParser, shard_size: int) -> None:
     parser.add_argument("--out", required=True, metavar="DIR")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--shard-size", type=int, default=shard_size)
+    add_ray_option(parser)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -288,7 +299,7 @@ def main(argv: list[str] | None = None) -> int:
     keep_freed_memory()
     try:
         return args.run(args)
-    except SceneError as err:
+    except (SceneError, RayMissing) as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:

@@ -30,7 +30,8 @@ def cmd_data_push(args: argparse.Namespace) -> int:
     t0 = time.time()
     try:
         summary = generate(Path(args.out), args.scenes, args.seed, workers=args.workers,
-                           shard_size=args.shard_size, spec=PushDataSpec(shapes=args.shapes))
+                           shard_size=args.shard_size, spec=PushDataSpec(shapes=args.shapes),
+                           ray=args.ray)
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -42,6 +43,27 @@ def cmd_data_push(args: argparse.Namespace) -> int:
     return 0
 
 
+def architecture(args: argparse.Namespace) -> dict:
+    """The ``DynamicsSpec`` fields that ``train push`` sets: the encoder and any widths given."""
+    spec: dict = {"encoder": args.encoder}
+    for name in ("channels", "sdf_features", "hidden"):
+        if getattr(args, name) is not None:
+            spec[name] = getattr(args, name)
+    return spec
+
+
+def architecture_problem(args: argparse.Namespace) -> str | None:
+    """Why the widths given to ``train push`` cannot build a model, or None."""
+    from robotplan.models.spec import DynamicsSpec
+
+    layers = len(DynamicsSpec().kernels)
+    if args.channels is not None and len(args.channels) != layers:
+        return f"--channels: {layers} convolutions, got {len(args.channels)} widths"
+    if args.sdf_features is not None and args.sdf_features < 1:
+        return f"--sdf-features: {args.sdf_features} is not a positive integer"
+    return None
+
+
 def cmd_train_push(args: argparse.Namespace) -> int:
     import torch
 
@@ -49,7 +71,8 @@ def cmd_train_push(args: argparse.Namespace) -> int:
     from robotplan.training.train import TrainConfig, train
 
     out = Path(args.out)
-    problem = training_folders_problem(args.data, args.out, args.resume, args.overwrite)
+    problem = (training_folders_problem(args.data, args.out, args.resume, args.overwrite)
+               or architecture_problem(args))
     if problem:
         print(f"error: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -61,7 +84,7 @@ def cmd_train_push(args: argparse.Namespace) -> int:
                       scenes=args.scenes, device=device, minutes=args.minutes,
                       val_every=args.val_every, contact_share=args.contact_share,
                       warmup=args.warmup, rigid_loss=args.rigid_loss,
-                      near_share=args.near_share, spec={"encoder": args.encoder},
+                      near_share=args.near_share, spec=architecture(args),
                       augment=args.augment, anneal_by_time=args.anneal_by_time,
                       init_weights=args.init_weights,
                       command=" ".join(["robotplan", *sys.argv[1:]]))

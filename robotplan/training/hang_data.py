@@ -25,11 +25,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from robotplan.base.units import check_ray
 from robotplan.execution.hang_world import HANG_PHYSICS, HangWorld
 from robotplan.geometry.transforms import perturbed_poses, quaternion_to_matrix, uniform_poses
 from robotplan.scene.hang_ranges import HangRanges, load_hang_ranges
 from robotplan.sdf.hang_shapes import MUG_FIELDS, Hook, Mug
-from robotplan.training.shards import make_shards, prepare_folder, save_shard, shard_path
+from robotplan.training.shards import make_shards, prepare_folder
 
 __all__ = ["OPTIMISED", "HangDataSpec", "HangScene", "decode_hook", "decode_mug",
            "generate_hang", "load_hang_shards", "simulate_hang_scene"]
@@ -169,14 +170,13 @@ def decode_mug(code: np.ndarray) -> Mug:
     return Mug(**{name: float(v) for name, v in zip(MUG_FIELDS, code, strict=True)})
 
 
-def _make_shard(args: tuple) -> int:
-    out, k, first, last, seed, spec = args
-    path = shard_path(out, k)
-    if path.exists():
-        return 0
+def _make_shard(args: tuple) -> tuple[dict[str, np.ndarray], int]:
+    """Scenes ``first ≤ i < last`` of ``seed``, dropped in this worker's pybullet: the
+    shard's arrays and its number of samples."""
+    first, last, seed, spec = args
     torch.set_num_threads(1)
     scenes = [simulate_hang_scene(i, seed, spec) for i in range(first, last)]
-    save_shard(path, dict(
+    arrays = dict(
         scene_index=np.arange(first, last),
         mug=np.array([[getattr(s.mug, f) for f in MUG_FIELDS] for s in scenes]),
         hook=np.array([_encode_hook(s.hook) for s in scenes]),
@@ -188,20 +188,23 @@ def _make_shard(args: tuple) -> int:
         role=np.array([s.role for s in scenes]),
         draws=np.array([s.draws for s in scenes]),
         found=np.array([s.found for s in scenes]),
-    ))
-    return len(scenes) * spec.per_scene
+    )
+    return arrays, len(scenes) * spec.per_scene
 
 
 def generate_hang(out: Path, scenes: int, seed: int, workers: int = 2, shard_size: int = 20,
-                  spec: HangDataSpec = HangDataSpec(), progress: bool = True) -> dict:
-    """Make (or finish) the hanging data set in ``out``. Returns a summary."""
+                  spec: HangDataSpec = HangDataSpec(), progress: bool = True,
+                  ray: str | None = None) -> dict:
+    """Make (or finish) the hanging data set in ``out``, in ``workers`` local processes or
+    on Ray (``ray``: :func:`robotplan.base.units.run_units`). Returns a summary."""
     ranges = load_hang_ranges()
     meta = {"format": FORMAT, "seed": seed, "shard_size": shard_size,
             "physics": HANG_PHYSICS.as_dict(), "spec": asdict(spec),
             "ranges": asdict(ranges)}
+    check_ray(ray)
     prepare_folder(out, meta, scenes)
     shards, made, samples = make_shards(out, scenes, shard_size, _make_shard, (seed, spec),
-                                        workers, progress, "hang data")
+                                        workers, progress, "hang data", ray)
     return {"scenes": scenes, "shards": shards, "made_shards": made, "new_samples": samples}
 
 

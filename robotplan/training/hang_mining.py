@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from robotplan.base.units import check_ray
 from robotplan.execution.hang_world import HANG_PHYSICS, HangWorld
 from robotplan.models.hang import load_hang_model
 from robotplan.program.hang_program import (
@@ -34,7 +35,7 @@ from robotplan.program.hang_program import (
 )
 from robotplan.search.hang_search import start_pose
 from robotplan.training.hang_data import OPTIMISED, decode_hook, decode_mug, load_hang_shards
-from robotplan.training.shards import make_shards, prepare_folder, save_shard, shard_path
+from robotplan.training.shards import make_shards, prepare_folder
 
 __all__ = ["MiningSpec", "mine_hang", "mine_scene"]
 
@@ -67,11 +68,10 @@ def mine_scene(problem: HangProblem, rng: np.random.Generator, spec: MiningSpec,
             "h_model": np.array([r[4] for r in rows])}
 
 
-def _mine_shard(args: tuple) -> int:
-    out, k, first, last, data, model_dir, seed, spec = args
-    path = shard_path(out, k)
-    if path.exists():
-        return 0
+def _mine_shard(args: tuple) -> tuple[dict[str, np.ndarray], int]:
+    """Scenes ``first ≤ i < last`` of ``data``, mined with a model and a pybullet client of
+    this worker: the shard's arrays and its number of poses."""
+    first, last, data, model_dir, seed, spec = args
     torch.set_num_threads(1)
     model = load_hang_model(model_dir)
     rows = []
@@ -84,12 +84,12 @@ def _mine_shard(args: tuple) -> int:
                                    spec, world))
     stacked = {key: np.array([r[key] for r in rows]) for key in rows[0]}
     n = last - first
-    save_shard(path, dict(
+    arrays = dict(
         scene_index=data["scene_index"][first:last], mug=data["mug"][first:last],
         hook=data["hook"][first:last], hook_radii=data["hook_radii"][first:last],
         role=np.full((n, spec.starts), OPTIMISED, dtype=np.int8),
-        draws=np.zeros(n, dtype=int), found=stacked["hangs"].any(axis=1), **stacked))
-    return n * spec.starts
+        draws=np.zeros(n, dtype=int), found=stacked["hangs"].any(axis=1), **stacked)
+    return arrays, n * spec.starts
 
 
 def _weights_digest(model_dir: Path) -> str:
@@ -98,11 +98,12 @@ def _weights_digest(model_dir: Path) -> str:
 
 def mine_hang(data: Path, model_dir: Path, out: Path, seed: int, scenes: int | None = None,
               spec: MiningSpec = MiningSpec(), workers: int = 2, shard_size: int = 10,
-              progress: bool = True, first: int = 0) -> dict:
+              progress: bool = True, first: int = 0, ray: str | None = None) -> dict:
     """Mine (or finish mining) ``scenes`` scenes of ``data`` from its scene ``first`` on (all
     the rest by default) with the model in ``model_dir`` into ``out``. Returns a summary:
     scenes, poses, the fraction the model calls a success (H_hang ≤ κ1) and of those the
-    fraction that hang in place."""
+    fraction that hang in place. The shards run in ``workers`` local processes or on Ray
+    (``ray``: :func:`robotplan.base.units.run_units`)."""
     d = load_hang_shards(data)
     if not 0 <= first < len(d["mug"]):
         raise ValueError(f"{data}: --first {first}: the folder has {len(d['mug'])} scenes")
@@ -111,10 +112,12 @@ def mine_hang(data: Path, model_dir: Path, out: Path, seed: int, scenes: int | N
             "seed": seed, "model": str(model_dir),
             "weights_sha256": _weights_digest(model_dir), "spec": asdict(spec),
             "physics": HANG_PHYSICS.as_dict(), "shard_size": shard_size}
+    check_ray(ray)
     prepare_folder(out, meta, n)
     head = {key: v[first:first + n] for key, v in d.items()}
     _, made, _ = make_shards(out, n, shard_size, _mine_shard,
-                             (head, model_dir, seed, spec), workers, progress, "mine hang")
+                             (head, model_dir, seed, spec), workers, progress, "mine hang",
+                             ray)
     mined = load_hang_shards(out)
     believed = mined["h_model"] <= HANG_DEFAULTS.kappa
     return {"scenes": n, "poses": int(mined["hangs"].size), "made_shards": made,

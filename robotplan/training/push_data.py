@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robotplan.base.units import check_ray
 from robotplan.execution.sim import PHYSICS, PushWorld
 from robotplan.sdf import Box, LShape, Shape2D
 from robotplan.sdf.footprint import footprint_centroid
@@ -33,7 +34,7 @@ from robotplan.training.footprints import (
     draw_ood_shape,
     encode_footprint,
 )
-from robotplan.training.shards import make_shards, prepare_folder, save_shard, shard_path
+from robotplan.training.shards import make_shards, prepare_folder
 
 __all__ = ["PushDataSpec", "SceneRecord", "generate", "load_shards", "scene_footprint",
            "simulate_scene"]
@@ -168,11 +169,10 @@ def _rollout(world: PushWorld, shape: Shape2D, radius: float, rng: np.random.Gen
                        np.array(contacts, dtype=bool))
 
 
-def _make_shard(args: tuple[Path, int, int, int, int, PushDataSpec]) -> int:
-    out, k, first, last, seed, spec = args
-    path = shard_path(out, k)
-    if path.exists():
-        return 0
+def _make_shard(args: tuple[int, int, int, PushDataSpec]) -> tuple[dict[str, np.ndarray], int]:
+    """Scenes ``first ≤ i < last`` of ``seed``, simulated in a pybullet client of this
+    worker: the shard's arrays and its number of samples."""
+    first, last, seed, spec = args
     import torch
 
     torch.set_num_threads(1)
@@ -183,7 +183,7 @@ def _make_shard(args: tuple[Path, int, int, int, int, PushDataSpec]) -> int:
         world.close()
     offsets = np.cumsum([0] + [len(r.object_pose) for r in records])
     codes = [encode_footprint(r.shape) for r in records]
-    save_shard(path, dict(
+    arrays = dict(
         scene_index=np.arange(first, last),
         shape_type=np.array([c[0] for c in codes], dtype=np.int8),
         size=np.array([c[1] for c in codes], dtype=np.float32),
@@ -194,8 +194,8 @@ def _make_shard(args: tuple[Path, int, int, int, int, PushDataSpec]) -> int:
         object_pose=np.concatenate([r.object_pose for r in records]).astype(np.float32),
         pusher_xy=np.concatenate([r.pusher_xy for r in records]).astype(np.float32),
         contact=np.concatenate([r.contact for r in records]),
-    ))
-    return int(offsets[-1] - len(records))
+    )
+    return arrays, int(offsets[-1] - len(records))
 
 
 def _legacy_settings(key: str, before: object) -> object:
@@ -205,13 +205,16 @@ def _legacy_settings(key: str, before: object) -> object:
 
 
 def generate(out: Path, scenes: int, seed: int, workers: int = 2, shard_size: int = 50,
-             spec: PushDataSpec = PushDataSpec(), progress: bool = True) -> dict:
-    """Make (or finish) the data set in ``out``. Returns a summary."""
+             spec: PushDataSpec = PushDataSpec(), progress: bool = True,
+             ray: str | None = None) -> dict:
+    """Make (or finish) the data set in ``out``, in ``workers`` local processes or on Ray
+    (``ray``: :func:`robotplan.base.units.run_units`). Returns a summary."""
     meta = {"format": FORMAT, "seed": seed, "shard_size": shard_size,
             "physics": PHYSICS.as_dict(), "spec": asdict(spec)}
+    check_ray(ray)
     prepare_folder(out, meta, scenes, _legacy_settings)
     shards, made, samples = make_shards(out, scenes, shard_size, _make_shard, (seed, spec),
-                                        workers, progress, "push data")
+                                        workers, progress, "push data", ray)
     return {"scenes": scenes, "shards": shards, "made_shards": made, "new_samples": samples}
 
 

@@ -1,18 +1,26 @@
 """Data sets stored as shards: ``meta.json`` with the settings, then ``shard_NNNNN.npz`` files,
-each a block of scenes written atomically by a worker process. A re-run on a partial folder
-makes only the missing shards; a folder made with other settings is refused."""
+each a block of scenes computed by a worker (a local process or a Ray task) and written
+atomically here. A re-run on a partial folder makes only the missing shards; a folder made
+with other settings is refused; ``run.json`` says where and how long the last run ran."""
 
 from __future__ import annotations
 
+import io
 import json
 import os
+import zipfile
 from collections.abc import Callable, Sequence
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
 
+from robotplan.base.files import write_atomically
+from robotplan.base.units import UnitsReport, run_units
+
 __all__ = ["make_shards", "prepare_folder", "save_shard", "shard_path"]
+
+
+ZIP_TIME = (1980, 1, 1, 0, 0, 0)  # the earliest a zip entry can carry
 
 
 def shard_path(out: Path, k: int) -> Path:
@@ -47,34 +55,49 @@ def prepare_folder(out: Path, meta: dict, scenes: int,
 
 
 def save_shard(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    """Write a shard whole or not at all (a temporary file renamed into place)."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    os.replace(tmp, path)
+    """Write a shard whole or not at all: an ``.npz`` (deflated) whose bytes depend on the
+    arrays alone (a fixed time stamp in every entry), so that a data set made again, with
+    other workers or on Ray, is byte-identical."""
+
+    def write(tmp: Path) -> None:
+        with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+            for name, array in arrays.items():
+                buf = io.BytesIO()
+                np.lib.format.write_array(buf, np.asanyarray(array), allow_pickle=False)
+                info = zipfile.ZipInfo(f"{name}.npy", date_time=ZIP_TIME)
+                info.compress_type = zipfile.ZIP_DEFLATED
+                zf.writestr(info, buf.getvalue())
+
+    write_atomically(path, write)
 
 
-def make_shards(out: Path, scenes: int, shard_size: int, make: Callable[[tuple], int],
+def make_shards(out: Path, scenes: int, shard_size: int,
+                make: Callable[[tuple], tuple[dict[str, np.ndarray], int]],
                 extra: Sequence = (), workers: int = 2, progress: bool = True,
-                desc: str = "data") -> tuple[int, int, int]:
-    """Run ``make((out, k, first, last, *extra))`` for every missing shard ``k`` (scenes
-    ``first ≤ i < last``), in ``workers`` processes, with a progress bar in scenes.
-    ``make`` returns how many samples it wrote. Returns (shards, made, samples)."""
+                desc: str = "data", ray: str | None = None) -> tuple[int, int, int]:
+    """Make every missing shard ``k`` (scenes ``first ≤ i < last``): ``make((first, last,
+    *extra))`` returns its arrays and how many samples they hold, and the shard is written
+    here as each comes back, in order. The units run in ``workers`` local processes, or as
+    Ray tasks (``ray``: :func:`robotplan.base.units.run_units`); where and how long they ran
+    goes to ``out/run.json``, apart from the data. Returns (shards, made, samples)."""
     from tqdm import tqdm
 
-    jobs = [(out, k, first, min(first + shard_size, scenes), *extra)
+    jobs = [(k, first, min(first + shard_size, scenes))
             for k, first in enumerate(range(0, scenes, shard_size))]
-    todo = [j for j in jobs if not shard_path(out, j[1]).exists()]
+    todo = [j for j in jobs if not shard_path(out, j[0]).exists()]
     samples = 0
-    done = sum(j[3] - j[2] for j in jobs if j not in todo)
+    done = sum(j[2] - j[1] for j in jobs if j not in todo)
+    report = UnitsReport("", workers)
+    units = run_units(make, [(first, last, *extra) for _, first, last in todo], workers, ray,
+                      report)
     with tqdm(total=scenes, initial=done, unit="scene", disable=not progress,
               desc=desc) as bar:
-        if workers <= 1:
-            for j in todo:
-                samples += make(j)
-                bar.update(j[3] - j[2])
-        else:
-            with get_context("fork").Pool(workers) as pool:
-                for n, j in zip(pool.imap(make, todo), todo, strict=True):
-                    samples += n
-                    bar.update(j[3] - j[2])
+        for (k, first, last), (arrays, n) in zip(todo, units, strict=True):
+            save_shard(shard_path(out, k), arrays)
+            samples += n
+            bar.update(last - first)
+    if todo:
+        run = {**report.as_dict(), "shards": len(todo), "scenes": sum(j[2] - j[1] for j in todo)}
+        write_atomically(out / "run.json",
+                         lambda tmp: tmp.write_text(json.dumps(run, indent=1)))
     return len(jobs), len(todo), samples

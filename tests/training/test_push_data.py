@@ -53,6 +53,28 @@ def test_generate_is_resumable_and_deterministic(tiny_push_data, tmp_path):
     a, b = load_shards(copy), load_shards(tiny_push_data)
     for key in a:
         assert np.array_equal(a[key], b[key], equal_nan=True), key
+    # the shard made again has the same bytes; where and how long it ran is kept apart
+    assert (copy / shards[2].name).read_bytes() == shards[2].read_bytes()
+    run = json.loads((copy / "run.json").read_text())
+    assert run["executor"] == "processes" and run["units"] == 1 and run["shards"] == 1
+
+
+def test_ray_tasks_write_the_bytes_local_processes_write(tmp_path):
+    """A local Ray cluster of 2 workers against 2 local processes: the same files, byte for
+    byte, but for run.json."""
+    pytest.importorskip("ray")
+    local, on_ray = tmp_path / "local", tmp_path / "ray"
+    generate(local, scenes=4, seed=7, workers=2, shard_size=1, progress=False)
+    generate(on_ray, scenes=4, seed=7, workers=2, shard_size=1, progress=False, ray="local")
+    names = sorted(p.name for p in local.iterdir())
+    assert names == sorted(p.name for p in on_ray.iterdir())
+    assert len(names) == 6  # four shards, meta.json, run.json
+    for name in names:
+        if name != "run.json":
+            assert (local / name).read_bytes() == (on_ray / name).read_bytes(), name
+    run = json.loads((on_ray / "run.json").read_text())
+    assert run["executor"] == "ray" and run["workers"] == 2 and run["units"] == 4
+    assert sum(run["hosts"].values()) == 4
 
 
 def test_other_settings_in_the_same_folder_are_refused(tiny_push_data):

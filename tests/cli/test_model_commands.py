@@ -1,0 +1,43 @@
+"""``robotplan train push``: the widths of the model it builds, and their refusals."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from robotplan.cli.main import main
+
+
+def _train(data, out, *extra: str) -> int:
+    return main(["train", "push", "--data", str(data), "--out", str(out), "--model", "rigid",
+                 "--encoder", "joint", "--steps", "2", "--batch", "4", "--val-every", "100",
+                 "--device", "cpu", "--threads", "1", *extra])
+
+
+def test_train_push_builds_the_widths_it_is_given(tiny_push_data, tmp_path, capsys):
+    assert _train(tiny_push_data, tmp_path / "fq", "--channels", "2,3,4", "--sdf-features",
+                  "6", "--hidden", "16,8,5") == 0
+    spec = json.loads((tmp_path / "fq" / "spec.json").read_text())
+    assert spec["channels"] == [2, 3, 4] and spec["sdf_features"] == 6
+    assert spec["hidden"] == [16, 8, 5] and spec["encoder"] == "joint"
+    capsys.readouterr()
+
+
+def test_train_push_refuses_widths_that_build_no_model(tiny_push_data, tmp_path, capsys):
+    """A wrong number of convolution widths: one line naming the option, exit 2, nothing
+    written."""
+    assert _train(tiny_push_data, tmp_path / "fq", "--channels", "4,8") == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "error: --channels: 3 convolutions, got 2 widths"
+    assert not (tmp_path / "fq").exists()
+
+
+def test_data_push_on_ray_without_the_package_is_one_line_and_writes_nothing(
+        tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray raises ImportError
+    argv = ["data", "push", "--scenes", "2", "--seed", "1", "--out", str(tmp_path / "d"),
+            "--ray", "local"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and err.startswith("error: --ray needs the ray package")
+    assert not (tmp_path / "d").exists()
