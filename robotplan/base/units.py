@@ -9,7 +9,8 @@ long each unit ran is reported apart (:class:`UnitsReport`).
 
 ``ray``: ``None`` for local processes (``workers`` of them, forked), ``"local"`` to start a
 Ray instance on this machine with ``workers`` CPUs, else the address of a running cluster
-(``"auto"``: the one this machine belongs to; ``"HOST:PORT"``).
+(``"auto"``: the one this machine belongs to; ``"HOST:PORT"``), where each unit asks for
+``cpus_per_unit`` CPUs.
 """
 
 from __future__ import annotations
@@ -63,20 +64,20 @@ def _timed(call: tuple[Callable, object]) -> tuple[object, str, float]:
     return result, socket.gethostname(), time.perf_counter() - t0
 
 
-def _ray_results(fn: Callable, jobs: Sequence, workers: int, address: str
-                 ) -> Iterator[tuple[object, str, float]]:
+def _ray_results(fn: Callable, jobs: Sequence, workers: int, address: str,
+                 cpus_per_unit: int) -> Iterator[tuple[object, str, float]]:
     check_ray(address)
     import ray
 
     started = not ray.is_initialized()
     if started:
         if address == "local":
-            ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False,
+            ray.init(num_cpus=workers * cpus_per_unit, include_dashboard=False, log_to_driver=False,
                      logging_level="ERROR")
         else:
             ray.init(address=address, log_to_driver=False, logging_level="ERROR")
     try:
-        task = ray.remote(num_cpus=1)(_timed)
+        task = ray.remote(num_cpus=cpus_per_unit)(_timed)
         refs = [task.remote((fn, job)) for job in jobs]
         for ref in refs:
             yield ray.get(ref)
@@ -96,14 +97,17 @@ def _local_results(fn: Callable, jobs: Sequence, workers: int
 
 
 def run_units(fn: Callable, jobs: Sequence, workers: int = 1, ray: str | None = None,
-              report: UnitsReport | None = None) -> Iterator[object]:
+              report: UnitsReport | None = None, cpus_per_unit: int = 1) -> Iterator[object]:
     """``fn(job)`` for every job, yielded in the order of ``jobs`` (see the module
-    docstring for ``ray``). ``report``, if given, is filled in as the units finish."""
+    docstring for ``ray``). ``workers``: units at once (local processes, or the Ray
+    instance ``"local"`` starts); ``cpus_per_unit``: the CPUs a Ray task asks for (a unit
+    that runs processes of its own). ``report``, if given, is filled in as the units
+    finish."""
     report = report if report is not None else UnitsReport("", workers)
     report.executor, report.workers, report.address = ("ray" if ray else "processes",
                                                        workers, ray)
     t0 = time.perf_counter()
-    results = (_ray_results(fn, jobs, workers, ray) if ray
+    results = (_ray_results(fn, jobs, workers, ray, cpus_per_unit) if ray
                else _local_results(fn, jobs, workers))
     for result, host, seconds in results:
         report.units += 1

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from robotplan.base.files import write_atomically
+from robotplan.base.units import UnitsReport, check_ray, run_units
 from robotplan.execution.hang_world import HangWorld
 from robotplan.models.hang import HANG_THRESHOLDS, load_hang_model
 from robotplan.program.hang_program import HANG_DEFAULTS, HangProblem, HangSettings
@@ -113,12 +114,13 @@ def _run(args: tuple) -> dict:
 def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
                    workers: int = 2, progress: bool = True,
                    methods: tuple[str, ...] = METHODS,
-                   settings: HangSettings = HANG_DEFAULTS) -> dict:
-    """Run (or continue) the benchmark in ``out``; returns the summary."""
-    from multiprocessing import get_context
-
+                   settings: HangSettings = HANG_DEFAULTS, ray: str | None = None) -> dict:
+    """Run (or continue) the benchmark in ``out``, its scenes in ``workers`` local processes
+    or as Ray tasks (``ray``: :func:`robotplan.base.units.run_units`); returns the summary,
+    with where and how long the scenes ran under ``units``."""
     from tqdm import tqdm
 
+    check_ray(ray)
     out.mkdir(parents=True, exist_ok=True)
     run = {"seed": seed, "model": str(model_dir), "evaluations": settings.evaluations,
            "start_pool": settings.start_pool, "methods": list(methods)}
@@ -136,22 +138,16 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
     t0 = time.time()
     with tqdm(total=scenes, initial=len(done), unit="scene", desc="bench hang",
               disable=not progress) as bar, rows_path.open("a") as log:
-        def keep(row: dict) -> None:
+        report = UnitsReport("", workers)
+        for row in run_units(_run, todo, workers, ray, report):
             rows.append(row)
             log.write(json.dumps(row) + "\n")
             log.flush()
             bar.update()
-
-        if workers <= 1:
-            for job in todo:
-                keep(_run(job))
-        else:
-            with get_context("fork").Pool(workers) as pool:
-                for row in pool.imap_unordered(_run, todo):
-                    keep(row)
     summary = summarize_hang(sorted(rows, key=lambda r: r["scene"]))
     summary.update(seed=seed, model=str(model_dir), evaluations=settings.evaluations,
-                   wall_seconds=round(time.time() - t0, 1), paper=PAPER_TAB3)
+                   wall_seconds=round(time.time() - t0, 1), paper=PAPER_TAB3,
+                   units=report.as_dict())
     write_atomically(out / "summary.json", lambda p: p.write_text(json.dumps(summary,
                                                                             indent=1)))
     return summary

@@ -22,6 +22,7 @@ import numpy as np
 import yaml
 
 from robotplan.base.files import write_atomically
+from robotplan.base.units import UnitsReport, check_ray, run_units
 from robotplan.bench.push_scenes import draw_scene, family_of
 from robotplan.scene import parse_scene
 
@@ -161,18 +162,60 @@ def _box_plot(rows: list[dict], path: Path, model: str) -> None:
     plt.close(fig)
 
 
+def bench_scene(job: tuple) -> dict:
+    """Plan and execute one benchmark scene (a unit of :func:`run_bench_push`): its row.
+    ``job = (i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb,
+    loop)``; the scene file and the solution are written under ``out``."""
+    from robotplan.api import solve
+    from robotplan.execution.perturb import Perturbation
+
+    i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb, loop = job
+    doc = draw_scene(i, seed, kind)
+    name = doc["name"]
+    scene_path = out / "scenes" / f"{name}.yaml"
+    scene_path.write_text(yaml.safe_dump(doc, sort_keys=False, default_flow_style=None))
+    scene = parse_scene(doc, scene_path)
+    t0 = time.time()
+    world = (Perturbation(int(np.random.default_rng([perturb, i, len(kind)]).integers(2**31)))
+             if perturb is not None else None)
+    result = solve(scene, out / "solutions" / name, model_dir, workers=workers,
+                   progress=False, exhaustive=exhaustive, quiet=True,
+                   time_budget=time_budget, perturb=world, compare_open_loop=True,
+                   loop=loop)
+    ex = result.get("execution") or {}
+    open_loop = result.get("open_loop") or {}
+    return {"scene": name, "shape": kind, "family": family_of(i, kind),
+            "footprint": scene.objects[0].shape.describe(),
+            "model": Path(result["model"]).name,
+            "status": result["status"],
+            "coverage": float(ex.get("coverage") or 0.0),
+            "open_loop_coverage": float(open_loop.get("coverage") or 0.0),
+            "execute_seconds": float(ex.get("seconds") or 0.0),
+            "open_loop_seconds": float(open_loop.get("seconds") or 0.0),
+            "replans": ex.get("replans") or [],
+            "plan_seconds": result["plan_seconds"], "total_seconds": round(time.time() - t0, 1),
+            "programs": result["programs_solved"],
+            "skeleton": " ".join(f"{p['mode']}@{p['init']}" for p in result["skeleton"]),
+            "violation": result["violation"],
+            "dynamics_rms_mm": result.get("dynamics_rms_mm"),
+            "timings": candidate_timings(result.get("candidates") or [])}
+
+
 def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | None,
                    workers: int = 2,
                    shapes: tuple[str, ...] = ("box", "lshape"), exhaustive: bool = False,
                    time_budget: float | None = None, perturb: int | None = None,
-                   loop: dict | None = None) -> dict:
+                   loop: dict | None = None, ray: str | None = None) -> dict:
     """Solve and execute ``scenes`` scenes per shape type; returns the summary.
     ``model_dir``: the learned dynamics' folder, None for each scene's default.
     ``perturb``: the seed of the perturbed worlds (one per scene), None for the nominal.
-    ``loop``: closed-loop settings in place of each scene class's (``LoopSettings`` fields)."""
-    from robotplan.api import solve
-    from robotplan.execution.perturb import Perturbation
-
+    ``loop``: closed-loop settings in place of each scene class's (``LoopSettings`` fields).
+    ``workers``: processes of each scene's skeleton search. The scenes run one after the
+    other here, or as Ray tasks of ``workers`` CPUs each (``ray``:
+    :func:`robotplan.base.units.run_units`; the solutions are written under ``out``, so a
+    cluster of several machines needs it on a shared file system); where and how long they
+    ran goes to the summary's ``units``."""
+    check_ray(ray)
     (out / "scenes").mkdir(parents=True, exist_ok=True)
     rows_path = out / "rows.jsonl"
     done = {}
@@ -182,42 +225,15 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
                 row = json.loads(line)
                 done[row["scene"]] = row
     todo = [(i, kind) for i in range(scenes) for kind in shapes]
-    for n, (i, kind) in enumerate(todo):
-        doc = draw_scene(i, seed, kind)
-        name = doc["name"]
-        if name in done:
-            continue
-        scene_path = out / "scenes" / f"{name}.yaml"
-        scene_path.write_text(yaml.safe_dump(doc, sort_keys=False, default_flow_style=None))
-        scene = parse_scene(doc, scene_path)
-        t0 = time.time()
-        print(f"[{n + 1}/{len(todo)}] {name}: {scene.objects[0].shape.describe()}", flush=True)
-        world = (Perturbation(int(np.random.default_rng([perturb, i, len(kind)]).integers(2**31)))
-                 if perturb is not None else None)
-        result = solve(scene, out / "solutions" / name, model_dir, workers=workers,
-                       progress=False, exhaustive=exhaustive, quiet=True,
-                       time_budget=time_budget, perturb=world, compare_open_loop=True,
-                       loop=loop)
-        ex = result.get("execution") or {}
-        open_loop = result.get("open_loop") or {}
-        row = {"scene": name, "shape": kind, "family": family_of(i, kind),
-               "model": Path(result["model"]).name,
-               "status": result["status"],
-               "coverage": float(ex.get("coverage") or 0.0),
-               "open_loop_coverage": float(open_loop.get("coverage") or 0.0),
-               "execute_seconds": float(ex.get("seconds") or 0.0),
-               "open_loop_seconds": float(open_loop.get("seconds") or 0.0),
-               "replans": ex.get("replans") or [],
-               "plan_seconds": result["plan_seconds"], "total_seconds": round(time.time() - t0, 1),
-               "programs": result["programs_solved"],
-               "skeleton": " ".join(f"{p['mode']}@{p['init']}" for p in result["skeleton"]),
-               "violation": result["violation"],
-               "dynamics_rms_mm": result.get("dynamics_rms_mm"),
-               "timings": candidate_timings(result.get("candidates") or [])}
-        done[name] = row
+    jobs = [(i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb, loop)
+            for i, kind in todo if draw_scene(i, seed, kind)["name"] not in done]
+    report = UnitsReport("", workers)
+    for row in run_units(bench_scene, jobs, 1, ray, report, cpus_per_unit=workers):
+        done[row["scene"]] = row
         with rows_path.open("a") as f:
             f.write(json.dumps(row) + "\n")
-        print(f"    coverage {row['coverage']:.3f} closed loop ({len(row['replans'])} "
+        print(f"[{len(done)}/{len(todo)}] {row['scene']}: {row['footprint']}\n"
+              f"    coverage {row['coverage']:.3f} closed loop ({len(row['replans'])} "
               f"re-plans), {row['open_loop_coverage']:.3f} open loop, "
               f"plan {row['plan_seconds']:.1f} s, "
               f"{row['programs']} programs, {row['skeleton']}", flush=True)
@@ -226,9 +242,9 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
     summary.update({"seed": seed, "model": str(model_dir) if model_dir else "auto",
                     "exhaustive": exhaustive,
                     "time_budget_s": time_budget, "perturb": perturb,
-                    "loop_settings": loop or {}})
+                    "loop_settings": loop or {}, "units": report.as_dict()})
     buf = io.StringIO()
-    flat = [{**{k: v for k, v in r.items() if k not in ("timings", "replans")},
+    flat = [{**{k: v for k, v in r.items() if k not in ("timings", "replans", "footprint")},
              "replans": len(r.get("replans", []))} for r in rows]
     fields = list(dict.fromkeys(k for r in flat for k in r))
     writer = csv.DictWriter(buf, fieldnames=fields)

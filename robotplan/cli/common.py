@@ -102,10 +102,10 @@ def model_folder(args) -> str | None:
 def add_ray_option(parser) -> None:
     """``--ray``: run the command's units (shards, scenes) as Ray tasks."""
     parser.add_argument("--ray", default=None, metavar="ADDRESS",
-                        help="run the units as Ray tasks: 'local' starts Ray on this machine "
-                             "with --workers CPUs; 'auto' or HOST:PORT joins a running "
-                             "cluster (needs the ray package); the files are the same as "
-                             "without it, where and how long the units ran goes to run.json")
+                        help="run the units (data shards, benchmark scenes) as Ray tasks: "
+                             "'local' starts Ray on this machine, 'auto' or HOST:PORT joins a "
+                             "running cluster (needs the ray package); where and how long "
+                             "they ran is kept apart from the results")
 
 
 def positive_ints(text: str) -> tuple[int, ...]:

@@ -155,7 +155,8 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
                        start_pool=pool)
     try:
         summary = run_bench_hang(args.scenes, args.seed, Path(args.out), model,
-                                 workers=args.workers, methods=methods, settings=settings)
+                                 workers=args.workers, methods=methods, settings=settings,
+                                 ray=args.ray)
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT

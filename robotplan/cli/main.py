@@ -85,6 +85,7 @@ def _parser() -> argparse.ArgumentParser:
                     "pentagon, hexagon, circle, T, cross, U, trapezoid), pose (a box or a "
                     "T-shape to a target pose turned 30–90°)")
     bp.add_argument("--workers", type=int, default=2)
+    add_ray_option(bp)
     bp.add_argument("--exhaustive", action="store_true", help="solve every skeleton")
     bp.add_argument("--time-budget", type=float, default=None, metavar="S",
                     help="per scene: start no program after S seconds (best so far wins)")
@@ -111,6 +112,7 @@ def _parser() -> argparse.ArgumentParser:
                     help="each optimisation starts from the best of N random poses (default: "
                     "the planner's, HangSettings.start_pool)")
     bh.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    add_ray_option(bh)
     bh.add_argument("--json", action="store_true")
     bh.set_defaults(run=cmd_bench_hang)
 

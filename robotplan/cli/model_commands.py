@@ -200,7 +200,7 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
             (out / name).unlink(missing_ok=True)
     summary = run_bench_push(args.scenes, args.seed, out, args.model, args.workers,
                              tuple(args.shapes.split(",")), args.exhaustive, args.time_budget,
-                             args.perturb, args.loop)
+                             args.perturb, args.loop, args.ray)
     if args.json:
         print(json.dumps(summary))
     else:
@@ -239,7 +239,7 @@ def _bench_compare(args: argparse.Namespace, kinds: list[str], out: Path) -> int
                 (out / kind / name).unlink(missing_ok=True)
     result = run_bench_compare(kinds, args.scenes, args.seed, out, args.workers,
                                tuple(args.shapes.split(",")), args.exhaustive,
-                               args.time_budget, args.perturb, args.loop)
+                               args.time_budget, args.perturb, args.loop, args.ray)
     if args.json:
         print(json.dumps(result))
         return 0

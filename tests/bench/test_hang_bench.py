@@ -34,6 +34,7 @@ def test_one_real_scene_and_bad_arguments(tmp_path, tiny_hang_data, capsys):
     assert summary["scenes"] == 1 and summary["evaluations"] == 128
     assert set(summary["sampling_k3"]) == {"found", "sim_success", "collision_free", "total",
                                            "in_place"}
+    assert summary["units"]["executor"] == "processes" and summary["units"]["units"] == 1
     row = json.loads((tmp_path / "b" / "rows.jsonl").read_text())
     assert 1 <= row["sampling_k2"]["evaluations"] <= row["sampling_k3"]["evaluations"] <= 128
     assert main([*bench, "--evaluations", "64"]) == 2, "a folder of another budget"

@@ -1,6 +1,7 @@
 """Benchmark scenes for ``robotplan bench push``: valid, deterministic, drawn as in the paper."""
 
 import dataclasses
+import json
 import math
 
 import numpy as np
@@ -108,6 +109,20 @@ def test_bench_push_refuses_bad_options(tmp_path):
     assert res.returncode == 2 and res.stderr.count("\n") == 1 and "--shapes" in res.stderr
     res = run("bench", "push", "--scenes", "0", "--out", str(tmp_path / "b"))
     assert res.returncode == 2 and "--scenes" in res.stderr
+
+
+@pytest.mark.slow
+def test_a_scene_runs_as_a_ray_task_and_the_summary_says_where(tmp_path):
+    pytest.importorskip("ray")
+    out = tmp_path / "b"
+    res = run("bench", "push", "--scenes", "1", "--shapes", "box", "--workers", "1",
+              "--time-budget", "30", "--ray", "local", "--out", str(out))
+    assert res.returncode == 0, res.stderr[-2000:]
+    row = json.loads((out / "rows.jsonl").read_text().splitlines()[0])
+    assert row["scene"] == "bench_box_000" and row["coverage"] >= 0.9
+    assert (out / "solutions" / "bench_box_000" / "result.json").is_file()
+    units = json.loads((out / "summary.json").read_text())["units"]
+    assert units["executor"] == "ray" and units["units"] == 1
 
 
 def test_unseen_shape_scenes_cover_eight_families_three_concave():
