@@ -1,0 +1,34 @@
+"""The paper's numbers that ``robotplan reproduce`` sets ours beside (its tables and figures,
+as printed there), and the parts of its evaluation that robotplan does not run yet."""
+
+from __future__ import annotations
+
+from robotplan.bench.hang import PAPER_TAB3
+
+__all__ = ["FIG3", "FIG8", "NOT_RUN", "PAPER_TAB3", "TAB2", "TAB5", "TAB6"]
+
+# Tab. 2: one-step RMSE of φ1_t over X_h, mm, (mean, std), with / without pusher contact
+TAB2 = {"F_flow": {"contact": (3.4, 1.6), "free": (1.4, 1.8)},
+        "F": {"contact": (5.8, 1.7), "free": (5.2, 1.6)},
+        "no motion": {"contact": (10.8, 3.4), "free": (0.0, 0.0)}}
+
+# Tab. 5 / Tab. 6: F_q's one-step |Δq| error, (x mm, y mm, α °), by input representation
+TAB5 = {"SDF": (2.1, 2.1, 0.63), "image-conditioned SDF": (2.2, 2.1, 0.63),
+        "occupancy ψ_s (b = 100)": (2.7, 2.7, 0.76), "PointNet": (3.3, 3.3, 0.88),
+        "PointNet++": (2.7, 2.6, 0.79)}
+TAB6 = {"SDF": (2.3, 2.3, 0.81), "occupancy ψ_s (b = 100)": (3.0, 3.2, 0.99),
+        "PointNet": (4.9, 5.1, 0.99), "PointNet++": (4.5, 4.6, 0.77)}
+
+# Fig. 3 / Fig. 8: median share of the object inside the goal, open loop, by model
+FIG3 = {"box": {"F_flow": 0.997, "F": 0.966}, "lshape": {"F_flow": 0.984, "F": 0.915}}
+FIG8 = {"F_flow": 0.997, "F": 0.920}  # 7 unseen shapes × 3 scenes
+
+# what the paper evaluates that robotplan has no code for yet: (item, what it needs)
+NOT_RUN = [
+    ("Tab. 4, Tab. 5–6 baseline rows", "models on occupancy measures ψ = sign(φ), "
+     "ψ_s = tanh(b φ) and on point clouds (PointNet, PointNet++)"),
+    ("Fig. 5", "planning from contact with the occupancy and point-cloud models"),
+    ("Fig. 6", "the analytic mesh / quasi-static pushing model in place of the learned H_F"),
+    ("Fig. 11", "the ablation without H_coll, without H_PoC and without both"),
+    ("Tab. 3 baseline rows", "H_hang on occupancy measures and point clouds"),
+]

@@ -1,0 +1,178 @@
+"""``robotplan reproduce``: the paper's tables and figures from our code, beside its numbers.
+
+Each item is a step (data, evaluation, benchmark) with its parameters; a step's result is
+kept in ``OUT/steps/<name>-<key>/result.json``, where the key hashes the step's name, its
+parameters and the content of the code, skeleton tables, robot descriptions and learned
+models, so a second run reuses every step whose inputs did not change and reruns the rest.
+The report (``OUT/report.md``, ``OUT/report.html``) is written from the step results.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from robotplan.base.files import write_atomically
+from robotplan.base.resources import data_root, learned_dir, robots_dir, skeletons_dir
+from robotplan.bench.hang import METHODS
+from robotplan.bench.report import write_report
+from robotplan.bench.reproduce_report import report_blocks
+
+__all__ = ["FULL", "QUICK", "ReproduceSizes", "inputs_digest", "reproduce"]
+
+
+@dataclass(frozen=True)
+class ReproduceSizes:
+    """How much of each item runs (``QUICK``: small sets within 30 min on 2 cores)."""
+
+    name: str
+    test_scenes: int  # held-out push scenes (seed 2) for Tabs. 2 and 5
+    ood_scenes: int  # unseen-footprint scenes (seed 3) for Tab. 6
+    per_scene: int  # samples per held-out scene
+    pose_fit: int  # contact samples F_flow's step is fitted on (Tab. 5 terms)
+    push_scenes: int  # benchmark scenes per shape (Fig. 3; the paper: 50)
+    ood_push_scenes: int  # unseen-footprint benchmark scenes (Fig. 8; scene i: family i mod 8)
+    hang_scenes: int  # mug-and-hook scenes (Tab. 3; the paper: 150)
+    hang_methods: tuple[str, ...]
+    time_budget: float  # per push scene: no program starts after this many seconds
+
+
+QUICK = ReproduceSizes("quick", test_scenes=40, ood_scenes=40, per_scene=10, pose_fit=20,
+                       push_scenes=2, ood_push_scenes=4, hang_scenes=2,
+                       hang_methods=("opt_sampling", "opt_only"), time_budget=30.0)
+FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pose_fit=100,
+                      push_scenes=50, ood_push_scenes=24, hang_scenes=150,
+                      hang_methods=METHODS, time_budget=100.0)
+
+
+def inputs_digest() -> str:
+    """SHA-256 of the package's code and of the skeleton tables, robot descriptions and
+    learned models it reads: what every step's result depends on beside its parameters."""
+    h = hashlib.sha256()
+    package = Path(__file__).resolve().parents[1]
+    roots = [(package, ("*.py", "*.c")), (skeletons_dir(), ("*",)), (robots_dir(), ("*",)),
+             (data_root() / "learned", ("*",))]
+    for root, patterns in roots:
+        files = sorted({p for pat in patterns for p in root.rglob(pat) if p.is_file()
+                        and "__pycache__" not in p.parts})
+        for p in files:
+            h.update(str(p.relative_to(root)).encode())
+            h.update(p.read_bytes())
+    return h.hexdigest()
+
+
+class _Steps:
+    """Runs steps, or reuses their kept results (see the module docstring)."""
+
+    def __init__(self, out: Path, digest: str, progress: bool) -> None:
+        self.out, self.digest, self.progress = out, digest, progress
+        self.log: list[dict] = []
+
+    def run(self, name: str, params: dict, fn: Callable[[Path], dict], command: str) -> dict:
+        key = hashlib.sha256(json.dumps({"name": name, "params": params,
+                                         "inputs": self.digest}, sort_keys=True,
+                                        default=str).encode()).hexdigest()[:12]
+        folder = self.out / "steps" / f"{name}-{key}"
+        done = folder / "result.json"
+        if done.is_file():
+            result = json.loads(done.read_text())
+            self._say(f"{name}: reused ({folder.relative_to(self.out)})")
+        else:
+            if folder.exists():  # an interrupted run of this step: start it over
+                shutil.rmtree(folder)
+            folder.mkdir(parents=True)
+            self._say(f"{name}: running `{command}` …")
+            t0 = time.time()
+            result = {"result": fn(folder), "seconds": round(time.time() - t0, 1),
+                      "command": command, "params": params}
+            write_atomically(done, lambda tmp: tmp.write_text(json.dumps(result, indent=1,
+                                                                          default=str)))
+            self._say(f"{name}: {result['seconds']} s")
+        result["folder"] = str(folder.relative_to(self.out))
+        self.log.append({"name": name, "folder": result["folder"],
+                         "seconds": result["seconds"], "command": result["command"]})
+        return result
+
+    def _say(self, text: str) -> None:
+        if self.progress:
+            print(text, flush=True)
+
+
+def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
+              ray: str | None = None, progress: bool = True) -> Path:
+    """Run (or reuse) every item at ``sizes`` and write ``out/report.md`` and
+    ``out/report.html``; returns the Markdown report's path. ``workers`` and ``ray`` as for
+    ``data push`` and ``bench push``."""
+    from robotplan.bench.hang import run_bench_hang
+    from robotplan.bench.push import run_bench_push
+    from robotplan.training.evaluation import evaluate_push
+    from robotplan.training.pose_fit import evaluate_pose_fit
+    from robotplan.training.push_data import PushDataSpec, generate
+    from robotplan.training.rigid import evaluate_rigid
+
+    out.mkdir(parents=True, exist_ok=True)
+    steps = _Steps(out, inputs_digest(), progress)
+    models = {kind: learned_dir(f"push_{kind}") for kind in ("flow", "direct", "rigid")}
+
+    def data(name: str, scenes: int, seed: int, shapes: str) -> Path:
+        params = {"scenes": scenes, "seed": seed, "shapes": shapes}
+        res = steps.run(name, params, lambda f: generate(
+            f / "data", scenes, seed, workers=workers, spec=PushDataSpec(shapes=shapes),
+            progress=False, ray=ray),
+            f"robotplan data push --scenes {scenes} --seed {seed} --shapes {shapes}")
+        return out / res["folder"] / "data"
+
+    test = data("data_test", sizes.test_scenes, 2, "train")
+    ood = data("data_ood", sizes.ood_scenes, 3, "ood")
+    results: dict[str, dict] = {}
+    per = sizes.per_scene
+    for set_name, folder in (("test", test), ("ood", ood)):
+        for kind in ("flow", "direct"):
+            results[f"rmse_{kind}_{set_name}"] = steps.run(
+                f"eval_{kind}_{set_name}", {"per_scene": per, "data": folder.parent.name},
+                lambda f, k=kind, d=folder: evaluate_push(models[k], d, per_scene=per,
+                                                          progress=False),
+                f"robotplan eval push --model learned/push_{kind} --data DATA --per-scene {per}")
+        results[f"rigid_{set_name}"] = steps.run(
+            f"eval_rigid_{set_name}", {"per_scene": per, "data": folder.parent.name},
+            lambda f, d=folder: evaluate_rigid(models["rigid"], d, per_scene=per),
+            f"robotplan eval push --model learned/push_rigid --data DATA --per-scene {per}")
+    results["pose_fit_flow"] = steps.run(
+        "pose_fit_flow", {"samples": sizes.pose_fit, "data": test.parent.name},
+        lambda f: evaluate_pose_fit(models["flow"], test, samples=sizes.pose_fit,
+                                    progress=False),
+        f"robotplan eval push --model learned/push_flow --data DATA --pose-fit {sizes.pose_fit}")
+
+    def bench(name: str, scenes: int, shapes: str) -> dict:
+        params = {"scenes": scenes, "seed": 0, "shapes": shapes,
+                  "time_budget": sizes.time_budget, "workers": workers}
+        return steps.run(name, params, lambda f: run_bench_push(
+            scenes, 0, f / "bench", None, workers, tuple(shapes.split(",")),
+            time_budget=sizes.time_budget, ray=ray),
+            f"robotplan bench push --scenes {scenes} --seed 0 --shapes {shapes} "
+            f"--time-budget {sizes.time_budget:g} --workers {workers}")
+
+    results["fig3"] = bench("bench_push", sizes.push_scenes, "box,lshape")
+    results["fig8"] = bench("bench_push_ood", sizes.ood_push_scenes, "ood")
+    methods = ",".join(sizes.hang_methods)
+    results["tab3"] = steps.run(
+        "bench_hang", {"scenes": sizes.hang_scenes, "seed": 2, "methods": methods},
+        lambda f: run_bench_hang(sizes.hang_scenes, 2, f / "bench", learned_dir("hang"),
+                                 workers=workers, progress=False,
+                                 methods=sizes.hang_methods, ray=ray),
+        f"robotplan bench hang --scenes {sizes.hang_scenes} --seed 2 --methods {methods}")
+    for key in ("fig3", "fig8"):  # the box plots sit beside the report
+        plot = out / results[key]["folder"] / "bench" / "coverage.png"
+        if plot.is_file():
+            shutil.copyfile(plot, out / f"{key}_coverage.png")
+    run = {"sizes": asdict(sizes), "workers": workers, "ray": ray, "steps": steps.log,
+           "inputs_sha256": steps.digest}
+    write_atomically(out / "run.json", lambda tmp: tmp.write_text(json.dumps(run, indent=1)))
+    md, _ = write_report(report_blocks(results, sizes, steps.log), out,
+                         "robotplan: the paper reproduced")
+    return md

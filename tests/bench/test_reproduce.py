@@ -1,0 +1,84 @@
+"""``robotplan reproduce``: steps kept and reused by content, the report in Markdown and
+HTML, the paper's numbers beside ours."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from robotplan.bench.report import write_report
+from robotplan.bench.reproduce import QUICK, _Steps, inputs_digest, reproduce
+from robotplan.cli.main import main
+
+
+def test_a_step_is_reused_until_its_parameters_or_inputs_change(tmp_path):
+    calls = []
+
+    def step(folder):
+        calls.append(folder)
+        (folder / "made.txt").write_text("x")
+        return {"value": len(calls)}
+
+    steps = _Steps(tmp_path, "digest-a", progress=False)
+    first = steps.run("s", {"n": 1}, step, "cmd")
+    again = steps.run("s", {"n": 1}, step, "cmd")
+    assert first["result"] == again["result"] == {"value": 1} and len(calls) == 1
+    assert steps.run("s", {"n": 2}, step, "cmd")["result"] == {"value": 2}
+    other_code = _Steps(tmp_path, "digest-b", progress=False)
+    assert other_code.run("s", {"n": 1}, step, "cmd")["result"] == {"value": 3}
+    assert len({c.name for c in calls}) == 3  # each in a folder of its own
+    assert [s["name"] for s in steps.log] == ["s", "s", "s"]
+
+
+def test_the_inputs_digest_is_stable():
+    assert inputs_digest() == inputs_digest() and len(inputs_digest()) == 64
+
+
+def test_report_tables_and_an_embedded_figure(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(2, 2))
+    ax.plot(np.arange(3))
+    fig.savefig(tmp_path / "plot.png")
+    plt.close(fig)
+    blocks = [("h1", "Title"), ("p", "see `robotplan reproduce`"),
+              ("table", ["a", "b"], [[1, "x"], [2.5, "y"]]), ("image", "plot.png", "a plot")]
+    md, page = write_report(blocks, tmp_path, "T")
+    text = md.read_text()
+    assert "# Title" in text and "| a | b |" in text and "| 2.5 | y |" in text
+    assert "![a plot](plot.png)" in text
+    html = page.read_text()
+    assert "<code>robotplan reproduce</code>" in html and "<td>2.5</td>" in html
+    assert "data:image/png;base64," in html
+
+
+def test_reproduce_refuses_a_folder_of_other_files(tmp_path, capsys):
+    (tmp_path / "mine.txt").write_text("a user's file")
+    assert main(["reproduce", "--out", str(tmp_path), "--quick"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--out" in err
+    assert [p.name for p in tmp_path.iterdir()] == ["mine.txt"]
+
+
+@pytest.mark.slow
+def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
+    tiny = replace(QUICK, name="quick", test_scenes=3, ood_scenes=3, per_scene=3, pose_fit=2,
+                   push_scenes=1, ood_push_scenes=1, hang_scenes=1,
+                   hang_methods=("opt_only",), time_budget=5.0)
+    md = reproduce(tmp_path, tiny, workers=1, progress=False)
+    text = md.read_text()
+    for item in ("Tab. 2", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 8", "Tab. 3", "Not run yet"):
+        assert item in text, item
+    assert "| F_flow | " in text and "| 3.40 ± 1.60 | 1.40 ± 1.80 |" in text
+    run = json.loads((tmp_path / "run.json").read_text())
+    assert len(run["steps"]) == 12 and run["sizes"]["test_scenes"] == 3
+    reproduce(tmp_path, tiny, workers=1, progress=False)
+    again = json.loads((tmp_path / "run.json").read_text())
+    assert [s["folder"] for s in again["steps"]] == [s["folder"] for s in run["steps"]]
+    assert (tmp_path / "report.html").stat().st_size > 1000
