@@ -90,14 +90,16 @@ class Plan:
                 "violation": float(best.violation) if best else None,
                 "cost": float(best.cost) if best else None,
                 "dynamics_rms_mm": round(best.dynamics_rms_mm, 3) if best else None,
-                "obstacle_clearance": metres(best.clearance) if best else None}
+                "obstacle_clearance": metres(best.clearance) if best else None,
+                **({"program_settings": dict(self.options["program"])}
+                   if self.options.get("program") else {})}
 
 
 def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt",
          workers: int = 2, skeleton: str | Skeleton | None = None, max_pushes: int = 2,
          progress: bool = True, exhaustive: bool = False, quiet: bool = False,
          time_budget: float | None = None, warm_start: Plan | None = None,
-         fallback: bool = True) -> Plan:
+         fallback: bool = True, program: Mapping[str, object] | None = None) -> Plan:
     """Search the scene's skeletons and solve their programs; no simulator runs.
 
     ``model``: the learned dynamics' folder (default: the shipped model of the scene's class,
@@ -105,7 +107,9 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     skeleton (in the CLI's notation, or a ``Skeleton``) instead of the search.
     ``warm_start``: an earlier plan of this scene (at other poses): its skeleton is tried
     first, from its trajectories; a fresh search follows when that does not solve (unless
-    ``fallback`` is False).
+    ``fallback`` is False). ``program``: program settings that win over those of the
+    scene's class (:class:`~robotplan.program.settings.ProgramSettings` fields, e.g.
+    ``{"with_contact": False}``); its re-plans keep them.
     """
     if isinstance(scene.goal, HangGoal):  # kinematic: a pose of the mug, no skeleton
         return plan_hang(scene, model)
@@ -117,10 +121,10 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
         guesses = {warm_start.best.skeleton: warm_guess(scene, warm_start.best)}
     obj, _actors = check_supported(scene)
     result, spaces = search_scene(scene, model_dir, solver, workers, skeleton, max_pushes,
-                                  progress, exhaustive, quiet, time_budget, guesses)
+                                  progress, exhaustive, quiet, time_budget, guesses, program)
     if not result.solved and guesses is not None and fallback:  # the old skeleton is lost
         again, more = search_scene(scene, model_dir, solver, workers, None, max_pushes,
-                                   progress, exhaustive, quiet, time_budget)
+                                   progress, exhaustive, quiet, time_budget, program=program)
         result, spaces = merge_results(result, again), {**spaces, **more}
     if not quiet:
         kind = dynamics_kind(model_dir)
@@ -131,7 +135,7 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     return Plan(scene, obj, best, result.solved, result.candidates, result.seconds,
                 spaces.get(id(best)) if best is not None else None,
                 {"model": model_dir, "solver": solver, "workers": workers,
-                 "max_pushes": max_pushes})
+                 "max_pushes": max_pushes, "program": dict(program or {})})
 
 
 def execute(planned: Plan, scene: Scene | None = None, *, mode: str = "closed_loop",

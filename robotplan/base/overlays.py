@@ -4,13 +4,15 @@ of a settings dataclass it changes (``skeletons/settings.yaml`` for the programs
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import fields, replace
 from pathlib import Path
 from typing import TypeVar
 
 import yaml
 
-__all__ = ["apply_overlays", "read_overlays"]
+__all__ = ["apply_overlays", "parse_overrides", "read_overlays"]
 
 S = TypeVar("S")
 
@@ -45,4 +47,45 @@ def apply_overlays(base: S, overlays: dict[str, dict], classes: tuple[str, ...])
     out = base
     for name in classes:
         out = replace(out, **overlays.get(name, {}))
+    return out
+
+
+_TRUE, _FALSE = ("true", "on", "yes", "1"), ("false", "off", "no", "0")
+
+
+def parse_overrides(defaults: object, items: Sequence[str], what: str) -> dict[str, object]:
+    """``NAME=VALUE`` items (the CLI's ``--loop``, ``--program``) as fields of the dataclass
+    ``defaults`` with values of their types: booleans as true/false (on/off, yes/no, 1/0),
+    numbers as written and not negative, text as it is. Raises ValueError naming the item
+    that is not a field (``what`` names the fields, e.g. "closed-loop setting") or not of
+    its type."""
+    names = {f.name: getattr(defaults, f.name) for f in fields(defaults)}
+    out: dict[str, object] = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        name, text = name.strip(), text.strip()
+        if not sep or not text:
+            raise ValueError(f"{item!r}: expected NAME=VALUE")
+        if name not in names:
+            raise ValueError(f"{name}: not a {what}; one of {', '.join(sorted(names))}")
+        default = names[name]
+        try:
+            if isinstance(default, bool):
+                if text.lower() not in _TRUE + _FALSE:
+                    raise ValueError
+                value: object = text.lower() in _TRUE
+            elif isinstance(default, str):
+                value = text
+            elif isinstance(default, int):
+                value = int(text)
+            else:  # floats, and optional limits whose default is None
+                value = float(text)
+                if not math.isfinite(value):
+                    raise ValueError
+        except ValueError:
+            kind = "float" if default is None else type(default).__name__
+            raise ValueError(f"{name}: {text!r} is not a {kind}") from None
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and value < 0:
+            raise ValueError(f"{name}: must not be negative")
+        out[name] = value
     return out

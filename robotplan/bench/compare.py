@@ -76,16 +76,17 @@ def _plot(rows_by_kind: dict[str, list[dict]], path: Path) -> None:
 def run_bench_compare(kinds: list[str], scenes: int, seed: int, out: Path, workers: int = 2,
                       shapes: tuple[str, ...] = ("box", "lshape"), exhaustive: bool = False,
                       time_budget: float | None = None, perturb: int | None = None,
-                      loop: dict | None = None, ray: str | None = None) -> dict:
+                      loop: dict | None = None, ray: str | None = None,
+                      program: dict | None = None) -> dict:
     """One push benchmark per dynamics kind (``flow``, ``rigid``, ``direct``) on the same
     scenes, in ``out/<kind>/``; returns (and writes) the comparison. ``loop``: closed-loop
-    settings in place of each scene class's."""
+    settings in place of each scene class's, ``program`` its program settings."""
     names = {draw_scene(i, seed, shape)["name"] for i in range(scenes) for shape in shapes}
     rows_by_kind = {}
     for kind in kinds:
         print(f"== {kind}", flush=True)
         run_bench_push(scenes, seed, out / kind, learned_dir(DYNAMICS_FOLDERS[kind]), workers,
-                       shapes, exhaustive, time_budget, perturb, loop, ray)
+                       shapes, exhaustive, time_budget, perturb, loop, ray, program)
         lines = (out / kind / "rows.jsonl").read_text().splitlines()
         rows_by_kind[kind] = [row for row in map(json.loads, filter(str.strip, lines))
                               if row["scene"] in names]

@@ -29,6 +29,5 @@ NOT_RUN = [
      "ψ_s = tanh(b φ) and on point clouds (PointNet, PointNet++)"),
     ("Fig. 5", "planning from contact with the occupancy and point-cloud models"),
     ("Fig. 6", "the analytic mesh / quasi-static pushing model in place of the learned H_F"),
-    ("Fig. 11", "the ablation without H_coll, without H_PoC and without both"),
     ("Tab. 3 baseline rows", "H_hang on occupancy measures and point clouds"),
 ]

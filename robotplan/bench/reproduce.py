@@ -23,7 +23,11 @@ from robotplan.bench.hang import METHODS
 from robotplan.bench.report import write_report
 from robotplan.bench.reproduce_report import report_blocks
 
-__all__ = ["FULL", "QUICK", "ReproduceSizes", "inputs_digest", "reproduce"]
+__all__ = ["ABLATIONS", "FULL", "QUICK", "ReproduceSizes", "inputs_digest", "reproduce"]
+
+# the paper's Fig. 11: the push program without H_coll, without H_PoC, without both
+ABLATIONS = {"no_collision": {"with_collision": False}, "no_contact": {"with_contact": False},
+             "dynamics_and_goal_only": {"with_collision": False, "with_contact": False}}
 
 
 @dataclass(frozen=True)
@@ -37,16 +41,18 @@ class ReproduceSizes:
     pose_fit: int  # contact samples F_flow's step is fitted on (Tab. 5 terms)
     push_scenes: int  # benchmark scenes per shape (Fig. 3; the paper: 50)
     ood_push_scenes: int  # unseen-footprint benchmark scenes (Fig. 8; scene i: family i mod 8)
+    ablation_scenes: int  # box scenes per ablation (Fig. 11; the paper: 20)
     hang_scenes: int  # mug-and-hook scenes (Tab. 3; the paper: 150)
     hang_methods: tuple[str, ...]
     time_budget: float  # per push scene: no program starts after this many seconds
 
 
 QUICK = ReproduceSizes("quick", test_scenes=40, ood_scenes=40, per_scene=10, pose_fit=20,
-                       push_scenes=2, ood_push_scenes=4, hang_scenes=2,
+                       push_scenes=2, ood_push_scenes=4, ablation_scenes=2, hang_scenes=2,
                        hang_methods=("opt_sampling", "opt_only"), time_budget=30.0)
 FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pose_fit=100,
-                      push_scenes=50, ood_push_scenes=24, hang_scenes=150,
+                      push_scenes=50, ood_push_scenes=24, ablation_scenes=20,
+                      hang_scenes=150,
                       hang_methods=METHODS, time_budget=100.0)
 
 
@@ -148,17 +154,21 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
                                     progress=False),
         f"robotplan eval push --model learned/push_flow --data DATA --pose-fit {sizes.pose_fit}")
 
-    def bench(name: str, scenes: int, shapes: str) -> dict:
+    def bench(name: str, scenes: int, shapes: str, program: dict | None = None) -> dict:
         params = {"scenes": scenes, "seed": 0, "shapes": shapes,
-                  "time_budget": sizes.time_budget, "workers": workers}
+                  "time_budget": sizes.time_budget, "workers": workers,
+                  "program": program or {}}
+        flags = "".join(f" --program {k}={str(v).lower()}" for k, v in (program or {}).items())
         return steps.run(name, params, lambda f: run_bench_push(
             scenes, 0, f / "bench", None, workers, tuple(shapes.split(",")),
-            time_budget=sizes.time_budget, ray=ray),
+            time_budget=sizes.time_budget, ray=ray, program=program),
             f"robotplan bench push --scenes {scenes} --seed 0 --shapes {shapes} "
-            f"--time-budget {sizes.time_budget:g} --workers {workers}")
+            f"--time-budget {sizes.time_budget:g} --workers {workers}{flags}")
 
     results["fig3"] = bench("bench_push", sizes.push_scenes, "box,lshape")
     results["fig8"] = bench("bench_push_ood", sizes.ood_push_scenes, "ood")
+    results["fig11"] = {name: bench(f"ablation_{name}", sizes.ablation_scenes, "box", program)
+                        for name, program in ABLATIONS.items()}
     methods = ",".join(sizes.hang_methods)
     results["tab3"] = steps.run(
         "bench_hang", {"scenes": sizes.hang_scenes, "seed": 2, "methods": methods},
@@ -173,6 +183,6 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
     run = {"sizes": asdict(sizes), "workers": workers, "ray": ray, "steps": steps.log,
            "inputs_sha256": steps.digest}
     write_atomically(out / "run.json", lambda tmp: tmp.write_text(json.dumps(run, indent=1)))
-    md, _ = write_report(report_blocks(results, sizes, steps.log), out,
+    md, _ = write_report(report_blocks(results, sizes, steps.log, out), out,
                          "robotplan: the paper reproduced")
     return md

@@ -163,6 +163,26 @@ def loop_overrides(args) -> dict | None:
         return None
 
 
+def add_program_option(parser) -> None:
+    """``--program NAME=VALUE``: program settings in place of the scene class's."""
+    parser.add_argument("--program", action="append", default=[], metavar="NAME=VALUE",
+                        help="a program setting in place of the scene class's (a field of "
+                        "ProgramSettings, e.g. with_contact=false for the paper's ablation "
+                        "without H_PoC; repeatable; re-plans keep it)")
+
+
+def program_overrides(args) -> dict | None:
+    """The ``--program`` settings as ProgramSettings fields; None after printing one line
+    on a bad item (the caller exits with status 2)."""
+    from robotplan.program.settings import parse_program_overrides
+
+    try:
+        return parse_program_overrides(args.program)
+    except ValueError as err:
+        print(f"error: --program: {err}", file=sys.stderr)
+        return None
+
+
 def perturbation(seed: int | None):
     """The perturbed world of ``--perturb SEED`` (None without it)."""
     if seed is None:

@@ -19,6 +19,7 @@ from robotplan.cli.common import (
     add_dynamics_options,
     add_execution_options,
     add_loop_option,
+    add_program_option,
     add_ray_option,
 )
 from robotplan.cli.hang_commands import (
@@ -96,6 +97,7 @@ def _parser() -> argparse.ArgumentParser:
                     help="execute in a perturbed world (friction and mass ±20 %%, observation "
                     "noise 1 mm / 0.5°), drawn per scene from SEED (default 0)")
     add_loop_option(bp)
+    add_program_option(bp)
     bp.set_defaults(run=cmd_bench_push)
     bh = bsub.add_parser("hang", help="find hanging poses on random mug-and-hook scenes and "
                          "drop them in pybullet (paper Tab. 3)")
@@ -134,6 +136,7 @@ def _parser() -> argparse.ArgumentParser:
     so.add_argument("--time-budget", type=float, default=None, metavar="S",
                     help="start no program after S seconds; the best so far wins")
     add_execution_options(so)
+    add_program_option(so)
     so.set_defaults(run=cmd_solve)
 
     dg = sub.add_parser("diagnose", help="a plan's push steps against one-step pybullet and "

@@ -17,6 +17,7 @@ from robotplan.cli.common import (
     model_folder,
     not_a_model,
     print_result,
+    program_overrides,
     training_folders_problem,
 )
 
@@ -171,8 +172,8 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
     if problem:
         print(f"error: --dynamics: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    args.loop = loop_overrides(args)
-    if args.loop is None:
+    args.loop, args.program = loop_overrides(args), program_overrides(args)
+    if args.loop is None or args.program is None:
         return EXIT_BAD_INPUT
     if len(kinds) == 1:
         args.model = model_folder(args)
@@ -200,7 +201,7 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
             (out / name).unlink(missing_ok=True)
     summary = run_bench_push(args.scenes, args.seed, out, args.model, args.workers,
                              tuple(args.shapes.split(",")), args.exhaustive, args.time_budget,
-                             args.perturb, args.loop, args.ray)
+                             args.perturb, args.loop, args.ray, args.program)
     if args.json:
         print(json.dumps(summary))
     else:
@@ -239,7 +240,8 @@ def _bench_compare(args: argparse.Namespace, kinds: list[str], out: Path) -> int
                 (out / kind / name).unlink(missing_ok=True)
     result = run_bench_compare(kinds, args.scenes, args.seed, out, args.workers,
                                tuple(args.shapes.split(",")), args.exhaustive,
-                               args.time_budget, args.perturb, args.loop, args.ray)
+                               args.time_budget, args.perturb, args.loop, args.ray,
+                               args.program)
     if args.json:
         print(json.dumps(result))
         return 0

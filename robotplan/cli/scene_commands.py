@@ -15,6 +15,7 @@ from robotplan.cli.common import (
     not_a_model,
     perturbation,
     print_result,
+    program_overrides,
 )
 from robotplan.cli.hang_commands import solve_hang_scene
 from robotplan.scene import SceneError, load_scene
@@ -64,8 +65,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
     from robotplan.api import UnsupportedScene, solve
 
     scene = load_scene(args.scene)
-    loop = loop_overrides(args)
-    if loop is None:
+    loop, program = loop_overrides(args), program_overrides(args)
+    if loop is None or program is None:
         return EXIT_BAD_INPUT
     out = Path(args.out)
     if out.exists() and any(out.iterdir()) and not args.overwrite:
@@ -83,7 +84,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
                     skeleton=args.skeleton, max_pushes=args.max_pushes,
                     exhaustive=args.exhaustive, time_budget=args.time_budget,
                     mode="open_loop" if args.open_loop else "closed_loop",
-                    perturb=perturbation(args.perturb), loop=loop)
+                    perturb=perturbation(args.perturb), loop=loop, program=program)
     except UnsupportedScene as err:
         print(f"error: {args.scene}: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT

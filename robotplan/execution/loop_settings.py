@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
 
-from robotplan.base.overlays import apply_overlays, read_overlays
+from robotplan.base.overlays import apply_overlays, parse_overrides, read_overlays
 from robotplan.base.resources import skeletons_dir
 from robotplan.scene import Scene
 from robotplan.search.scene_search import scene_classes
@@ -85,38 +85,8 @@ def loop_settings_for(scene: Scene, base: LoopSettings | None = None,
     return replace(settings, **overrides) if overrides else settings
 
 
-_TRUE, _FALSE = ("true", "on", "yes", "1"), ("false", "off", "no", "0")
-
-
 def parse_loop_overrides(items: Sequence[str]) -> dict[str, object]:
     """``NAME=VALUE`` items (the CLI's ``--loop``) as :class:`LoopSettings` fields with
     values of their types: booleans as true/false (on/off, yes/no, 1/0), numbers as written.
     Raises ValueError naming the item that is not a setting or not of its type."""
-    defaults = {f.name: getattr(LoopSettings(), f.name) for f in fields(LoopSettings)}
-    out: dict[str, object] = {}
-    for item in items:
-        name, sep, text = item.partition("=")
-        name, text = name.strip(), text.strip()
-        if not sep or not text:
-            raise ValueError(f"{item!r}: expected NAME=VALUE")
-        if name not in defaults:
-            raise ValueError(f"{name}: not a closed-loop setting; one of "
-                             f"{', '.join(sorted(defaults))}")
-        default = defaults[name]
-        try:
-            if isinstance(default, bool):
-                if text.lower() not in _TRUE + _FALSE:
-                    raise ValueError
-                value: object = text.lower() in _TRUE
-            elif isinstance(default, int):
-                value = int(text)
-            else:
-                value = float(text)
-                if not math.isfinite(value):
-                    raise ValueError
-        except ValueError:
-            raise ValueError(f"{name}: {text!r} is not a {type(default).__name__}") from None
-        if isinstance(value, (int, float)) and not isinstance(value, bool) and value < 0:
-            raise ValueError(f"{name}: must not be negative")
-        out[name] = value
-    return out
+    return parse_overrides(LoopSettings(), items, "closed-loop setting")

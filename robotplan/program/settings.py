@@ -4,16 +4,17 @@ are in docs/experiments.md."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
 
-from robotplan.base.overlays import apply_overlays, read_overlays
+from robotplan.base.overlays import apply_overlays, parse_overrides, read_overlays
 from robotplan.base.resources import skeletons_dir
 from robotplan.functionals.dynamics import QUADRATURE_COARSE
 
 __all__ = ["ARM_PROGRAM_SETTINGS", "DEFAULT_SETTINGS", "SCENE_CLASSES", "ProgramSettings",
-           "load_overlays", "settings_for"]
+           "load_overlays", "parse_program_overrides", "settings_for", "with_overrides"]
 
 
 @dataclass(frozen=True)
@@ -138,6 +139,13 @@ class ProgramSettings:
     # (measured: docs/experiments.md#tip-reach-step)
     tip_reach_step: float = 0.04
     joint_step_weight: float = 0.01  # cost per rad² of joint motion per step
+    # the paper's ablation (Fig. 11): off, the program has no H_coll (and no swept
+    # clearance) between actor and object, or no H_PoC
+    with_collision: bool = True
+    with_contact: bool = True
+    # a user's settings (``--program NAME=VALUE``) as (name, value) pairs: they win over
+    # every scene class's overlay, also over those applied later (re-plans, routes)
+    overrides: tuple[tuple[str, object], ...] = ()
 
 
 DEFAULT_SETTINGS = ProgramSettings()  # the free pushers' settings
@@ -155,8 +163,29 @@ def load_overlays(path: Path | None = None) -> dict[str, dict]:
 def settings_for(*classes: str, base: ProgramSettings = DEFAULT_SETTINGS,
                  **changes: object) -> ProgramSettings:
     """``base`` with the overlays of the scene ``classes`` (``arms``, ``routes``) from
-    ``skeletons/settings.yaml`` in order, then ``changes``."""
-    return replace(apply_overlays(base, load_overlays(), classes), **changes)
+    ``skeletons/settings.yaml`` in order, then ``changes``, then the user's ``overrides``
+    that ``base`` carries."""
+    settings = replace(apply_overlays(base, load_overlays(), classes), **changes)
+    return replace(settings, **dict(settings.overrides)) if settings.overrides else settings
+
+
+def with_overrides(settings: ProgramSettings, overrides: Mapping[str, object] | None
+                   ) -> ProgramSettings:
+    """``settings`` with a user's ``overrides`` applied, and carried into every overlay
+    applied after (:func:`settings_for`)."""
+    if not overrides:
+        return settings
+    pairs = tuple(sorted(dict(overrides).items()))
+    return replace(settings, **dict(pairs), overrides=pairs)
+
+
+def parse_program_overrides(items: Sequence[str]) -> dict[str, object]:
+    """``NAME=VALUE`` items (the CLI's ``--program``) as :class:`ProgramSettings` fields
+    with values of their types (:func:`robotplan.base.overlays.parse_overrides`)."""
+    parsed = parse_overrides(DEFAULT_SETTINGS, items, "program setting")
+    if "overrides" in parsed:
+        raise ValueError("overrides: not a program setting")
+    return parsed
 
 
 ARM_PROGRAM_SETTINGS = settings_for("arms")

@@ -6,7 +6,7 @@ candidate (:func:`robotplan.search.planner.search_push`)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from dataclasses import replace
 from functools import cache
 from pathlib import Path
@@ -19,7 +19,7 @@ from robotplan.functionals.clearance import OBSTACLE_MARGIN
 from robotplan.models.loading import dynamics_kind
 from robotplan.program.arm_program import reach_check
 from robotplan.program.chain_program import objects_touch
-from robotplan.program.settings import ProgramSettings
+from robotplan.program.settings import ProgramSettings, with_overrides
 from robotplan.program.settings import settings_for as program_settings
 from robotplan.program.skeleton import (
     Skeleton,
@@ -252,15 +252,17 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
                  progress: bool = True,
                  exhaustive: bool = False, quiet: bool = False,
                  time_budget: float | None = None,
-                 guesses: dict[Skeleton, dict] | None = None
+                 guesses: dict[Skeleton, dict] | None = None,
+                 program: Mapping[str, object] | None = None
                  ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
     """Search the scene's candidates tier by tier, then routes around obstacles when nothing
     plans; the result and each candidate's skeleton space (by ``id`` of its solution).
     ``guesses``: initial guesses of the learned program by skeleton (warm starts). A free
     pusher's region goal without obstacles that the plain tier does not plan gets the
-    fitted pushes' tier, even past ``time_budget`` (at most four programs)."""
+    fitted pushes' tier, even past ``time_budget`` (at most four programs). ``program``:
+    program settings that win over every scene class's (``ProgramSettings`` fields)."""
     obj, actors = check_supported(scene)
-    settings = settings_for(scene, solver, dynamics_kind(model_dir))
+    settings = with_overrides(settings_for(scene, solver, dynamics_kind(model_dir)), program)
     if guesses:  # a re-plan from an earlier plan: the `replan` overlay's budget
         settings = program_settings("replan", base=settings)
     result, spaces = SearchResult(None), {}  # spaces: a skeleton may recur in two tiers

@@ -69,15 +69,16 @@ def test_reproduce_refuses_a_folder_of_other_files(tmp_path, capsys):
 @pytest.mark.slow
 def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     tiny = replace(QUICK, name="quick", test_scenes=3, ood_scenes=3, per_scene=3, pose_fit=2,
-                   push_scenes=1, ood_push_scenes=1, hang_scenes=1,
+                   push_scenes=1, ood_push_scenes=1, ablation_scenes=1, hang_scenes=1,
                    hang_methods=("opt_only",), time_budget=5.0)
     md = reproduce(tmp_path, tiny, workers=1, progress=False)
     text = md.read_text()
-    for item in ("Tab. 2", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 8", "Tab. 3", "Not run yet"):
+    for item in ("Tab. 2", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 8", "Fig. 11", "Tab. 3",
+                 "Not run yet", "without H_PoC"):
         assert item in text, item
     assert "| F_flow | " in text and "| 3.40 ± 1.60 | 1.40 ± 1.80 |" in text
     run = json.loads((tmp_path / "run.json").read_text())
-    assert len(run["steps"]) == 12 and run["sizes"]["test_scenes"] == 3
+    assert len(run["steps"]) == 15 and run["sizes"]["test_scenes"] == 3
     reproduce(tmp_path, tiny, workers=1, progress=False)
     again = json.loads((tmp_path / "run.json").read_text())
     assert [s["folder"] for s in again["steps"]] == [s["folder"] for s in run["steps"]]

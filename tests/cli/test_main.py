@@ -207,14 +207,16 @@ def test_footprint_commands_refuse_a_hang_scene(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
-def test_a_bad_loop_setting_is_refused_before_any_work(tmp_path):
-    """``--loop`` of solve and bench push: one line naming the option and the item, exit 2,
-    nothing written."""
-    for argv in (["solve", str(TASKS / "box_push.yaml"), "--out", str(tmp_path / "s"),
-                  "--loop", "no_such=1"],
-                 ["bench", "push", "--out", str(tmp_path / "b"), "--loop", "max_replans=x"]):
-        res = run(*argv)
-        err = res.stderr.strip()
-        assert res.returncode == 2, argv
-        assert "\n" not in err and err.startswith("error: --loop: ") and "Traceback" not in err
+def test_a_bad_loop_or_program_setting_is_refused_before_any_work(tmp_path):
+    """``--loop`` and ``--program`` of solve and bench push: one line naming the option and
+    the item, exit 2, nothing written."""
+    for option, item in (("--loop", "no_such=1"), ("--loop", "max_replans=x"),
+                         ("--program", "with_contact=maybe"), ("--program", "no_such=1")):
+        for argv in (["solve", str(TASKS / "box_push.yaml"), "--out", str(tmp_path / "s")],
+                     ["bench", "push", "--out", str(tmp_path / "b")]):
+            res = run(*argv, option, item)
+            err = res.stderr.strip()
+            assert res.returncode == 2, argv
+            assert "\n" not in err and err.startswith(f"error: {option}: ")
+            assert "Traceback" not in err
     assert not list(tmp_path.iterdir())

@@ -65,6 +65,19 @@ def test_learned_program_keeps_the_quasi_static_rows_asked_for():
     assert not {"friction_cone", "quasi_static"} & constraints(push_friction=0.0)
 
 
+def test_the_ablations_leave_out_h_coll_or_h_poc_in_both_stages():
+    """The paper's Fig. 11: without H_coll (and the swept clearance), without H_PoC."""
+    for kinematic in (False, True):
+        def constraints(kinematic=kinematic, **settings):
+            prog = build(kinematic=kinematic, **settings).prog
+            return {b.evaluator().get_description() for b in prog.GetAllConstraints()}
+
+        full = constraints()
+        assert {"H_coll", "swept", "H_PoC"} <= full
+        assert constraints(with_collision=False) == full - {"H_coll", "swept"}
+        assert constraints(with_contact=False) == full - {"H_PoC"}
+
+
 def test_kinematic_program_replaces_h_f_by_sticking_contact():
     prog = build(kinematic=True, scene_file=DATA / "box_push_near.yaml")
     names = {b.evaluator().get_description() for b in prog.prog.GetAllConstraints()}

@@ -70,3 +70,24 @@ def test_settings_overlays_per_scene_class(tmp_path, monkeypatch):
         ("arms: {no_such: 1}", "not a program setting"),
         ("pets: {}", "not a scene class"),
         ("arms: {sparse_jacobians: 3}", "must be a bool")))
+
+
+def test_a_users_program_settings_win_over_every_later_overlay():
+    from robotplan.program.settings import parse_program_overrides, with_overrides
+
+    given = parse_program_overrides(["accept_good_start=off", "lever_weight=0.5",
+                                     "max_step=0.02", "solver=ipopt"])
+    assert given == {"accept_good_start": False, "lever_weight": 0.5, "max_step": 0.02,
+                     "solver": "ipopt"}
+    mine = with_overrides(settings_for("arms"), given)
+    # the re-plan overlay turns accept_good_start on and the routes' sets lever_weight
+    later = settings_for("routes", base=settings_for("replan", base=mine))
+    assert not later.accept_good_start and later.lever_weight == 0.5
+    assert later.max_step == 0.02 and later.solver == "ipopt" and later.sparse_jacobians
+    assert settings_for("replan").accept_good_start  # without them, the overlay's value
+    for items, words in ((["no_such=1"], "not a program setting"),
+                         (["with_contact=maybe"], "not a bool"),
+                         (["a_coll=-1"], "must not be negative"),
+                         (["a_coll"], "expected NAME=VALUE")):
+        with pytest.raises(ValueError, match=words):
+            parse_program_overrides(items)
