@@ -56,16 +56,23 @@ FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pos
                       hang_methods=METHODS, time_budget=100.0)
 
 
+# how the report is written, not what its steps compute: left out of the steps' key
+REPORT_ONLY = frozenset({"bench/paper.py", "bench/report.py", "bench/reproduce_report.py"})
+
+
 def inputs_digest() -> str:
-    """SHA-256 of the package's code and of the skeleton tables, robot descriptions and
-    learned models it reads: what every step's result depends on beside its parameters."""
+    """SHA-256 of the package's code (but the report's formatting, ``REPORT_ONLY``) and of
+    the skeleton tables, robot descriptions and learned models it reads: what every step's
+    result depends on beside its parameters."""
     h = hashlib.sha256()
     package = Path(__file__).resolve().parents[1]
     roots = [(package, ("*.py", "*.c")), (skeletons_dir(), ("*",)), (robots_dir(), ("*",)),
              (data_root() / "learned", ("*",))]
     for root, patterns in roots:
         files = sorted({p for pat in patterns for p in root.rglob(pat) if p.is_file()
-                        and "__pycache__" not in p.parts})
+                        and "__pycache__" not in p.parts
+                        and not (root == package
+                                 and p.relative_to(root).as_posix() in REPORT_ONLY)})
         for p in files:
             h.update(str(p.relative_to(root)).encode())
             h.update(p.read_bytes())

@@ -12,7 +12,8 @@ from robotplan.bench.report import Block
 
 __all__ = ["report_blocks"]
 
-SHAPE_NAMES = {"box": "boxes", "lshape": "L-shapes", "ood": "unseen footprints"}
+SHAPE_NAMES = {"box": "boxes", "lshape": "L-shapes", "ood": "unseen footprints",
+               "other": "unseen footprints"}
 ABLATION_NAMES = {"no_collision": "without H_coll", "no_contact": "without H_PoC",
                   "dynamics_and_goal_only": "without both (dynamics and goal only)"}
 
@@ -44,7 +45,7 @@ def _dq(err: dict) -> list[str]:
 
 
 def _paper_dq(values) -> list[str]:
-    return [f"{v:g}" for v in values]
+    return [str(v) for v in values]
 
 
 def _tab56(results: dict, set_name: str, paper: dict) -> list:

@@ -249,10 +249,8 @@ def _settings_of(candidates: list[Skeleton], settings: ProgramSettings) -> Progr
 
 def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: int = 2,
                  skeleton: str | Skeleton | None = None, max_pushes: int = 2,
-                 progress: bool = True,
-                 exhaustive: bool = False, quiet: bool = False,
-                 time_budget: float | None = None,
-                 guesses: dict[Skeleton, dict] | None = None,
+                 progress: bool = True, exhaustive: bool = False, quiet: bool = False,
+                 time_budget: float | None = None, guesses: dict[Skeleton, dict] | None = None,
                  program: Mapping[str, object] | None = None
                  ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
     """Search the scene's candidates tier by tier, then routes around obstacles when nothing
@@ -260,7 +258,7 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     ``guesses``: initial guesses of the learned program by skeleton (warm starts). A free
     pusher's region goal without obstacles that the plain tier does not plan gets the
     fitted pushes' tier, even past ``time_budget`` (at most four programs). ``program``:
-    program settings that win over every scene class's (``ProgramSettings`` fields)."""
+    a user's program settings (:func:`~robotplan.program.settings.with_overrides`)."""
     obj, actors = check_supported(scene)
     settings = with_overrides(settings_for(scene, solver, dynamics_kind(model_dir)), program)
     if guesses:  # a re-plan from an earlier plan: the `replan` overlay's budget
