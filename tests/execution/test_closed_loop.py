@@ -83,14 +83,14 @@ def test_a_users_loop_settings_are_typed_and_win_over_the_scene_class():
     """``--loop NAME=VALUE`` items become LoopSettings fields of their own types and replace
     the scene class's overlay; a wrong name, type or form is refused naming the item."""
     items = ["last_resort_beyond_drift=on", "last_resort_violation=0.03", "max_replans=4",
-             "phase_drift = 0.02"]
+             "phase_drift = 0.03"]
     overrides = parse_loop_overrides(items)
     assert overrides == {"last_resort_beyond_drift": True, "last_resort_violation": 0.03,
-                         "max_replans": 4, "phase_drift": 0.02}
+                         "max_replans": 4, "phase_drift": 0.03}
     assert type(overrides["max_replans"]) is int and type(overrides["phase_drift"]) is float
     chain = load_scene(TASKS / "three_objects.yaml")
     settings = loop_settings_for(chain, overrides=overrides)
-    assert settings.phase_drift == 0.02 != loop_settings_for(chain).phase_drift
+    assert settings.phase_drift == 0.03 != loop_settings_for(chain).phase_drift
     assert settings.phase_drift_yaw == loop_settings_for(chain).phase_drift_yaw  # the class's
     assert settings.last_resort_beyond_drift and settings.max_replans == 4
     assert parse_loop_overrides([]) == {}
