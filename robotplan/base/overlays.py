@@ -58,8 +58,9 @@ def parse_overrides(defaults: object, items: Sequence[str], what: str) -> dict[s
     ``defaults`` with values of their types: booleans as true/false (on/off, yes/no, 1/0),
     numbers as written and not negative, text as it is. Raises ValueError naming the item
     that is not a field (``what`` names the fields, e.g. "closed-loop setting") or not of
-    its type."""
-    names = {f.name: getattr(defaults, f.name) for f in fields(defaults)}
+    its type. Only fields of those kinds (or None by default) can be set so."""
+    names = {f.name: getattr(defaults, f.name) for f in fields(defaults)
+             if isinstance(getattr(defaults, f.name), (bool, int, float, str, type(None)))}
     out: dict[str, object] = {}
     for item in items:
         name, sep, text = item.partition("=")

@@ -32,8 +32,8 @@ class RayMissing(RuntimeError):
 class UnitsReport:
     """Where and how long the units ran (kept apart from their results)."""
 
-    executor: str  # "processes" or "ray"
-    workers: int
+    executor: str = "processes"  # or "ray"
+    workers: int = 1
     address: str | None = None
     units: int = 0
     wall_seconds: float = 0.0
@@ -103,7 +103,7 @@ def run_units(fn: Callable, jobs: Sequence, workers: int = 1, ray: str | None = 
     instance ``"local"`` starts); ``cpus_per_unit``: the CPUs a Ray task asks for (a unit
     that runs processes of its own). ``report``, if given, is filled in as the units
     finish."""
-    report = report if report is not None else UnitsReport("", workers)
+    report = report if report is not None else UnitsReport()
     report.executor, report.workers, report.address = ("ray" if ray else "processes",
                                                        workers, ray)
     t0 = time.perf_counter()

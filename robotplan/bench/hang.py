@@ -138,7 +138,7 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
     t0 = time.time()
     with tqdm(total=scenes, initial=len(done), unit="scene", desc="bench hang",
               disable=not progress) as bar, rows_path.open("a") as log:
-        report = UnitsReport("", workers)
+        report = UnitsReport()
         for row in run_units(_run, todo, workers, ray, report):
             rows.append(row)
             log.write(json.dumps(row) + "\n")

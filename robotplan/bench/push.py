@@ -230,7 +230,7 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
     jobs = [(i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb, loop,
              program)
             for i, kind in todo if draw_scene(i, seed, kind)["name"] not in done]
-    report = UnitsReport("", workers)
+    report = UnitsReport()
     for row in run_units(bench_scene, jobs, 1, ray, report, cpus_per_unit=workers):
         done[row["scene"]] = row
         with rows_path.open("a") as f:

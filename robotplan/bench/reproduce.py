@@ -18,7 +18,13 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from robotplan.base.files import write_atomically
-from robotplan.base.resources import data_root, learned_dir, robots_dir, skeletons_dir
+from robotplan.base.resources import (
+    DYNAMICS_FOLDERS,
+    data_root,
+    learned_dir,
+    robots_dir,
+    skeletons_dir,
+)
 from robotplan.bench.hang import METHODS
 from robotplan.bench.report import write_report
 from robotplan.bench.reproduce_report import report_blocks
@@ -130,7 +136,7 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
 
     out.mkdir(parents=True, exist_ok=True)
     steps = _Steps(out, inputs_digest(), progress)
-    models = {kind: learned_dir(f"push_{kind}") for kind in ("flow", "direct", "rigid")}
+    models = {kind: learned_dir(folder) for kind, folder in DYNAMICS_FOLDERS.items()}
 
     def data(name: str, scenes: int, seed: int, shapes: str) -> Path:
         params = {"scenes": scenes, "seed": seed, "shapes": shapes}

@@ -182,10 +182,7 @@ def with_overrides(settings: ProgramSettings, overrides: Mapping[str, object] | 
 def parse_program_overrides(items: Sequence[str]) -> dict[str, object]:
     """``NAME=VALUE`` items (the CLI's ``--program``) as :class:`ProgramSettings` fields
     with values of their types (:func:`robotplan.base.overlays.parse_overrides`)."""
-    parsed = parse_overrides(DEFAULT_SETTINGS, items, "program setting")
-    if "overrides" in parsed:
-        raise ValueError("overrides: not a program setting")
-    return parsed
+    return parse_overrides(DEFAULT_SETTINGS, items, "program setting")
 
 
 ARM_PROGRAM_SETTINGS = settings_for("arms")

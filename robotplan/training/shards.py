@@ -87,7 +87,7 @@ def make_shards(out: Path, scenes: int, shard_size: int,
     todo = [j for j in jobs if not shard_path(out, j[0]).exists()]
     samples = 0
     done = sum(j[2] - j[1] for j in jobs if j not in todo)
-    report = UnitsReport("", workers)
+    report = UnitsReport()
     units = run_units(make, [(first, last, *extra) for _, first, last in todo], workers, ray,
                       report)
     with tqdm(total=scenes, initial=done, unit="scene", disable=not progress,
