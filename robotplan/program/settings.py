@@ -92,6 +92,10 @@ class ProgramSettings:
     # every row with a residual of at most good_rms_mm: such a solve mostly keeps its start
     # (the `replan` overlay turns it on; measured: docs/experiments.md#good-start)
     accept_good_start: bool = False
+    # nor when its start misses the constraints by more than this (scaled violation; None:
+    # always run): from such a start the learned stage's few iterations ended where they
+    # began (the `replan` overlay sets it; measured: docs/experiments.md#replan-learned-stage)
+    learned_start_violation: float | None = None
     warm_iterations: int = 300
     # a kinematic solve that ends above this violation (but usable, ≤ WARM_USABLE) is solved
     # again from where it ended (a fresh quasi-Newton model): it rescues SNOPT's

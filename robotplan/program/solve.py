@@ -35,7 +35,7 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
     program from its solution; seconds and timings cover both (``"warm_start"``: stage 1).
     A given ``guess`` (an earlier plan of the same skeleton) is repaired by the kinematic
     program (``warm_from_guess``) and starts the learned program, which is not run when
-    ``accept_good_start`` and that start already meets every row within ``good_rms_mm``."""
+    the start is kept (:func:`_kept_start`)."""
     program = program_class(scene, skeleton)
     states = len(skeleton.phases) * space.steps_per_phase + 1
     if guess is not None and len(guess["q_obj"]) != states:
@@ -63,18 +63,32 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
             guess = kin.as_guess(warm)
     learned = program(scene, skeleton, model, space, settings, guess=guess)
     sol = None
-    if settings.accept_good_start and given:
-        # a repaired re-plan the learned rows already accept needs no learned solve
-        start = learned.start_solution()
-        if start.success and start.dynamics_rms_mm <= settings.good_rms_mm:
-            start.status = (f"learned stage not run: its start meets every row, residual "
-                            f"{start.dynamics_rms_mm:.1f} mm")
-            sol = start
+    if given and (settings.accept_good_start or settings.learned_start_violation is not None):
+        sol = _kept_start(learned.start_solution(), settings)
     sol = sol or learned.solve()
     if settings.warm_start and warm_seconds:
         sol.seconds += warm_seconds
         sol.timings = {"warm_start": round(warm_seconds, 3), **sol.timings}
     return sol
+
+
+def _kept_start(start: Solution, settings: ProgramSettings) -> Solution | None:
+    """A re-plan's repaired start as its solution, without the learned solve: when the
+    learned rows already accept it (``accept_good_start``: every row met, residual at most
+    ``good_rms_mm``) or when it misses the constraints by more than
+    ``learned_start_violation``, from where the learned stage's few iterations do not get
+    (measured: docs/experiments.md#replan-learned-stage). None: run the learned stage."""
+    if (settings.accept_good_start and start.success
+            and start.dynamics_rms_mm <= settings.good_rms_mm):
+        start.status = (f"learned stage not run: its start meets every row, residual "
+                        f"{start.dynamics_rms_mm:.1f} mm")
+        return start
+    bound = settings.learned_start_violation
+    if bound is not None and start.violation > bound:
+        start.status = (f"learned stage not run: its start misses the constraints by "
+                        f"{start.violation:.3g} (> {bound:g})")
+        return start
+    return None
 
 
 def _carried(points: np.ndarray, centres: np.ndarray, turns: np.ndarray,

@@ -210,6 +210,35 @@ def test_a_start_the_learned_rows_accept_is_kept_without_a_learned_solve():
     assert solved.timings.get("H_F", 0.0) > 0.0
 
 
+def test_a_start_far_from_the_constraints_is_kept_without_a_learned_solve():
+    """With ``learned_start_violation`` a re-plan whose start misses the constraints by
+    more than it is returned as it is (not solved); without it the learned stage runs."""
+    from robotplan.program.solve import solve_skeleton
+
+    kin = build(kinematic=True, scene_file=DATA / "box_push_near.yaml")
+    warm = kin.solve()
+    guess = kin.as_guess(warm)
+    guess["p"] = guess["p"] + np.array([0.05, 0.0])  # contact points 5 cm off the object
+    model = PushDynamics(DynamicsSpec(**TINY))
+
+    def replan(bound: float | None):
+        settings = ProgramSettings(iterations=3, warm_from_guess=False,
+                                   learned_start_violation=bound)
+        torch.manual_seed(0)
+        return solve_skeleton(kin.scene, kin.skeleton, model, kin.space, settings,
+                              guess=guess)
+
+    kept = replan(0.02)
+    assert kept.violation > 0.02 and not kept.success
+    assert kept.status.startswith("learned stage not run: its start misses")
+    assert "H_F" not in kept.timings
+    assert np.array_equal(kept.contact, guess["p"])
+    ran = replan(None)
+    assert ran.timings.get("H_F", 0.0) > 0.0
+    assert not ran.status.startswith("learned stage not run")
+    assert ran.violation <= kept.violation  # the learned solve never ends worse than its start
+
+
 def test_arm_touch_program_ends_in_contact_and_hands_its_touch_point_on():
     """The touch goal's last state is a contact (H_coll allows touching there, not the
     reach clearance that contradicted H_touch), the kinematic stage of left-push,
