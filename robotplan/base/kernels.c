@@ -11,6 +11,7 @@
  * Vectorized along image rows, 8 floats per vector (GCC vector extensions: AVX2 + FMA where
  * the compiler is told so, SSE otherwise); each output pixel block keeps every output
  * channel's accumulator in registers, so an input vector loaded once feeds all of them.
+ * Layers wider than MAXC run in groups of at most MAXC output channels over one staging.
  * Stride 2 reads column-deinterleaved copies of the input rows (stride 1 along the row), and
  * its transposed form computes the even and odd output columns together and interleaves them.
  *
@@ -28,7 +29,8 @@ typedef float v8u __attribute__((vector_size(32), aligned(4)));
 
 #define LOAD(p) (*(const v8u *)(p))
 #define STORE(p, v) (*(v8u *)(p) = (v))
-#define MAXC 8   /* channels per layer handled here */
+#define MAXC 8   /* output channels per register block: wider layers run in groups of MAXC */
+#define MAXCH 64 /* channels per layer handled here */
 #define MAXK 16  /* kernel size */
 #define BLOCK 32 /* the widest row block of the forward kernel (four vectors) */
 
@@ -154,7 +156,7 @@ static const forward_fn FORWARD[MAXC + 1] = {0,         forward_1, forward_2, fo
 int rp_conv_forward(const float *x, int M, int Cx, int H, int W, const int *in_ch, int nci,
                     const float *w, const float *b, int N, int K, int S, float *y,
                     float *sums) {
-    if (N < 1 || N > MAXC || nci < 1 || nci > MAXC || (S != 1 && S != 2) || K > H || K > W
+    if (N < 1 || N > MAXCH || nci < 1 || nci > MAXCH || (S != 1 && S != 2) || K > H || K > W
         || K > MAXK)
         return -1;
     for (int c = 0; c < nci; ++c)
@@ -166,7 +168,11 @@ int rp_conv_forward(const float *x, int M, int Cx, int H, int W, const int *in_c
     if (!scr) return -1;
     for (int m = 0; m < M; ++m) {
         stage_input(x + (long)m * Cx * H * W, H, W, S, in_ch, nci, scr, RS, PS);
-        FORWARD[N](scr, nci, S, RS, PS, K, w, b, Ho, Wo, y + (long)m * N * Ho * Wo, sums, 1);
+        for (int o0 = 0; o0 < N; o0 += MAXC) {
+            const int n = N - o0 < MAXC ? N - o0 : MAXC;
+            FORWARD[n](scr, nci, S, RS, PS, K, w + (long)o0 * nci * K * K, b + o0, Ho, Wo,
+                       y + ((long)m * N + o0) * Ho * Wo, sums ? sums + o0 : NULL, 1);
+        }
     }
     free(scr);
     return 0;
@@ -203,8 +209,8 @@ static void stage_masked(const float *g, const float *y, int Cy, const int *live
  * gx[i][2u+a][2v+c] = Σ_o Σ_j Σ_q gpad[o][u − j + P][v − q + P] · w[o][i][a + 2j][c + 2q]. */
 #define DEFINE_BACKWARD2(N)                                                                  \
     static void backward2_##N(const float *scr, int ng, long RS, long PS, int K, int P,     \
-                              const float *w, int H, int W, float *gx) {                    \
-        const long KK = (long)K * K, wo_stride = (long)N * KK;                              \
+                              const float *w, long wo_stride, int H, int W, float *gx) {    \
+        const long KK = (long)K * K;                                                        \
         const v8i lo = {0, 8, 1, 9, 2, 10, 3, 11}, hi = {4, 12, 5, 13, 6, 14, 7, 15};       \
         const int half = (W + 1) / 2;                                                       \
         for (int r = 0; r < H; ++r) {                                                       \
@@ -256,8 +262,8 @@ DEFINE_BACKWARD2(6)
 DEFINE_BACKWARD2(7)
 DEFINE_BACKWARD2(8)
 
-typedef void (*backward2_fn)(const float *, int, long, long, int, int, const float *, int,
-                             int, float *);
+typedef void (*backward2_fn)(const float *, int, long, long, int, int, const float *, long,
+                             int, int, float *);
 static const backward2_fn BACKWARD2[MAXC + 1] = {0,           backward2_1, backward2_2,
                                                  backward2_3, backward2_4, backward2_5,
                                                  backward2_6, backward2_7, backward2_8};
@@ -270,7 +276,7 @@ static const backward2_fn BACKWARD2[MAXC + 1] = {0,           backward2_1, backw
 int rp_conv_backward(const float *g, const float *y, int M, int Cy, const int *live, int ng,
                      int Ho, int Wo, const float *w, int N, int K, int S, int H, int W,
                      float *gx) {
-    if (N < 1 || N > MAXC || ng < 1 || ng > MAXC || (S != 1 && S != 2) || K > MAXK
+    if (N < 1 || N > MAXCH || ng < 1 || ng > MAXCH || (S != 1 && S != 2) || K > MAXK
         || Ho != (H - K) / S + 1 || Wo != (W - K) / S + 1)
         return -1;
     for (int c = 0; c < ng; ++c)
@@ -285,8 +291,11 @@ int rp_conv_backward(const float *g, const float *y, int M, int Cy, const int *l
         for (int m = 0; m < M; ++m) {
             stage_masked(g + (long)m * ng * Ho * Wo, y + (long)m * Cy * Ho * Wo, Cy, live, ng,
                          Ho, Wo, P, scr, RS, PS);
-            FORWARD[N](scr, ng, 1, RS, PS, K, w, zero_b, H, W, gx + (long)m * N * H * W, NULL,
-                       0);
+            for (int i0 = 0; i0 < N; i0 += MAXC) {
+                const int n = N - i0 < MAXC ? N - i0 : MAXC;
+                FORWARD[n](scr, ng, 1, RS, PS, K, w + (long)i0 * ng * K * K, zero_b, H, W,
+                           gx + ((long)m * N + i0) * H * W, NULL, 0);
+            }
         }
         free(scr);
         return 0;
@@ -302,7 +311,11 @@ int rp_conv_backward(const float *g, const float *y, int M, int Cy, const int *l
     for (int m = 0; m < M; ++m) {
         stage_masked(g + (long)m * ng * Ho * Wo, y + (long)m * Cy * Ho * Wo, Cy, live, ng, Ho,
                      Wo, P, scr, RS, PS);
-        BACKWARD2[N](scr, ng, RS, PS, K, P, w, H, W, gx + (long)m * N * H * W);
+        for (int i0 = 0; i0 < N; i0 += MAXC) {
+            const int n = N - i0 < MAXC ? N - i0 : MAXC;
+            BACKWARD2[n](scr, ng, RS, PS, K, P, w + (long)i0 * K * K, (long)N * K * K, H, W,
+                         gx + ((long)m * N + i0) * H * W);
+        }
     }
     free(scr);
     return 0;

@@ -37,7 +37,7 @@ from torch import Tensor
 __all__ = ["BOX", "CIRCLE", "LSHAPE", "KernelShape", "conv_relu_forward", "conv_relu_input_grad",
            "kernels", "render_planes", "shape_planes"]
 
-MAX_CHANNELS = 8  # per layer, as compiled (MAXC in the C file)
+MAX_CHANNELS = 64  # per layer, as compiled (MAXCH in the C file)
 REQUIRED_CPU_FLAGS = ("avx2", "fma")  # what setup.py compiles the kernels for
 
 

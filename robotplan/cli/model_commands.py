@@ -47,7 +47,7 @@ def cmd_data_push(args: argparse.Namespace) -> int:
 def architecture(args: argparse.Namespace) -> dict:
     """The ``DynamicsSpec`` fields that ``train push`` sets: the encoder and any widths given."""
     spec: dict = {"encoder": args.encoder}
-    for name in ("channels", "sdf_features", "hidden"):
+    for name in ("channels", "kernels", "strides", "sdf_features", "hidden"):
         if getattr(args, name) is not None:
             spec[name] = getattr(args, name)
     return spec
@@ -57,9 +57,19 @@ def architecture_problem(args: argparse.Namespace) -> str | None:
     """Why the widths given to ``train push`` cannot build a model, or None."""
     from robotplan.models.spec import DynamicsSpec
 
-    layers = len(DynamicsSpec().kernels)
-    if args.channels is not None and len(args.channels) != layers:
-        return f"--channels: {layers} convolutions, got {len(args.channels)} widths"
+    default = DynamicsSpec()
+    layers = len(default.kernels)
+    for option, values in (("channels", args.channels), ("kernels", args.kernels),
+                           ("strides", args.strides)):
+        if values is not None and len(values) != layers:
+            return f"--{option}: {layers} convolutions, got {len(values)} values"
+    side = min(default.grid)
+    for k, s in zip(args.kernels or default.kernels, args.strides or default.strides,
+                    strict=True):
+        if side < k:
+            return (f"--kernels/--strides: the {default.grid[0]} x {default.grid[1]} grid "
+                    f"shrinks below a {k} x {k} kernel")
+        side = (side - k) // s + 1
     if args.sdf_features is not None and args.sdf_features < 1:
         return f"--sdf-features: {args.sdf_features} is not a positive integer"
     return None

@@ -23,6 +23,11 @@ def add_train_push_parser(tsub) -> None:
     tp.add_argument("--out", required=True, metavar="DIR", help="e.g. learned/push_flow")
     tp.add_argument("--channels", type=positive_ints, default=None, metavar="C1,C2,C3",
                     help="the SDF encoder's convolution channels (default 3,5,5, app. I.1)")
+    tp.add_argument("--kernels", type=positive_ints, default=None, metavar="K1,K2,K3",
+                    help="the convolutions' kernel sizes (default 3,5,5)")
+    tp.add_argument("--strides", type=positive_ints, default=None, metavar="S1,S2,S3",
+                    help="the convolutions' strides (default 1,2,2); 2,2,2 quarters the "
+                         "first convolution's work, and F_q's H_q with it")
     tp.add_argument("--sdf-features", type=int, default=None, metavar="N",
                     help="features per SDF after the encoder's linear layer (default 200)")
     tp.add_argument("--hidden", type=positive_ints, default=None, metavar="H1,H2",

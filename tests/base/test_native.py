@@ -27,7 +27,10 @@ needs_kernels = pytest.mark.skipif(native.kernels() is None,
 # T = 10, and odd sizes that end mid-vector, narrower than a block, one channel in
 LAYERS = [(10, 3, 140, 140, 3, 3, 1), (10, 3, 138, 138, 5, 5, 2), (10, 5, 67, 67, 5, 5, 2),
           (2, 2, 31, 29, 4, 5, 2), (3, 1, 20, 23, 2, 3, 1), (1, 4, 12, 9, 8, 3, 2),
-          (2, 3, 45, 70, 7, 4, 1), (2, 2, 30, 33, 3, 4, 2)]
+          (2, 3, 45, 70, 7, 4, 1), (2, 2, 30, 33, 3, 4, 2),
+          # wider than one register block of 8 output channels: run in groups
+          (3, 6, 69, 69, 12, 5, 2), (2, 12, 33, 33, 5, 5, 2), (2, 3, 20, 21, 11, 3, 1),
+          (1, 17, 15, 18, 17, 3, 1)]
 
 
 def _layer(case, seed=0):

@@ -16,9 +16,10 @@ def _train(data, out, *extra: str) -> int:
 
 def test_train_push_builds_the_widths_it_is_given(tiny_push_data, tmp_path, capsys):
     assert _train(tiny_push_data, tmp_path / "fq", "--channels", "2,3,4", "--sdf-features",
-                  "6", "--hidden", "16,8,5") == 0
+                  "6", "--hidden", "16,8,5", "--kernels", "3,3,5", "--strides", "2,2,2") == 0
     spec = json.loads((tmp_path / "fq" / "spec.json").read_text())
     assert spec["channels"] == [2, 3, 4] and spec["sdf_features"] == 6
+    assert spec["kernels"] == [3, 3, 5] and spec["strides"] == [2, 2, 2]
     assert spec["hidden"] == [16, 8, 5] and spec["encoder"] == "joint"
     capsys.readouterr()
 
@@ -28,7 +29,15 @@ def test_train_push_refuses_widths_that_build_no_model(tiny_push_data, tmp_path,
     written."""
     assert _train(tiny_push_data, tmp_path / "fq", "--channels", "4,8") == 2
     err = capsys.readouterr().err.strip()
-    assert err == "error: --channels: 3 convolutions, got 2 widths"
+    assert err == "error: --channels: 3 convolutions, got 2 values"
+    assert not (tmp_path / "fq").exists()
+
+
+def test_train_push_refuses_strides_that_shrink_the_grid_away(tiny_push_data, tmp_path,
+                                                               capsys):
+    assert _train(tiny_push_data, tmp_path / "fq", "--strides", "9,9,9") == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: --kernels/--strides:") and "\n" not in err
     assert not (tmp_path / "fq").exists()
 
 
