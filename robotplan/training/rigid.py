@@ -34,6 +34,7 @@ from robotplan.sdf import Workspace
 from robotplan.training.evaluation import pick_samples
 from robotplan.training.footprints import BOX, LSHAPE
 from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
+from robotplan.training.model_card import earlier_stages
 from robotplan.training.samples import PushSamples, SampleBatch
 from robotplan.training.train import (
     TrainConfig,
@@ -118,6 +119,7 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
         model.load_state_dict(torch.load(cfg.init_weights, map_location=device,
                                          weights_only=True))
     run = load_checkpoint(ckpt_path, model, opt, device) if resume else Run()
+    stages = earlier_stages(cfg.init_weights)  # read before this run overwrites that folder
     samples = PushSamples(cfg.data, cfg.scenes)
     train_idx, val_idx = samples.split_by_scene(cfg.val_fraction, cfg.seed)
     val_batch = samples.batch(validation_indices(samples, val_idx, cfg.val_samples, cfg.seed),
@@ -138,7 +140,8 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
                "val_turn_gain": round(turn_gain(pred[c], true[c]), 3)}
         run.history.append(row)
         save_rigid(model, out)
-        write_json(out / "training.json", {"config": asdict(cfg), "history": run.history,
+        write_json(out / "training.json", {"config": asdict(cfg), "stages": stages,
+                                            "history": run.history,
                                             "samples": {"train": len(train_idx),
                                                         "val": len(val_idx)},
                                             "hardware": hardware(device)})

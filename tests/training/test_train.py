@@ -2,11 +2,13 @@
 
 import json
 
+import pytest
 import torch
 
 from robotplan.models.dynamics import load_model
 from robotplan.training.evaluation import evaluate_push
 from robotplan.training.model_card import record_heldout, write_model_card
+from robotplan.training.rigid import train_rigid
 from robotplan.training.train import TrainConfig, train
 from tests.conftest import TINY_SPEC
 
@@ -79,18 +81,20 @@ def test_init_weights_starts_from_a_previous_run(tiny_push_data, tmp_path):
         assert torch.allclose(va, vb, atol=1e-6)
 
 
-def test_fine_tuned_model_keeps_the_recipe_of_its_parents(tiny_push_data, tmp_path):
-    a_cfg = config(tiny_push_data, tmp_path / "a", 4)
-    a_cfg.command = "train a"
-    train(a_cfg, progress=False)
-    for parent, child, steps in (("a", "b", 3), ("b", "c", 2)):
+@pytest.mark.parametrize("kind", ["flow", "rigid"])
+def test_fine_tuned_model_keeps_the_recipe_of_its_parents(tiny_push_data, tmp_path, kind):
+    run = train_rigid if kind == "rigid" else train
+    for parent, child, steps in ((None, "a", 4), ("a", "b", 3), ("b", "c", 2)):
         cfg = config(tiny_push_data, tmp_path / child, steps)
-        cfg.init_weights = str(tmp_path / parent / "weights.pt")
+        cfg.kind = kind
+        cfg.init_weights = str(tmp_path / parent / "weights.pt") if parent else None
         cfg.command = f"train {child}"
-        train(cfg, progress=False)
+        run(cfg, progress=False)
     record = json.loads((tmp_path / "c" / "training.json").read_text())
     assert [(s["command"], s["steps"]) for s in record["stages"]] == [("train a", 4),
                                                                       ("train b", 3)]
+    if kind == "rigid":  # F_q's card is written by hand
+        return
     write_model_card(tmp_path / "c")
     card = (tmp_path / "c" / "MODEL_CARD.md").read_text()
     assert "trained in 3 runs" in card
