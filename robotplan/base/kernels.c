@@ -150,6 +150,19 @@ static const forward_fn FORWARD[MAXC + 1] = {0,         forward_1, forward_2, fo
                                              forward_4, forward_5, forward_6, forward_7,
                                              forward_8};
 
+/* All N output channels of one staged image, in groups of at most MAXC (the register block):
+ * w (N, nci, K, K), y (N, Ho, Wo); bias b (N,) or NULL for none, sums (N,) or NULL. */
+static void forward_groups(const float *scr, int nci, int S, long RS, long PS, int K,
+                           const float *w, const float *b, int N, int Ho, int Wo, float *y,
+                           float *sums, int relu) {
+    const float zero_b[MAXC] = {0};
+    for (int o0 = 0; o0 < N; o0 += MAXC) {
+        const int n = N - o0 < MAXC ? N - o0 : MAXC;
+        FORWARD[n](scr, nci, S, RS, PS, K, w + (long)o0 * nci * K * K, b ? b + o0 : zero_b,
+                   Ho, Wo, y + (long)o0 * Ho * Wo, sums ? sums + o0 : NULL, relu);
+    }
+}
+
 /* x (M, Cx, H, W) → y (M, N, Ho, Wo) = ReLU(conv), Ho = (H − K) / S + 1; sums (N,) are added
  * to. w (N, nci, K, K): the weights of the listed input channels only. Returns 0, or −1 for
  * sizes it does not handle. */
@@ -168,11 +181,8 @@ int rp_conv_forward(const float *x, int M, int Cx, int H, int W, const int *in_c
     if (!scr) return -1;
     for (int m = 0; m < M; ++m) {
         stage_input(x + (long)m * Cx * H * W, H, W, S, in_ch, nci, scr, RS, PS);
-        for (int o0 = 0; o0 < N; o0 += MAXC) {
-            const int n = N - o0 < MAXC ? N - o0 : MAXC;
-            FORWARD[n](scr, nci, S, RS, PS, K, w + (long)o0 * nci * K * K, b + o0, Ho, Wo,
-                       y + ((long)m * N + o0) * Ho * Wo, sums ? sums + o0 : NULL, 1);
-        }
+        forward_groups(scr, nci, S, RS, PS, K, w, b, N, Ho, Wo, y + (long)m * N * Ho * Wo, sums,
+                       1);
     }
     free(scr);
     return 0;
@@ -286,16 +296,12 @@ int rp_conv_backward(const float *g, const float *y, int M, int Cy, const int *l
         const long RS = (W + BLOCK + K + 8 + 7) / 8 * 8;
         const long PS = (long)(Ho + 2 * P) * RS;
         float *scr = aligned_alloc(32, sizeof(float) * (ng * PS + 8));
-        const float zero_b[MAXC] = {0};
         if (!scr) return -1;
         for (int m = 0; m < M; ++m) {
             stage_masked(g + (long)m * ng * Ho * Wo, y + (long)m * Cy * Ho * Wo, Cy, live, ng,
                          Ho, Wo, P, scr, RS, PS);
-            for (int i0 = 0; i0 < N; i0 += MAXC) {
-                const int n = N - i0 < MAXC ? N - i0 : MAXC;
-                FORWARD[n](scr, ng, 1, RS, PS, K, w + (long)i0 * ng * K * K, zero_b, H, W,
-                           gx + ((long)m * N + i0) * H * W, NULL, 0);
-            }
+            forward_groups(scr, ng, 1, RS, PS, K, w, NULL, N, H, W, gx + (long)m * N * H * W,
+                           NULL, 0);
         }
         free(scr);
         return 0;

@@ -55,7 +55,7 @@ def architecture(args: argparse.Namespace) -> dict:
 
 def architecture_problem(args: argparse.Namespace) -> str | None:
     """Why the widths given to ``train push`` cannot build a model, or None."""
-    from robotplan.models.spec import DynamicsSpec
+    from robotplan.models.spec import DynamicsSpec, conv_output_side
 
     default = DynamicsSpec()
     layers = len(default.kernels)
@@ -69,7 +69,7 @@ def architecture_problem(args: argparse.Namespace) -> str | None:
         if side < k:
             return (f"--kernels/--strides: the {default.grid[0]} x {default.grid[1]} grid "
                     f"shrinks below a {k} x {k} kernel")
-        side = (side - k) // s + 1
+        side = conv_output_side(side, k, s)
     if args.sdf_features is not None and args.sdf_features < 1:
         return f"--sdf-features: {args.sdf_features} is not a positive integer"
     return None

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import torch
 from torch import Tensor, nn
 
-from robotplan.models.spec import DynamicsSpec
+from robotplan.models.spec import DynamicsSpec, conv_output_side
 
 __all__ = ["ConvWithoutOneDNN", "EncoderPass", "SDFEncoder", "channel_sums", "conv_input_grad",
            "live_columns", "no_onednn", "relu_backward"]
@@ -130,7 +130,7 @@ class SDFEncoder(nn.Module):
         c_in, (h, w) = (3 if joint else 1), spec.grid
         for c, k, s in zip(spec.channels, spec.kernels, spec.strides, strict=True):
             layers += [nn.Conv2d(c_in, c, k, stride=s), nn.ReLU()]
-            c_in, h, w = c, (h - k) // s + 1, (w - k) // s + 1
+            c_in, h, w = c, conv_output_side(h, k, s), conv_output_side(w, k, s)
         self.conv = nn.Sequential(*layers)
         self.linear = nn.Linear(c_in * h * w, spec.sdf_features * (3 if joint else 1))
         self.scale = spec.sdf_scale

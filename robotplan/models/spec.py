@@ -14,8 +14,8 @@ from torch import nn
 
 from robotplan.base.arith import bfloat16_head
 
-__all__ = ["DynamicsSpec", "head_matmul_dtype", "read_model_folder", "read_spec",
-           "write_model_folder"]
+__all__ = ["DynamicsSpec", "conv_output_side", "head_matmul_dtype", "read_model_folder",
+           "read_spec", "write_model_folder"]
 
 
 def head_matmul_dtype(model_dtype: torch.dtype) -> torch.dtype:
@@ -24,6 +24,11 @@ def head_matmul_dtype(model_dtype: torch.dtype) -> torch.dtype:
     if model_dtype == torch.float32 and bfloat16_head():
         return torch.bfloat16
     return model_dtype
+
+
+def conv_output_side(side: int, kernel: int, stride: int) -> int:
+    """The side of a convolution's output map (no padding) over an input of ``side``."""
+    return (side - kernel) // stride + 1
 
 
 @dataclass(frozen=True)
