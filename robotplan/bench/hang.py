@@ -79,6 +79,8 @@ def bench_scene(index: int, seed: int, model_dir: str | Path,
                            "h_hang": round(sol.h_hang, 4),
                            "h_coll_cm3": round(sol.h_coll_cm3, 5),
                            "evaluations": sol.evaluations, "restarts": sol.restarts,
+                           "robust_h": (None if sol.robust_h is None
+                                        else round(sol.robust_h, 4)),
                            "seconds": round(sol.seconds, 2),
                            "pose": [round(float(v), 5) for v in sol.pose]}
     return row
@@ -123,7 +125,8 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
     check_ray(ray)
     out.mkdir(parents=True, exist_ok=True)
     run = {"seed": seed, "model": str(model_dir), "evaluations": settings.evaluations,
-           "start_pool": settings.start_pool, "methods": list(methods)}
+           "start_pool": settings.start_pool, "robust_samples": settings.robust_samples,
+           "methods": list(methods)}
     run_path = out / "run.json"
     if run_path.is_file() and json.loads(run_path.read_text()) != run:
         raise ValueError(f"{out}: holds a run with other settings ({run_path}); "

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 from robotplan.bench.hang import PAPER_TAB3
 
-__all__ = ["FIG3", "FIG8", "NOT_RUN", "PAPER_TAB3", "TAB2", "TAB5", "TAB6"]
+__all__ = ["FIG3", "FIG8", "NOT_RUN", "PAPER_TAB3", "REPRESENTATIONS", "TAB2", "TAB5",
+           "TAB6"]
 
 # Tab. 2: one-step RMSE of φ1_t over X_h, mm, (mean, std), with / without pusher contact
 TAB2 = {"F_flow": {"contact": (3.4, 1.6), "free": (1.4, 1.8)},
@@ -19,15 +20,28 @@ TAB5 = {"SDF": (2.1, 2.1, 0.63), "image-conditioned SDF": (2.2, 2.1, 0.63),
 TAB6 = {"SDF": (2.3, 2.3, 0.81), "occupancy ψ_s (b = 100)": (3.0, 3.2, 0.99),
         "PointNet": (4.9, 5.1, 0.99), "PointNet++": (4.5, 4.6, 0.77)}
 
+# the paper's app. A (Tabs. 5, 6): F_q trained alike on each object representation; key →
+# (the paper's row, DynamicsSpec fields)
+REPRESENTATIONS = {
+    "sdf": ("SDF", {}),
+    "occupancy": ("occupancy ψ = sign(φ)", {"representation": "occupancy"}),
+    "smooth100": ("occupancy ψ_s (b = 100)", {"representation": "smooth_occupancy",
+                                              "occupancy_sharpness": 100.0}),
+    "smooth1000": ("occupancy ψ_s (b = 1000)", {"representation": "smooth_occupancy",
+                                                "occupancy_sharpness": 1000.0}),
+    "pointnet": ("PointNet", {"representation": "pointcloud"}),
+}
+
 # Fig. 3 / Fig. 8: median share of the object inside the goal, open loop, by model
 FIG3 = {"box": {"F_flow": 0.997, "F": 0.966}, "lshape": {"F_flow": 0.984, "F": 0.915}}
 FIG8 = {"F_flow": 0.997, "F": 0.920}  # 7 unseen shapes × 3 scenes
 
 # what the paper evaluates that robotplan has no code for yet: (item, what it needs)
 NOT_RUN = [
-    ("Tab. 4, Tab. 5–6 baseline rows", "models on occupancy measures ψ = sign(φ), "
-     "ψ_s = tanh(b φ) and on point clouds (PointNet, PointNet++)"),
-    ("Fig. 5", "planning from contact with the occupancy and point-cloud models"),
+    ("Tab. 4", "F_flow predicting occupancy measures ψ, ψ_s instead of SDFs"),
+    ("Tab. 5–6 PointNet++ row", "F_q on point clouds with a PointNet++ encoder"),
+    ("Fig. 5", "planning from contact with the occupancy and point-cloud models (the F_q "
+     "trained on ψ and ψ_s of Tabs. 5–6 plan with `--model DIR`; not run in the report)"),
     ("Fig. 6", "the analytic mesh / quasi-static pushing model in place of the learned H_F"),
     ("Tab. 3 baseline rows", "H_hang on occupancy measures and point clouds"),
 ]

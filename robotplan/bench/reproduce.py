@@ -26,15 +26,16 @@ from robotplan.base.resources import (
     skeletons_dir,
 )
 from robotplan.bench.hang import METHODS
+from robotplan.bench.paper import REPRESENTATIONS
 from robotplan.bench.report import write_report
 from robotplan.bench.reproduce_report import report_blocks
 
-__all__ = ["ABLATIONS", "FULL", "QUICK", "ReproduceSizes", "inputs_digest", "reproduce"]
+__all__ = ["ABLATIONS", "FULL", "QUICK", "REPRESENTATIONS", "ReproduceSizes", "inputs_digest",
+           "reproduce"]
 
 # the paper's Fig. 11: the push program without H_coll, without H_PoC, without both
 ABLATIONS = {"no_collision": {"with_collision": False}, "no_contact": {"with_contact": False},
              "dynamics_and_goal_only": {"with_collision": False, "with_contact": False}}
-
 
 @dataclass(frozen=True)
 class ReproduceSizes:
@@ -51,15 +52,19 @@ class ReproduceSizes:
     hang_scenes: int  # mug-and-hook scenes (Tab. 3; the paper: 150)
     hang_methods: tuple[str, ...]
     time_budget: float  # per push scene: no program starts after this many seconds
+    representation_scenes: int  # push training scenes (seed 4) of the representation rows
+    representation_steps: int  # F_q's training steps per representation (batch 32)
 
 
 QUICK = ReproduceSizes("quick", test_scenes=40, ood_scenes=40, per_scene=10, pose_fit=20,
                        push_scenes=2, ood_push_scenes=4, ablation_scenes=2, hang_scenes=2,
-                       hang_methods=("opt_sampling", "opt_only"), time_budget=30.0)
+                       hang_methods=("opt_sampling", "opt_only"), time_budget=30.0,
+                       representation_scenes=600, representation_steps=400)
 FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pose_fit=100,
                       push_scenes=50, ood_push_scenes=24, ablation_scenes=20,
                       hang_scenes=150,
-                      hang_methods=METHODS, time_budget=100.0)
+                      hang_methods=METHODS, time_budget=100.0,
+                      representation_scenes=15_000, representation_steps=20_000)
 
 
 # how the report is written, not what its steps compute: left out of the steps' key
@@ -122,6 +127,38 @@ class _Steps:
             print(text, flush=True)
 
 
+def _representations(steps: _Steps, out: Path, sizes: ReproduceSizes, data: Callable,
+                     sets: dict[str, Path]) -> dict[str, dict]:
+    """F_q trained alike on each of :data:`REPRESENTATIONS` (the shipped F_q's architecture,
+    the same data, seed and steps) and evaluated on each set: ``reps_<set>`` → key → the
+    step result."""
+    from robotplan.training.rigid import evaluate_rigid, train_rigid
+    from robotplan.training.train import TrainConfig
+
+    train = data("data_train_representations", sizes.representation_scenes, 4, "train")
+    n, per = sizes.representation_steps, sizes.per_scene
+    results: dict[str, dict] = {f"reps_{name}": {} for name in sets}
+    for key, (_label, fields) in REPRESENTATIONS.items():
+        flags = "".join(f" --{k.replace('occupancy_', '')} {v:g}" if isinstance(v, float)
+                        else f" --{k} {v}" for k, v in fields.items())
+        cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n,
+               "spec": {"encoder": "joint", **fields}}
+        trained = steps.run(
+            f"train_rigid_{key}", {**cfg, "data": train.parent.name},
+            lambda f, c=cfg: train_rigid(TrainConfig(data=str(train), out=str(f / "model"),
+                                                     kind="rigid", **c), progress=False),
+            f"robotplan train push --model rigid --encoder joint --data DATA --steps {n} "
+            f"--warmup {cfg['warmup']}{flags}")
+        model = out / trained["folder"] / "model"
+        for name, folder in sets.items():
+            results[f"reps_{name}"][key] = steps.run(
+                f"eval_rigid_{key}_{name}", {"per_scene": per, "data": folder.parent.name,
+                                             "model": trained["folder"]},
+                lambda f, m=model, d=folder: evaluate_rigid(m, d, per_scene=per),
+                f"robotplan eval push --model MODEL --data DATA --per-scene {per}")
+    return results
+
+
 def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
               ray: str | None = None, progress: bool = True) -> Path:
     """Run (or reuse) every item at ``sizes`` and write ``out/report.md`` and
@@ -161,6 +198,7 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
             f"eval_rigid_{set_name}", {"per_scene": per, "data": folder.parent.name},
             lambda f, d=folder: evaluate_rigid(models["rigid"], d, per_scene=per),
             f"robotplan eval push --model learned/push_rigid --data DATA --per-scene {per}")
+    results.update(_representations(steps, out, sizes, data, {"test": test, "ood": ood}))
     results["pose_fit_flow"] = steps.run(
         "pose_fit_flow", {"samples": sizes.pose_fit, "data": test.parent.name},
         lambda f: evaluate_pose_fit(models["flow"], test, samples=sizes.pose_fit,

@@ -114,6 +114,10 @@ def _parser() -> argparse.ArgumentParser:
     bh.add_argument("--start-pool", type=int, default=None, metavar="N",
                     help="each optimisation starts from the best of N random poses (default: "
                     "the planner's, HangSettings.start_pool)")
+    bh.add_argument("--robust-samples", type=int, default=None, metavar="N",
+                    help="a found pose ends a scene's restarts only where H_hang's median "
+                    "over N poses about it (1 cm, 5°) is ≤ 0.1 (default 0: off; "
+                    "HangSettings.robust_samples)")
     bh.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     add_ray_option(bh)
     bh.add_argument("--json", action="store_true")

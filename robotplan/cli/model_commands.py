@@ -20,6 +20,7 @@ from robotplan.cli.common import (
     program_overrides,
     training_folders_problem,
 )
+from robotplan.cli.push_options import architecture, architecture_problem
 
 __all__ = ["cmd_bench", "cmd_bench_functional", "cmd_bench_push", "cmd_data_push", "cmd_eval_push",
            "cmd_train_push"]
@@ -42,37 +43,6 @@ def cmd_data_push(args: argparse.Namespace) -> int:
         summary["samples_per_second"] = round(summary["new_samples"] / seconds, 1)
     print(json.dumps(summary))
     return 0
-
-
-def architecture(args: argparse.Namespace) -> dict:
-    """The ``DynamicsSpec`` fields that ``train push`` sets: the encoder and any widths given."""
-    spec: dict = {"encoder": args.encoder}
-    for name in ("channels", "kernels", "strides", "sdf_features", "hidden"):
-        if getattr(args, name) is not None:
-            spec[name] = getattr(args, name)
-    return spec
-
-
-def architecture_problem(args: argparse.Namespace) -> str | None:
-    """Why the widths given to ``train push`` cannot build a model, or None."""
-    from robotplan.models.spec import DynamicsSpec, conv_output_side
-
-    default = DynamicsSpec()
-    layers = len(default.kernels)
-    for option, values in (("channels", args.channels), ("kernels", args.kernels),
-                           ("strides", args.strides)):
-        if values is not None and len(values) != layers:
-            return f"--{option}: {layers} convolutions, got {len(values)} values"
-    side = min(default.grid)
-    for k, s in zip(args.kernels or default.kernels, args.strides or default.strides,
-                    strict=True):
-        if side < k:
-            return (f"--kernels/--strides: the {default.grid[0]} x {default.grid[1]} grid "
-                    f"shrinks below a {k} x {k} kernel")
-        side = conv_output_side(side, k, s)
-    if args.sdf_features is not None and args.sdf_features < 1:
-        return f"--sdf-features: {args.sdf_features} is not a positive integer"
-    return None
 
 
 def cmd_train_push(args: argparse.Namespace) -> int:

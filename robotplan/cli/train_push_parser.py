@@ -32,6 +32,17 @@ def add_train_push_parser(tsub) -> None:
                     help="features per SDF after the encoder's linear layer (default 200)")
     tp.add_argument("--hidden", type=positive_ints, default=None, metavar="H1,H2",
                     help="the MLP's hidden widths (default 300,300)")
+    tp.add_argument("--representation",
+                    choices=["sdf", "occupancy", "smooth_occupancy", "pointcloud"],
+                    default="sdf",
+                    help="what the encoder reads of each object: sdf (the paper's proposal); "
+                         "occupancy, ψ = sign(φ) (eq. 10); smooth_occupancy, ψ_s = tanh(b φ) "
+                         "(eq. 11); pointcloud, the boundary's marching-squares vertices "
+                         "through a PointNet (eq. 12; --model rigid only): the paper's "
+                         "baselines (app. A)")
+    tp.add_argument("--sharpness", type=float, default=None, metavar="B",
+                    help="b of smooth_occupancy in 1/m (default 100; the paper tests 100 and "
+                         "1000)")
     tp.add_argument("--steps", type=int, default=60_000, help="total optimiser steps")
     tp.add_argument("--batch", type=int, default=32)
     tp.add_argument("--lr", type=float, default=5e-4)

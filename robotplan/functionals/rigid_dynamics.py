@@ -75,6 +75,9 @@ class RigidDynamics:
     def __init__(self, model: RigidMotion, obj: Body, pusher: Body) -> None:
         if model.spec.encoder != "joint":
             raise ValueError("H_q needs an F_q with the joint encoder (spec.encoder 'joint')")
+        if model.spec.representation == "pointcloud":
+            raise ValueError("H_q needs an F_q on grids: a point-cloud F_q (representation "
+                             "'pointcloud') has no reverse pass to the SDFs")
         self.model, self.obj, self.pusher = model.eval(), obj, pusher
         for p in model.parameters():
             p.requires_grad_(False)

@@ -108,6 +108,9 @@ class EncoderPass:
 
     activations: list[Tensor]  # per convolution: its ReLU outputs (M, C_j, h_j, w_j)
     live: list[Tensor]  # per convolution: its channels that are non-zero somewhere (C_j',)
+    # dψ/dφ of the grids (M, C, H, W) where the encoder reads an occupancy measure ψ of the
+    # SDFs, None where it reads the SDFs themselves
+    input_slope: Tensor | None = None
 
 
 def channel_sums(y: Tensor) -> Tensor:
@@ -133,10 +136,31 @@ class SDFEncoder(nn.Module):
             c_in, h, w = c, conv_output_side(h, k, s), conv_output_side(w, k, s)
         self.conv = nn.Sequential(*layers)
         self.linear = nn.Linear(c_in * h * w, spec.sdf_features * (3 if joint else 1))
-        self.scale = spec.sdf_scale
+        if spec.representation == "pointcloud":
+            raise ValueError("the SDF encoder reads grids: representation 'pointcloud' is "
+                             "F_q's PointNet encoder (robotplan.models.pointnet)")
+        self.representation = spec.representation
+        self.sharpness = spec.occupancy_sharpness
+        # SDF values (m) are scaled to unit range; occupancy measures are in [-1, 1] already
+        self.scale = spec.sdf_scale if spec.representation == "sdf" else 1.0
+
+    def represent(self, grids: Tensor, slope: bool = False) -> tuple[Tensor, Tensor | None]:
+        """What the first convolution reads of SDF grids ``(M, C, H, W)``: the SDFs, or the
+        occupancy measure ψ = sign(φ) (eq. 10) or ψ_s = tanh(b φ) (eq. 11) of the spec's
+        ``representation``; with ``slope`` also dψ/dφ (None for the SDFs: the identity).
+        ψ's slope is zero almost everywhere: a model on ψ passes the planner no gradient
+        through its grids, the paper's argument for SDFs."""
+        if self.representation == "sdf":
+            return grids, None
+        if self.representation == "occupancy":
+            psi = torch.sign(grids)
+            return psi, torch.zeros_like(grids) if slope else None
+        psi = torch.tanh(self.sharpness * grids)
+        return psi, self.sharpness * (1.0 - psi * psi) if slope else None
 
     def forward(self, grids: Tensor) -> Tensor:
         first = self.conv[0]
+        grids, _ = self.represent(grids)
         weight = first.weight * self.scale  # the input scaling, folded into the first layer
         if grids.device.type == "cpu":
             x = ConvWithoutOneDNN.apply(grids, weight, first.bias, first.stride[0])

@@ -42,7 +42,7 @@ class EncoderPasses:
         convs = [m for m in enc.conv if isinstance(m, nn.Conv2d)]
         activations: list[Tensor] = []
         lives: list[Tensor] = []
-        y = grids
+        y, slope = enc.represent(grids, slope=True)
         for j, conv in enumerate(convs):
             weight = conv.weight * enc.scale if j == 0 else conv.weight
             # our own kernels (float32 CPU): bias, ReLU and channel sums in one pass, and
@@ -65,9 +65,10 @@ class EncoderPasses:
             live = torch.nonzero(channel_sums(y) > 0)[:, 0]
             activations.append(y)
             lives.append(live)
+        cache = EncoderPass(activations, lives, slope)
         if linear:  # dead channels are zeros: the linear layer reads all of them
-            return enc.linear(y.flatten(1)), EncoderPass(activations, lives)
-        return y[:, lives[-1]].flatten(1), EncoderPass(activations, lives)
+            return enc.linear(y.flatten(1)), cache
+        return y[:, lives[-1]].flatten(1), cache
 
     @torch.no_grad()
     def encoder_input_grad(self, cache: EncoderPass, grad_features: Tensor,
@@ -84,8 +85,17 @@ class EncoderPasses:
             ``(M', C, H, W)``: one gradient image per row of ``grad_features``.
         The encoder is piecewise linear, so this is exact: transposed convolutions masked by
         the primal's ReLU pattern (one pass per image, about the cost of a forward pass),
-        between the live channels only.
+        between the live channels only; times dψ/dφ where it reads an occupancy measure.
         """
+        g = self._input_grad(cache, grad_features, index, linear)
+        slope = cache.input_slope
+        if slope is None:
+            return g
+        return g * (slope if index is None else slope[index])
+
+    def _input_grad(self, cache: EncoderPass, grad_features: Tensor, index: Tensor | None,
+                    linear: bool) -> Tensor:
+        """:meth:`encoder_input_grad` with respect to what the first convolution reads."""
         enc = self.encoder
         convs = [m for m in enc.conv if isinstance(m, nn.Conv2d)]
         activations, lives = cache.activations, cache.live

@@ -48,6 +48,13 @@ class DynamicsSpec:
     hidden: tuple[int, ...] = (300, 300)
     encoder: Literal["shared", "joint"] = "shared"  # joint: one encoder sees all 3 SDFs
     sdf_scale: float = 5.0  # input SDF values (m) are multiplied by this
+    # what the encoder reads of each grid φ: the SDF itself (the paper's proposal), or the
+    # baselines of its app. A: the occupancy measure ψ = sign(φ) (eq. 10) or its smooth
+    # version ψ_s = tanh(b φ) (eq. 11); the boundary's point cloud (eq. 12, F_q only)
+    representation: Literal["sdf", "occupancy", "smooth_occupancy", "pointcloud"] = "sdf"
+    occupancy_sharpness: float = 100.0  # b of ψ_s = tanh(b φ), 1/m (eq. 11)
+    cloud_points: int = 128  # points per boundary cloud (pointcloud)
+    cloud_widths: tuple[int, ...] = (64, 128, 256)  # PointNet's per-point MLP (pointcloud)
     out_scale: float = 0.01  # the network's output is multiplied by this (m)
     turn_scale: float = 0.05  # F_q's turn output is multiplied by this (rad)
     extra: dict = field(default_factory=dict)  # free-form notes (not used by the network)
@@ -56,7 +63,7 @@ class DynamicsSpec:
     def from_json(cls, data: dict) -> DynamicsSpec:
         kw = dict(data)
         for k in ("grid", "workspace_center", "workspace_size", "channels", "kernels",
-                  "strides", "hidden"):
+                  "strides", "hidden", "cloud_widths"):
             if k in kw:
                 kw[k] = tuple(kw[k])
         return cls(**kw)

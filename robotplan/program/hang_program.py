@@ -38,6 +38,14 @@ class HangSettings:
     # each optimisation starts from the best of this many uniform random poses (least H_hang
     # among those within the collision bound; 1: one random pose, the paper's restarts)
     start_pool: int = 1
+    # a feasible pose is taken at once only where H_hang's median over this many poses about
+    # it (Gaussian, robust_shift m and robust_turn rad per axis) is ≤ robust_kappa: the
+    # network's accepted region is narrow where it errs; otherwise the restarts go on and
+    # the feasible pose with the least such median wins at the end (0: off, the paper's)
+    robust_samples: int = 0
+    robust_shift: float = 0.01
+    robust_turn: float = 0.0873  # 5°
+    robust_kappa: float = 0.1
 
 
 HANG_DEFAULTS = HangSettings()
@@ -53,6 +61,8 @@ class HangSolution:
     seconds: float
     method: str = "optimisation"
     restarts: int = 0
+    # median H_hang over poses about this one (HangSettings.robust_samples), None: not checked
+    robust_h: float | None = None
 
 
 class HangProblem:

@@ -9,7 +9,7 @@ import time
 
 import numpy as np
 
-from robotplan.geometry.transforms import uniform_poses
+from robotplan.geometry.transforms import perturbed_poses, uniform_poses
 from robotplan.program.hang_program import (
     HANG_DEFAULTS,
     HangProblem,
@@ -18,7 +18,7 @@ from robotplan.program.hang_program import (
     solve_hang_once,
 )
 
-__all__ = ["optimise_hang", "sample_hang", "start_pose"]
+__all__ = ["optimise_hang", "robust_median", "sample_hang", "start_pose"]
 
 SAMPLE_BATCH = 64  # poses scored per network call while sampling
 
@@ -41,12 +41,34 @@ def start_pose(problem: HangProblem, rng: np.random.Generator,
     return pool[int(np.argmin(np.where(clear, h, np.inf)) if clear.any() else np.argmin(h))]
 
 
+def robust_median(problem: HangProblem, pose: np.ndarray, rng: np.random.Generator,
+                  settings: HangSettings) -> float:
+    """The median H_hang over ``settings.robust_samples`` poses about ``pose`` (they count
+    as evaluations)."""
+    about = perturbed_poses(rng, pose, settings.robust_shift, settings.robust_turn,
+                            settings.robust_samples)
+    return float(np.median(problem.hang_values(about)))
+
+
+def _better(sol: HangSolution, best: HangSolution | None) -> bool:
+    """Feasible beats infeasible; among feasible poses the lower neighbourhood median (where
+    checked), else the lower H_hang."""
+    if best is None or sol.feasible != best.feasible:
+        return best is None or sol.feasible
+    if sol.robust_h is not None and best.robust_h is not None:
+        return sol.robust_h < best.robust_h
+    return sol.h_hang < best.h_hang
+
+
 def optimise_hang(problem: HangProblem, rng: np.random.Generator,
                   settings: HangSettings = HANG_DEFAULTS, restarts: int | None = None
                   ) -> HangSolution:
     """SNOPT from random poses until a feasible pose, ``restarts`` solves (default
     ``settings.restarts``; 1 = optimisation only) or the evaluation budget is spent. Returns
-    the first feasible solution, else the one with the least H_hang."""
+    the first feasible solution, else the one with the least H_hang. With
+    ``settings.robust_samples`` a feasible pose ends the search only where H_hang is low
+    about it too (:func:`robust_median` ≤ ``robust_kappa``); else the search goes on and
+    returns the first such pose, or the feasible one with the least median."""
     t0 = time.perf_counter()
     problem.evaluations = 0
     best: HangSolution | None = None
@@ -55,9 +77,13 @@ def optimise_hang(problem: HangProblem, rng: np.random.Generator,
     while solves < n:
         sol = solve_hang_once(problem, start_pose(problem, rng, settings), settings)
         solves += 1
-        if best is None or sol.feasible or sol.h_hang < best.h_hang:
+        done = sol.feasible
+        if sol.feasible and settings.robust_samples:
+            sol.robust_h = robust_median(problem, sol.pose, rng, settings)
+            done = sol.robust_h <= settings.robust_kappa
+        if _better(sol, best):
             best = sol
-        if sol.feasible or problem.evaluations >= settings.evaluations:
+        if done or problem.evaluations >= settings.evaluations:
             break
     assert best is not None
     best.restarts, best.evaluations = solves, problem.evaluations

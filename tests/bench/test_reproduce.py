@@ -9,8 +9,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from robotplan.bench.paper import TAB5
 from robotplan.bench.report import write_report
-from robotplan.bench.reproduce import QUICK, _Steps, inputs_digest, reproduce
+from robotplan.bench.reproduce import QUICK, _representations, _Steps, inputs_digest, reproduce
+from robotplan.bench.reproduce_report import _tab56
 from robotplan.cli.main import main
 
 
@@ -66,11 +68,39 @@ def test_reproduce_refuses_a_folder_of_other_files(tmp_path, capsys):
     assert [p.name for p in tmp_path.iterdir()] == ["mine.txt"]
 
 
+def test_each_representation_is_trained_alike_and_set_beside_the_paper(
+        tiny_push_data, tiny_ood_push_data, tmp_path):
+    """F_q on SDFs, ψ, ψ_s and point clouds (tiny data, 2 steps each): every model folder
+    says what it reads, each set has a row per representation, and the paper's own rows for
+    ψ_s (b = 100) and PointNet are no longer marked "paper only" once ours sit beside them."""
+    sizes = replace(QUICK, per_scene=2, representation_scenes=12, representation_steps=2)
+    steps = _Steps(tmp_path, "digest", progress=False)
+    sets = {"test": tiny_push_data, "ood": tiny_ood_push_data}
+    reps = _representations(steps, tmp_path, sizes, lambda *args: tiny_push_data, sets)
+    assert set(reps) == {"reps_test", "reps_ood"}
+    assert list(reps["reps_test"]) == ["sdf", "occupancy", "smooth100", "smooth1000",
+                                       "pointnet"]
+    specs = [json.loads(p.read_text())
+             for p in sorted(tmp_path.glob("steps/train_rigid_*/model/spec.json"))]
+    assert sorted((s["representation"], s["occupancy_sharpness"]) for s in specs) == [
+        ("occupancy", 100.0), ("pointcloud", 100.0), ("sdf", 100.0),
+        ("smooth_occupancy", 100.0), ("smooth_occupancy", 1000.0)]
+    shipped = reps["reps_test"]["sdf"]  # any evaluation has the fields a row reads
+    rows = _tab56({"rigid_test": shipped, **reps}, "test", TAB5, sizes)
+    labels = [row[0] for row in rows]
+    assert "F_q on occupancy ψ_s (b = 100), 2 steps" in labels
+    assert "occupancy ψ_s (b = 100) (paper only)" not in labels
+    assert "PointNet (paper only)" not in labels and "PointNet++ (paper only)" in labels
+    smooth = rows[labels.index("F_q on occupancy ψ_s (b = 100), 2 steps")]
+    assert smooth[-3:] == ["2.7", "2.7", "0.76"] and "±" in smooth[1]
+
+
 @pytest.mark.slow
 def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     tiny = replace(QUICK, name="quick", test_scenes=3, ood_scenes=3, per_scene=3, pose_fit=2,
                    push_scenes=1, ood_push_scenes=1, ablation_scenes=1, hang_scenes=1,
-                   hang_methods=("opt_only",), time_budget=5.0)
+                   hang_methods=("opt_only",), time_budget=5.0, representation_scenes=6,
+                   representation_steps=2)
     md = reproduce(tmp_path, tiny, workers=1, progress=False)
     text = md.read_text()
     for item in ("Tab. 2", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 8", "Fig. 11", "Tab. 3",
@@ -78,7 +108,9 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
         assert item in text, item
     assert "| F_flow | " in text and "| 3.40 ± 1.60 | 1.40 ± 1.80 |" in text
     run = json.loads((tmp_path / "run.json").read_text())
-    assert len(run["steps"]) == 15 and run["sizes"]["test_scenes"] == 3
+    assert "| F_q on occupancy ψ_s (b = 100), 2 steps |" in text
+    # data, training and evaluation of five representations: 1 + 5 + 10 steps more
+    assert len(run["steps"]) == 31 and run["sizes"]["test_scenes"] == 3
     reproduce(tmp_path, tiny, workers=1, progress=False)
     again = json.loads((tmp_path / "run.json").read_text())
     assert [s["folder"] for s in again["steps"]] == [s["folder"] for s in run["steps"]]

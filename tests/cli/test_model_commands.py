@@ -1,4 +1,5 @@
-"""``robotplan train push``: the widths of the model it builds, and their refusals."""
+"""``robotplan train push``: the widths and input representation of the model it builds,
+and their refusals."""
 
 from __future__ import annotations
 
@@ -39,6 +40,42 @@ def test_train_push_refuses_strides_that_shrink_the_grid_away(tiny_push_data, tm
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: --kernels/--strides:") and "\n" not in err
     assert not (tmp_path / "fq").exists()
+
+
+def test_train_push_builds_an_occupancy_baseline(tiny_push_data, tmp_path, capsys):
+    """F_q on ψ_s = tanh(b φ) (paper eq. 11): the spec says so, and the trained folder loads
+    and predicts."""
+    import torch
+
+    from robotplan.models.rigid import load_rigid
+
+    assert _train(tiny_push_data, tmp_path / "fq", "--representation", "smooth_occupancy",
+                  "--sharpness", "1000") == 0
+    spec = json.loads((tmp_path / "fq" / "spec.json").read_text())
+    assert spec["representation"] == "smooth_occupancy"
+    assert spec["occupancy_sharpness"] == 1000.0
+    model = load_rigid(tmp_path / "fq")
+    assert model.encoder.representation == "smooth_occupancy" and model.encoder.scale == 1.0
+    assert torch.isfinite(model(torch.rand(1, 3, 140, 140) - 0.5)).all()
+    capsys.readouterr()
+
+
+def test_train_push_refuses_point_clouds_for_f_flow(tiny_push_data, tmp_path, capsys):
+    assert main(["train", "push", "--data", str(tiny_push_data), "--out", str(tmp_path / "m"),
+                 "--model", "flow", "--representation", "pointcloud"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "error: --representation pointcloud: only with --model rigid (F_q)"
+    assert not (tmp_path / "m").exists()
+
+
+def test_train_push_refuses_a_sharpness_it_cannot_use(tiny_push_data, tmp_path, capsys):
+    for extra, why in ((("--sharpness", "100"), "only with --representation smooth_occupancy"),
+                       (("--representation", "smooth_occupancy", "--sharpness", "-5"),
+                        "-5.0 is not a positive number")):
+        assert _train(tiny_push_data, tmp_path / "fq", *extra) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("error: --sharpness:") and why in err and "\n" not in err
+        assert not (tmp_path / "fq").exists()
 
 
 def test_data_push_on_ray_without_the_package_is_one_line_and_writes_nothing(

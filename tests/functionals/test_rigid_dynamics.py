@@ -99,3 +99,15 @@ def test_the_shared_encoder_is_refused(obj):
     shared = RigidMotion(DynamicsSpec(kind="rigid", encoder="shared", **SPEC))
     with pytest.raises(ValueError, match="joint"):
         RigidDynamics(shared, obj, PUSHER)
+
+
+def test_jacobian_through_the_smooth_occupancy_baseline(obj):
+    """An F_q on ψ_s = tanh(b φ) (paper eq. 11): H_q's Jacobians are exact there too."""
+    torch.manual_seed(6)
+    spec = DynamicsSpec(kind="rigid", encoder="joint", representation="smooth_occupancy",
+                        occupancy_sharpness=100.0, **SPEC)
+    H = RigidDynamics(RigidMotion(spec).double(), obj, PUSHER)
+    X1, X2 = trajectory()
+    values, j1, j2 = H.evaluate(X1, X2)
+    assert (j2.abs() > 0).any() and (values > 0).all()
+    assert_step_jacobians(H, X1, X2, j1, j2, h=1e-7, tol=1e-5, scale_with_jacobian=True)

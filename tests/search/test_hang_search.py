@@ -88,3 +88,21 @@ def test_restarts_stop_at_the_budget(problem):
     sol = optimise_hang(problem, rng, HangSettings(kappa=1e-12, evaluations=30,
                                                    major_iterations=5), restarts=20)
     assert not sol.feasible and sol.restarts < 20 and sol.evaluations >= 30
+
+
+def test_a_robust_search_goes_on_past_a_pose_whose_neighbourhood_it_rejects(problem):
+    """With ``robust_samples`` a feasible pose ends the restarts only when H_hang's median
+    about it is ≤ robust_kappa; when none is, every restart runs and the feasible pose of
+    least median wins."""
+    base = HangSettings(kappa=1e6, major_iterations=10, robust_samples=8)
+    strict = optimise_hang(problem, np.random.default_rng(4),
+                           HangSettings(**{**base.__dict__, "robust_kappa": -1e6}), restarts=3)
+    assert strict.feasible and strict.restarts == 3 and strict.robust_h is not None
+    loose = optimise_hang(problem, np.random.default_rng(4),
+                          HangSettings(**{**base.__dict__, "robust_kappa": 1e6}), restarts=3)
+    assert loose.feasible and loose.restarts == 1
+    # the same first solve: the strict search kept the least median of its three
+    assert strict.robust_h <= loose.robust_h
+    plain = optimise_hang(problem, np.random.default_rng(4),
+                          HangSettings(kappa=1e6, major_iterations=10), restarts=3)
+    assert plain.robust_h is None and plain.evaluations + 8 == loose.evaluations

@@ -1,0 +1,50 @@
+"""The model that ``robotplan train push``'s options describe: its spec fields, and why a
+combination of them builds none."""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["architecture", "architecture_problem"]
+
+
+def architecture(args: argparse.Namespace) -> dict:
+    """The ``DynamicsSpec`` fields that ``train push`` sets: the encoder, what it reads of the
+    objects, and any widths given."""
+    spec: dict = {"encoder": args.encoder}
+    if args.representation != "sdf":
+        spec["representation"] = args.representation
+    if args.sharpness is not None:
+        spec["occupancy_sharpness"] = args.sharpness
+    for name in ("channels", "kernels", "strides", "sdf_features", "hidden"):
+        if getattr(args, name) is not None:
+            spec[name] = getattr(args, name)
+    return spec
+
+
+def architecture_problem(args: argparse.Namespace) -> str | None:
+    """Why the widths given to ``train push`` cannot build a model, or None."""
+    from robotplan.models.spec import DynamicsSpec, conv_output_side
+
+    default = DynamicsSpec()
+    layers = len(default.kernels)
+    for option, values in (("channels", args.channels), ("kernels", args.kernels),
+                           ("strides", args.strides)):
+        if values is not None and len(values) != layers:
+            return f"--{option}: {layers} convolutions, got {len(values)} values"
+    side = min(default.grid)
+    for k, s in zip(args.kernels or default.kernels, args.strides or default.strides,
+                    strict=True):
+        if side < k:
+            return (f"--kernels/--strides: the {default.grid[0]} x {default.grid[1]} grid "
+                    f"shrinks below a {k} x {k} kernel")
+        side = conv_output_side(side, k, s)
+    if args.sdf_features is not None and args.sdf_features < 1:
+        return f"--sdf-features: {args.sdf_features} is not a positive integer"
+    if args.representation == "pointcloud" and args.model != "rigid":
+        return "--representation pointcloud: only with --model rigid (F_q)"
+    if args.sharpness is not None and args.representation != "smooth_occupancy":
+        return "--sharpness: only with --representation smooth_occupancy"
+    if args.sharpness is not None and not 0 < args.sharpness < float("inf"):
+        return f"--sharpness: {args.sharpness} is not a positive number (1/m)"
+    return None

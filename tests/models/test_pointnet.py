@@ -1,0 +1,67 @@
+"""The point-cloud baseline (paper app. A.2, eq. 12): boundary clouds from SDF grids and the
+PointNet encoder of F_q."""
+
+import pytest
+import torch
+
+from robotplan.functionals.rigid_dynamics import RigidDynamics
+from robotplan.models.pointnet import PointNetEncoder, boundary_points, fixed_size_cloud
+from robotplan.models.rigid import RigidMotion
+from robotplan.models.spec import DynamicsSpec
+from robotplan.scene.bodies import Body
+from robotplan.sdf import Box, Circle, Workspace
+
+F64 = torch.float64
+SPEC = {"kind": "rigid", "encoder": "joint", "representation": "pointcloud",
+        "cloud_points": 32, "cloud_widths": (8, 16), "sdf_features": 8, "hidden": (16,)}
+
+
+def disc_sdf(points: torch.Tensor, centre, radius: float) -> torch.Tensor:
+    return (points - torch.tensor(centre, dtype=points.dtype)).norm(dim=-1) - radius
+
+
+def test_the_boundary_points_lie_on_the_zero_level():
+    points = Workspace().points(F64)
+    cloud = boundary_points(disc_sdf(points, (0.1234, -0.2071), 0.1), points)
+    gap = ((cloud - torch.tensor([0.1234, -0.2071], dtype=F64)).norm(dim=1) - 0.1).abs()
+    # the disc's distance is linear along a cell edge up to its curvature: < 1 mm here
+    assert gap.max() < 1e-3
+    # one vertex per crossed edge: about 4 per cell of the diameter along each axis
+    assert 60 <= len(cloud) <= 100
+
+
+def test_fixed_size_clouds_are_deterministic_and_repeat_short_clouds():
+    cloud = torch.arange(10, dtype=F64).reshape(5, 2)
+    eight = fixed_size_cloud(cloud, 8)
+    assert eight.shape == (8, 2) and torch.equal(eight, fixed_size_cloud(cloud, 8))
+    assert {tuple(p) for p in eight.tolist()} == {tuple(p) for p in cloud.tolist()}
+    assert torch.equal(fixed_size_cloud(cloud, 5), cloud)
+    assert not fixed_size_cloud(cloud[:0], 4).any()
+
+
+def test_a_shifted_object_shifts_its_cloud():
+    enc = PointNetEncoder(DynamicsSpec(**SPEC)).double()
+    points = Workspace().points(F64)
+    grids = torch.stack((disc_sdf(points, (0.0, 0.0), 0.08),
+                         disc_sdf(points, (0.03, -0.05), 0.08)))[:, None]
+    a, b = enc.clouds(grids)[:, 0]
+    assert torch.allclose(b - a, torch.tensor([0.03, -0.05], dtype=F64), atol=1e-12)
+
+
+def test_a_point_cloud_f_q_trains_and_is_refused_by_the_planner():
+    torch.manual_seed(0)
+    model = RigidMotion(DynamicsSpec(**SPEC)).double()
+    points = Workspace().points(F64)
+    grids = torch.stack([torch.stack((disc_sdf(points, (0.01 * k, 0.0), 0.08),
+                                      disc_sdf(points, (-0.15, 0.0), 0.02),
+                                      disc_sdf(points, (-0.14, 0.0), 0.02)))
+                         for k in range(3)])
+    delta = model(grids)
+    assert delta.shape == (3, 3) and torch.isfinite(delta).all()
+    delta.square().sum().backward()
+    assert all(p.grad is not None and p.grad.abs().sum() > 0
+               for p in model.parameters())
+    obj = Body("obj", "object", Box((0.2, 0.12)), (0, 0, 0), 0.0, 0.06)
+    pusher = Body("pusher", "pusher", Circle(0.03), (0, 0, 0), 0.0, 0.06)
+    with pytest.raises(ValueError, match="point-cloud"):
+        RigidDynamics(model, obj, pusher)
