@@ -41,7 +41,8 @@ class HangSettings:
     # a feasible pose is taken at once only where H_hang's median over this many poses about
     # it (Gaussian, robust_shift m and robust_turn rad per axis) is ≤ robust_kappa: the
     # network's accepted region is narrow where it errs; otherwise the restarts go on and
-    # the feasible pose with the least such median wins at the end (0: off, the paper's)
+    # the feasible pose with the least such median wins at the end (0: off, the paper's;
+    # on 12 scenes it solved as many, in ten times the time: docs/experiments.md#hang-robust)
     robust_samples: int = 0
     robust_shift: float = 0.01
     robust_turn: float = 0.0873  # 5°
