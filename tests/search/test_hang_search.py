@@ -94,7 +94,7 @@ def test_a_robust_search_goes_on_past_a_pose_whose_neighbourhood_it_rejects(prob
     """With ``robust_samples`` a feasible pose ends the restarts only when H_hang's median
     about it is ≤ robust_kappa; when none is, every restart runs and the feasible pose of
     least median wins."""
-    base = HangSettings(kappa=1e6, major_iterations=10, robust_samples=8)
+    base = HangSettings(kappa=1e6, major_iterations=4, robust_samples=8)
     strict = optimise_hang(problem, np.random.default_rng(4),
                            HangSettings(**{**base.__dict__, "robust_kappa": -1e6}), restarts=3)
     assert strict.feasible and strict.restarts == 3 and strict.robust_h is not None
@@ -104,5 +104,5 @@ def test_a_robust_search_goes_on_past_a_pose_whose_neighbourhood_it_rejects(prob
     # the same first solve: the strict search kept the least median of its three
     assert strict.robust_h <= loose.robust_h
     plain = optimise_hang(problem, np.random.default_rng(4),
-                          HangSettings(kappa=1e6, major_iterations=10), restarts=3)
+                          HangSettings(kappa=1e6, major_iterations=4), restarts=3)
     assert plain.robust_h is None and plain.evaluations + 8 == loose.evaluations
