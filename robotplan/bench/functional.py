@@ -131,8 +131,7 @@ def bench_functional(model_dir: str | Path = DEFAULT_MODEL, configurations: int 
     if dynamics_kind(model_dir) == "rigid":
         return {**bench_rigid(model_dir, repeats), **bench_analytic(repeats)}
     model = load_model(model_dir)
-    ws = Workspace(model.spec.workspace_center, model.spec.workspace_size,
-                   model.spec.workspace_size[0] / model.spec.grid[1])
+    ws = model.spec.workspace()
     # memory first, while the process's high-water mark is still low: 40 steps in one call
     obj, pusher, X1, X2 = realistic_pushes(1, steps=40, seed=987, min_contacts=10)[0]
     before, _ = _rss_mb()

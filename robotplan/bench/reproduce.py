@@ -30,12 +30,14 @@ from robotplan.bench.paper import REPRESENTATIONS
 from robotplan.bench.report import write_report
 from robotplan.bench.reproduce_report import report_blocks
 
-__all__ = ["ABLATIONS", "FULL", "QUICK", "REPRESENTATIONS", "ReproduceSizes", "inputs_digest",
-           "reproduce"]
+__all__ = ["ABLATIONS", "FULL", "QUICK", "ReproduceSizes", "inputs_digest", "reproduce"]
 
 # the paper's Fig. 11: the push program without H_coll, without H_PoC, without both
 ABLATIONS = {"no_collision": {"with_collision": False}, "no_contact": {"with_contact": False},
              "dynamics_and_goal_only": {"with_collision": False, "with_contact": False}}
+# the `train push` option of each DynamicsSpec field a representation sets
+SPEC_FLAGS = {"representation": "--representation", "occupancy_sharpness": "--sharpness"}
+
 
 @dataclass(frozen=True)
 class ReproduceSizes:
@@ -139,8 +141,8 @@ def _representations(steps: _Steps, out: Path, sizes: ReproduceSizes, data: Call
     n, per = sizes.representation_steps, sizes.per_scene
     results: dict[str, dict] = {f"reps_{name}": {} for name in sets}
     for key, (_label, fields) in REPRESENTATIONS.items():
-        flags = "".join(f" --{k.replace('occupancy_', '')} {v:g}" if isinstance(v, float)
-                        else f" --{k} {v}" for k, v in fields.items())
+        flags = "".join(f" {SPEC_FLAGS[k]} {v:g}" if isinstance(v, float)
+                        else f" {SPEC_FLAGS[k]} {v}" for k, v in fields.items())
         cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n,
                "spec": {"encoder": "joint", **fields}}
         trained = steps.run(

@@ -69,7 +69,6 @@ from robotplan.models.dynamics import PushDynamics, head_matmul_dtype
 from robotplan.models.folded_layer import FoldedLayer
 from robotplan.models.tiled_head import TiledHead, tile_points
 from robotplan.scene.bodies import Body
-from robotplan.sdf import Workspace
 
 __all__ = ["QUADRATURE_COARSE", "QUADRATURE_LEVELS", "GridTangents", "LearnedDynamics",
            "grid_with_tangents", "phase_quadrature", "render_on_grid"]
@@ -97,8 +96,7 @@ class LearnedDynamics:
         for p in model.parameters():
             p.requires_grad_(False)
         spec = model.spec
-        self.workspace = Workspace(spec.workspace_center, spec.workspace_size,
-                                   spec.workspace_size[0] / spec.grid[1])
+        self.workspace = spec.workspace()
         self.dtype = next(model.parameters()).dtype  # float32, or float64 for checks
         # the head's hidden products: the model's dtype, or bfloat16 for a float32 model where
         # the user opted in and the CPU multiplies bfloat16 natively (see the module notes)

@@ -30,7 +30,6 @@ from robotplan.functionals.grid_render import render_on_grid
 from robotplan.models.folded_layer import FoldedLayer
 from robotplan.models.rigid import RigidMotion
 from robotplan.scene.bodies import Body
-from robotplan.sdf import Workspace
 
 __all__ = ["RigidDynamics", "footprint_moments"]
 
@@ -82,8 +81,7 @@ class RigidDynamics:
         for p in model.parameters():
             p.requires_grad_(False)
         spec = model.spec
-        self.workspace = Workspace(spec.workspace_center, spec.workspace_size,
-                                   spec.workspace_size[0] / spec.grid[1])
+        self.workspace = spec.workspace()
         self.dtype = next(model.parameters()).dtype
         self.centre, self.rho = footprint_moments(obj, self.dtype)
         # the encoder's linear layer and the head's first layer folded into one map

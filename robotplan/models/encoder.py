@@ -128,6 +128,9 @@ class SDFEncoder(nn.Module):
 
     def __init__(self, spec: DynamicsSpec) -> None:
         super().__init__()
+        if spec.representation == "pointcloud":
+            raise ValueError("the SDF encoder reads grids: representation 'pointcloud' is "
+                             "F_q's PointNet encoder (robotplan.models.pointnet)")
         layers: list[nn.Module] = []
         joint = spec.encoder == "joint"
         c_in, (h, w) = (3 if joint else 1), spec.grid
@@ -136,9 +139,6 @@ class SDFEncoder(nn.Module):
             c_in, h, w = c, conv_output_side(h, k, s), conv_output_side(w, k, s)
         self.conv = nn.Sequential(*layers)
         self.linear = nn.Linear(c_in * h * w, spec.sdf_features * (3 if joint else 1))
-        if spec.representation == "pointcloud":
-            raise ValueError("the SDF encoder reads grids: representation 'pointcloud' is "
-                             "F_q's PointNet encoder (robotplan.models.pointnet)")
         self.representation = spec.representation
         self.sharpness = spec.occupancy_sharpness
         # SDF values (m) are scaled to unit range; occupancy measures are in [-1, 1] already

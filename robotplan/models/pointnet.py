@@ -13,7 +13,6 @@ import torch
 from torch import Tensor, nn
 
 from robotplan.models.spec import DynamicsSpec
-from robotplan.sdf.grid import Workspace
 
 __all__ = ["PointNetEncoder", "boundary_points", "fixed_size_cloud"]
 
@@ -50,9 +49,7 @@ class PointNetEncoder(nn.Module):
     def __init__(self, spec: DynamicsSpec) -> None:
         super().__init__()
         self.spec = spec
-        ws = Workspace(spec.workspace_center, spec.workspace_size,
-                       spec.workspace_size[0] / spec.grid[1])
-        self.register_buffer("points", ws.points(), persistent=False)
+        self.register_buffer("points", spec.workspace().points(), persistent=False)
         layers: list[nn.Module] = []
         width = 2
         for w in spec.cloud_widths:

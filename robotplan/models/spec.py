@@ -13,6 +13,7 @@ import torch
 from torch import nn
 
 from robotplan.base.arith import bfloat16_head
+from robotplan.sdf.grid import Workspace
 
 __all__ = ["DynamicsSpec", "conv_output_side", "head_matmul_dtype", "read_model_folder",
            "read_spec", "write_model_folder"]
@@ -58,6 +59,11 @@ class DynamicsSpec:
     out_scale: float = 0.01  # the network's output is multiplied by this (m)
     turn_scale: float = 0.05  # F_q's turn output is multiplied by this (rad)
     extra: dict = field(default_factory=dict)  # free-form notes (not used by the network)
+
+    def workspace(self) -> Workspace:
+        """X_h: the table region the grids sample, ``grid`` points over ``workspace_size``."""
+        return Workspace(self.workspace_center, self.workspace_size,
+                         self.workspace_size[0] / self.grid[1])
 
     @classmethod
     def from_json(cls, data: dict) -> DynamicsSpec:

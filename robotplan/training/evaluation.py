@@ -9,7 +9,6 @@ import numpy as np
 import torch
 
 from robotplan.models.dynamics import load_model
-from robotplan.sdf import Workspace
 from robotplan.training.samples import PushSamples, SampleBatch
 
 __all__ = ["evaluate_push", "pick_samples"]
@@ -42,8 +41,7 @@ def evaluate_push(model_dir: str | Path, data_dir: str | Path, scenes: int | Non
         chunk = 8 if torch.device(device).type == "cpu" else 128
     model = load_model(model_dir, device)
     spec = model.spec
-    ws = Workspace(spec.workspace_center, spec.workspace_size,
-                   spec.workspace_size[0] / spec.grid[1])
+    ws = spec.workspace()
     grid = ws.points().reshape(-1, 2).to(device)
     point_term = model.point_term(grid[None])  # the same for every sample: computed once
     samples = PushSamples(data_dir, scenes)

@@ -30,7 +30,6 @@ from robotplan.models.rigid import (
     transform_points,
 )
 from robotplan.models.spec import DynamicsSpec
-from robotplan.sdf import Workspace
 from robotplan.training.evaluation import pick_samples
 from robotplan.training.footprints import BOX, LSHAPE
 from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
@@ -99,11 +98,6 @@ def table5_errors(pred: np.ndarray, true: np.ndarray) -> dict:
             for k, key in enumerate(("x_mm", "y_mm", "alpha_deg"))}
 
 
-def _workspace(spec: DynamicsSpec) -> Workspace:
-    return Workspace(spec.workspace_center, spec.workspace_size,
-                     spec.workspace_size[0] / spec.grid[1])
-
-
 def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict:
     """Run (or resume) F_q training with ``cfg.rigid_loss``; returns the last validation
     row (Δq errors against the ground truth, whichever loss trains)."""
@@ -124,7 +118,7 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
     train_idx, val_idx = samples.split_by_scene(cfg.val_fraction, cfg.seed)
     val_batch = samples.batch(validation_indices(samples, val_idx, cfg.val_samples, cfg.seed),
                               device=device)
-    ws = _workspace(spec)
+    ws = spec.workspace()
     grid = ws.points().reshape(-1, 2).to(device)
     per_epoch = max(1, len(train_idx) // cfg.batch)
 
@@ -172,7 +166,7 @@ def evaluate_rigid(model_dir: str | Path, data_dir: str | Path, scenes: int | No
     free samples), the turn gain per shape, and the no-motion baseline (Δq = 0)."""
     t0 = time.time()
     model = load_rigid(model_dir, device)
-    ws = _workspace(model.spec)
+    ws = model.spec.workspace()
     grid = ws.points().reshape(-1, 2).to(device)
     samples = PushSamples(data_dir, scenes)
     idx = pick_samples(samples, per_scene, seed)

@@ -152,8 +152,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
     train_idx, val_idx = samples.split_by_scene(cfg.val_fraction, cfg.seed)
     val_batch = samples.batch(validation_indices(samples, val_idx, cfg.val_samples, cfg.seed),
                               device=device)
-    ws = Workspace(spec.workspace_center, spec.workspace_size,
-                   spec.workspace_size[0] / spec.grid[1])
+    ws = spec.workspace()
     grid = ws.points().reshape(-1, 2).to(device)
     per_epoch = len(train_idx) // cfg.batch
     train_contact = train_idx[samples.contact[train_idx]]
