@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from robotplan.functionals.rigid_dynamics import RigidDynamics
-from robotplan.models.pointnet import PointNetEncoder, boundary_points, fixed_size_cloud
+from robotplan.models.pointnet import PointNetEncoder, boundary_clouds, boundary_points
 from robotplan.models.rigid import RigidMotion
 from robotplan.models.spec import DynamicsSpec
 from robotplan.scene.bodies import Body
@@ -30,13 +30,23 @@ def test_the_boundary_points_lie_on_the_zero_level():
     assert 60 <= len(cloud) <= 100
 
 
-def test_fixed_size_clouds_are_deterministic_and_repeat_short_clouds():
-    cloud = torch.arange(10, dtype=F64).reshape(5, 2)
-    eight = fixed_size_cloud(cloud, 8)
-    assert eight.shape == (8, 2) and torch.equal(eight, fixed_size_cloud(cloud, 8))
-    assert {tuple(p) for p in eight.tolist()} == {tuple(p) for p in cloud.tolist()}
-    assert torch.equal(fixed_size_cloud(cloud, 5), cloud)
-    assert not fixed_size_cloud(cloud[:0], 4).any()
+def test_fixed_size_clouds_pick_evenly_through_each_grid_boundary():
+    points = Workspace().points(F64)
+    torch.manual_seed(0)
+    grids = torch.stack([disc_sdf(points, (0.1234, -0.2071), 0.1),
+                         disc_sdf(points, (-0.2, 0.1), 0.006),  # a few crossings only
+                         disc_sdf(points, (0.0, 0.0), 0.05) + 1.0,  # no sign change
+                         torch.randn(points.shape[:2], dtype=F64)])
+    for n in (5, 40, 300):
+        clouds = boundary_clouds(grids, points, n)
+        assert clouds.shape == (4, n, 2)
+        for grid, cloud in zip(grids, clouds, strict=True):
+            every = boundary_points(grid, points)
+            if len(every) == 0:
+                assert not cloud.any()
+                continue
+            picked = every[torch.arange(n) * len(every) // n]
+            assert torch.equal(cloud, picked)
 
 
 def test_a_shifted_object_shifts_its_cloud():
