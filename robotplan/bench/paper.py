@@ -30,6 +30,7 @@ REPRESENTATIONS = {
     "smooth1000": ("occupancy ψ_s (b = 1000)", {"representation": "smooth_occupancy",
                                                 "occupancy_sharpness": 1000.0}),
     "pointnet": ("PointNet", {"representation": "pointcloud"}),
+    "pointnet2": ("PointNet++", {"representation": "pointcloud", "cloud_encoder": "pointnet2"}),
 }
 
 # Fig. 3 / Fig. 8: median share of the object inside the goal, open loop, by model
@@ -39,9 +40,7 @@ FIG8 = {"F_flow": 0.997, "F": 0.920}  # 7 unseen shapes × 3 scenes
 # what the paper evaluates that robotplan has no code for yet: (item, what it needs)
 NOT_RUN = [
     ("Tab. 4", "F_flow predicting occupancy measures ψ, ψ_s instead of SDFs"),
-    ("Tab. 5–6 PointNet++ row", "F_q on point clouds with a PointNet++ encoder"),
     ("Fig. 5", "planning from contact with the occupancy and point-cloud models (the F_q "
      "trained on ψ and ψ_s of Tabs. 5–6 plan with `--model DIR`; not run in the report)"),
-    ("Fig. 6", "the analytic mesh / quasi-static pushing model in place of the learned H_F"),
     ("Tab. 3 baseline rows", "H_hang on occupancy measures and point clouds"),
 ]

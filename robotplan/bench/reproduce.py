@@ -30,13 +30,17 @@ from robotplan.bench.paper import REPRESENTATIONS
 from robotplan.bench.report import write_report
 from robotplan.bench.reproduce_report import report_blocks
 
-__all__ = ["ABLATIONS", "FULL", "QUICK", "ReproduceSizes", "inputs_digest", "reproduce"]
+__all__ = ["ABLATIONS", "ANALYTIC", "FULL", "QUICK", "ReproduceSizes", "inputs_digest", "reproduce"]
 
 # the paper's Fig. 11: the push program without H_coll, without H_PoC, without both
 ABLATIONS = {"no_collision": {"with_collision": False}, "no_contact": {"with_contact": False},
              "dynamics_and_goal_only": {"with_collision": False, "with_contact": False}}
+# the paper's Fig. 6: the analytic pushing model in place of the learned one (the kinematic
+# program's quasi-static push is the plan)
+ANALYTIC = {"learned_stage": False}
 # the `train push` option of each DynamicsSpec field a representation sets
-SPEC_FLAGS = {"representation": "--representation", "occupancy_sharpness": "--sharpness"}
+SPEC_FLAGS = {"representation": "--representation", "occupancy_sharpness": "--sharpness",
+              "cloud_encoder": "--cloud-encoder"}
 
 
 @dataclass(frozen=True)
@@ -220,6 +224,8 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
 
     results["fig3"] = bench("bench_push", sizes.push_scenes, "box,lshape")
     results["fig8"] = bench("bench_push_ood", sizes.ood_push_scenes, "ood")
+    results["fig6"] = bench("bench_push_analytic", sizes.push_scenes, "box,lshape",
+                            ANALYTIC)
     results["fig11"] = {name: bench(f"ablation_{name}", sizes.ablation_scenes, "box", program)
                         for name, program in ABLATIONS.items()}
     methods = ",".join(sizes.hang_methods)

@@ -16,6 +16,8 @@ def architecture(args: argparse.Namespace) -> dict:
         spec["representation"] = args.representation
     if args.sharpness is not None:
         spec["occupancy_sharpness"] = args.sharpness
+    if args.cloud_encoder is not None:
+        spec["cloud_encoder"] = args.cloud_encoder
     for name in ("channels", "kernels", "strides", "sdf_features", "hidden"):
         if getattr(args, name) is not None:
             spec[name] = getattr(args, name)
@@ -43,6 +45,8 @@ def architecture_problem(args: argparse.Namespace) -> str | None:
         return f"--sdf-features: {args.sdf_features} is not a positive integer"
     if args.representation == "pointcloud" and args.model != "rigid":
         return "--representation pointcloud: only with --model rigid (F_q)"
+    if args.cloud_encoder is not None and args.representation != "pointcloud":
+        return "--cloud-encoder: only with --representation pointcloud"
     if args.sharpness is not None and args.representation != "smooth_occupancy":
         return "--sharpness: only with --representation smooth_occupancy"
     if args.sharpness is not None and not 0 < args.sharpness < float("inf"):

@@ -40,6 +40,9 @@ def add_train_push_parser(tsub) -> None:
                          "(eq. 11); pointcloud, the boundary's marching-squares vertices "
                          "through a PointNet (eq. 12; --model rigid only): the paper's "
                          "baselines (app. A)")
+    tp.add_argument("--cloud-encoder", choices=["pointnet", "pointnet2"], default=None,
+                    help="the point-cloud encoder of --representation pointcloud: pointnet "
+                         "(default) or pointnet2, a PointNet++ with one set-abstraction level")
     tp.add_argument("--sharpness", type=float, default=None, metavar="B",
                     help="b of smooth_occupancy in 1/m (default 100; the paper tests 100 and "
                          "1000)")

@@ -18,7 +18,7 @@ from torch import Tensor, nn
 
 from robotplan.models.encoder import SDFEncoder
 from robotplan.models.encoder_passes import EncoderPasses
-from robotplan.models.pointnet import PointNetEncoder
+from robotplan.models.pointnet import cloud_encoder
 from robotplan.models.spec import DynamicsSpec, read_model_folder, write_model_folder
 
 __all__ = ["RigidMotion", "load_rigid", "moved_pivot_delta", "save_rigid", "sdf_pivot",
@@ -68,7 +68,7 @@ class RigidMotion(EncoderPasses, nn.Module):
     def __init__(self, spec: DynamicsSpec | None = None) -> None:
         super().__init__()
         spec = self.spec = spec or DynamicsSpec(kind="rigid", encoder="joint")
-        self.encoder = (PointNetEncoder(spec) if spec.representation == "pointcloud"
+        self.encoder = (cloud_encoder(spec) if spec.representation == "pointcloud"
                         else SDFEncoder(spec))
         layers: list[nn.Module] = []
         width = 3 * spec.sdf_features

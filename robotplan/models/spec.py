@@ -56,6 +56,14 @@ class DynamicsSpec:
     occupancy_sharpness: float = 100.0  # b of ψ_s = tanh(b φ), 1/m (eq. 11)
     cloud_points: int = 128  # points per boundary cloud (pointcloud)
     cloud_widths: tuple[int, ...] = (64, 128, 256)  # PointNet's per-point MLP (pointcloud)
+    # the point-cloud encoder: PointNet, or PointNet++ with one set-abstraction level of
+    # cloud_centroids centroids, each with its cloud_neighbours nearest points through the
+    # local MLP cloud_local_widths (offsets in m times cloud_local_scale)
+    cloud_encoder: Literal["pointnet", "pointnet2"] = "pointnet"
+    cloud_centroids: int = 32
+    cloud_neighbours: int = 16
+    cloud_local_widths: tuple[int, ...] = (32, 64)
+    cloud_local_scale: float = 50.0
     out_scale: float = 0.01  # the network's output is multiplied by this (m)
     turn_scale: float = 0.05  # F_q's turn output is multiplied by this (rad)
     extra: dict = field(default_factory=dict)  # free-form notes (not used by the network)
@@ -69,7 +77,7 @@ class DynamicsSpec:
     def from_json(cls, data: dict) -> DynamicsSpec:
         kw = dict(data)
         for k in ("grid", "workspace_center", "workspace_size", "channels", "kernels",
-                  "strides", "hidden", "cloud_widths"):
+                  "strides", "hidden", "cloud_widths", "cloud_local_widths"):
             if k in kw:
                 kw[k] = tuple(kw[k])
         return cls(**kw)

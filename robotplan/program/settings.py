@@ -86,6 +86,10 @@ class ProgramSettings:
     # warm start: first solve the kinematic program (sticking contact, pushing direction,
     # no H_F: milliseconds per iteration) and start the learned program from its solution
     warm_start: bool = True
+    # False: the kinematic program is the plan, its quasi-static model (sticking contact,
+    # the limit surface's turning law) in place of the learned one: the analytic-model
+    # baseline of the paper's Fig. 6
+    learned_stage: bool = True
     # with a given guess (a re-plan from an earlier plan), the kinematic stage starts from it
     warm_from_guess: bool = True
     # and the learned stage is not run when its start (the repaired guess) already meets

@@ -35,12 +35,15 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
     program from its solution; seconds and timings cover both (``"warm_start"``: stage 1).
     A given ``guess`` (an earlier plan of the same skeleton) is repaired by the kinematic
     program (``warm_from_guess``) and starts the learned program, which is not run when
-    the start is kept (:func:`_kept_start`)."""
+    the start is kept (:func:`_kept_start`). Without ``learned_stage`` the kinematic
+    program's solution is the plan."""
     program = program_class(scene, skeleton)
     states = len(skeleton.phases) * space.steps_per_phase + 1
     if guess is not None and len(guess["q_obj"]) != states:
         raise ValueError(f"a guess of {len(guess['q_obj'])} states for {skeleton.describe()} "
                          f"at {space.steps_per_phase} steps per phase ({states} states)")
+    if not settings.learned_stage:
+        return program(scene, skeleton, None, space, settings, guess=guess).solve()
     warm_seconds = 0.0
     given = guess is not None
     if settings.warm_start and guess is None:

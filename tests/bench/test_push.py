@@ -13,7 +13,7 @@ from robotplan.functionals.coverage import coverage
 from robotplan.program.skeleton import load_skeleton_space
 from robotplan.scene import parse_scene
 from robotplan.search.planner import order_candidates
-from tests.cli.test_main import run
+from tests.cli.test_main import call, run
 
 
 @pytest.mark.parametrize("kind", ["box", "lshape"])
@@ -103,11 +103,11 @@ def test_candidates_behind_the_object_come_first():
     assert by_table.init_angle(1, (0.0, 0.0), (0.35, 0.0)) == pytest.approx(math.pi / 2)
 
 
-def test_bench_push_refuses_bad_options(tmp_path):
+def test_bench_push_refuses_bad_options(tmp_path, capsys):
     res = run("bench", "push", "--scenes", "1", "--shapes", "box,triangle",
               "--out", str(tmp_path / "b"))
     assert res.returncode == 2 and res.stderr.count("\n") == 1 and "--shapes" in res.stderr
-    res = run("bench", "push", "--scenes", "0", "--out", str(tmp_path / "b"))
+    res = call(capsys, "bench", "push", "--scenes", "0", "--out", str(tmp_path / "b"))
     assert res.returncode == 2 and "--scenes" in res.stderr
 
 

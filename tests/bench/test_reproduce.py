@@ -12,7 +12,7 @@ import pytest
 from robotplan.bench.paper import TAB5
 from robotplan.bench.report import write_report
 from robotplan.bench.reproduce import QUICK, _representations, _Steps, inputs_digest, reproduce
-from robotplan.bench.reproduce_report import _tab56
+from robotplan.bench.reproduce_report import _analytic_rows, _tab56
 from robotplan.cli.main import main
 
 
@@ -60,6 +60,20 @@ def test_report_tables_and_an_embedded_figure(tmp_path):
     assert "data:image/png;base64," in html
 
 
+def test_fig6_sets_the_analytic_model_beside_the_learned_one_for_each_shape():
+    def summary(median: float) -> dict:
+        q = {"n": 2, "median": median, "q1": median / 2}
+        return {"coverage": {"box": q, "lshape": q}, "open_loop_coverage": {"box": q,
+                                                                          "lshape": q},
+                "plan_seconds": {"box": {"median": 3.0}, "lshape": {"median": 9.0}}}
+
+    rows = _analytic_rows({"fig3": {"result": summary(1.0)}, "fig6": {"result": summary(0.5)}})
+    assert [r[:2] for r in rows] == [["boxes", "learned (Fig. 3's run)"], ["boxes", "analytic"],
+                                     ["L-shapes", "learned (Fig. 3's run)"],
+                                     ["L-shapes", "analytic"]]
+    assert rows[1][3:5] == ["0.500 (0.250)", "0.500 (0.250)"] and rows[2][5] == "9.0"
+
+
 def test_reproduce_refuses_a_folder_of_other_files(tmp_path, capsys):
     (tmp_path / "mine.txt").write_text("a user's file")
     assert main(["reproduce", "--out", str(tmp_path), "--quick"]) == 2
@@ -70,27 +84,30 @@ def test_reproduce_refuses_a_folder_of_other_files(tmp_path, capsys):
 
 def test_each_representation_is_trained_alike_and_set_beside_the_paper(
         tiny_push_data, tiny_ood_push_data, tmp_path):
-    """F_q on SDFs, ψ, ψ_s and point clouds (tiny data, 2 steps each): every model folder
-    says what it reads, each set has a row per representation, and the paper's own rows for
-    ψ_s (b = 100) and PointNet are no longer marked "paper only" once ours sit beside them."""
+    """F_q on SDFs, ψ, ψ_s and point clouds, two encoders (tiny data, 2 steps each): every
+    model folder says what it reads, each set has a row per representation, and the
+    paper's own rows for ψ_s (b = 100), PointNet and PointNet++ are no longer marked "paper
+    only" once ours sit beside them."""
     sizes = replace(QUICK, per_scene=2, representation_scenes=12, representation_steps=2)
     steps = _Steps(tmp_path, "digest", progress=False)
     sets = {"test": tiny_push_data, "ood": tiny_ood_push_data}
     reps = _representations(steps, tmp_path, sizes, lambda *args: tiny_push_data, sets)
     assert set(reps) == {"reps_test", "reps_ood"}
     assert list(reps["reps_test"]) == ["sdf", "occupancy", "smooth100", "smooth1000",
-                                       "pointnet"]
+                                       "pointnet", "pointnet2"]
     specs = [json.loads(p.read_text())
              for p in sorted(tmp_path.glob("steps/train_rigid_*/model/spec.json"))]
-    assert sorted((s["representation"], s["occupancy_sharpness"]) for s in specs) == [
-        ("occupancy", 100.0), ("pointcloud", 100.0), ("sdf", 100.0),
-        ("smooth_occupancy", 100.0), ("smooth_occupancy", 1000.0)]
+    assert sorted((s["representation"], s["occupancy_sharpness"], s["cloud_encoder"])
+                  for s in specs) == [
+        ("occupancy", 100.0, "pointnet"), ("pointcloud", 100.0, "pointnet"),
+        ("pointcloud", 100.0, "pointnet2"), ("sdf", 100.0, "pointnet"),
+        ("smooth_occupancy", 100.0, "pointnet"), ("smooth_occupancy", 1000.0, "pointnet")]
     shipped = reps["reps_test"]["sdf"]  # any evaluation has the fields a row reads
     rows = _tab56({"rigid_test": shipped, **reps}, "test", TAB5, sizes)
     labels = [row[0] for row in rows]
     assert "F_q on occupancy ψ_s (b = 100), 2 steps" in labels
     assert "occupancy ψ_s (b = 100) (paper only)" not in labels
-    assert "PointNet (paper only)" not in labels and "PointNet++ (paper only)" in labels
+    assert not any(label.endswith("(paper only)") and "PointNet" in label for label in labels)
     smooth = rows[labels.index("F_q on occupancy ψ_s (b = 100), 2 steps")]
     assert smooth[-3:] == ["2.7", "2.7", "0.76"] and "±" in smooth[1]
 
@@ -103,14 +120,14 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
                    representation_steps=2)
     md = reproduce(tmp_path, tiny, workers=1, progress=False)
     text = md.read_text()
-    for item in ("Tab. 2", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 8", "Fig. 11", "Tab. 3",
-                 "Not run yet", "without H_PoC"):
+    for item in ("Tab. 2", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 6", "Fig. 8", "Fig. 11",
+                 "Tab. 3", "Not run yet", "without H_PoC", "| analytic |"):
         assert item in text, item
     assert "| F_flow | " in text and "| 3.40 ± 1.60 | 1.40 ± 1.80 |" in text
     run = json.loads((tmp_path / "run.json").read_text())
     assert "| F_q on occupancy ψ_s (b = 100), 2 steps |" in text
-    # data, training and evaluation of five representations: 1 + 5 + 10 steps more
-    assert len(run["steps"]) == 31 and run["sizes"]["test_scenes"] == 3
+    # data, training and evaluation of six representations: 1 + 6 + 12 steps; Fig. 6: 1
+    assert len(run["steps"]) == 35 and run["sizes"]["test_scenes"] == 3
     reproduce(tmp_path, tiny, workers=1, progress=False)
     again = json.loads((tmp_path / "run.json").read_text())
     assert [s["folder"] for s in again["steps"]] == [s["folder"] for s in run["steps"]]

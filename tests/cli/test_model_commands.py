@@ -68,13 +68,15 @@ def test_train_push_refuses_point_clouds_for_f_flow(tiny_push_data, tmp_path, ca
     assert not (tmp_path / "m").exists()
 
 
-def test_train_push_refuses_a_sharpness_it_cannot_use(tiny_push_data, tmp_path, capsys):
+def test_train_push_refuses_an_encoder_option_it_cannot_use(tiny_push_data, tmp_path, capsys):
     for extra, why in ((("--sharpness", "100"), "only with --representation smooth_occupancy"),
                        (("--representation", "smooth_occupancy", "--sharpness", "-5"),
-                        "-5.0 is not a positive number")):
+                        "-5.0 is not a positive number"),
+                       (("--cloud-encoder", "pointnet2"), "only with --representation "
+                                                          "pointcloud")):
         assert _train(tiny_push_data, tmp_path / "fq", *extra) == 2
         err = capsys.readouterr().err.strip()
-        assert err.startswith("error: --sharpness:") and why in err and "\n" not in err
+        assert err.startswith(f"error: {extra[-2]}:") and why in err and "\n" not in err
         assert not (tmp_path / "fq").exists()
 
 

@@ -5,7 +5,13 @@ import pytest
 import torch
 
 from robotplan.functionals.rigid_dynamics import RigidDynamics
-from robotplan.models.pointnet import PointNetEncoder, boundary_clouds, boundary_points
+from robotplan.models.pointnet import (
+    PointNet2Encoder,
+    PointNetEncoder,
+    boundary_clouds,
+    boundary_points,
+    farthest_points,
+)
 from robotplan.models.rigid import RigidMotion
 from robotplan.models.spec import DynamicsSpec
 from robotplan.scene.bodies import Body
@@ -58,9 +64,38 @@ def test_a_shifted_object_shifts_its_cloud():
     assert torch.allclose(b - a, torch.tensor([0.03, -0.05], dtype=F64), atol=1e-12)
 
 
-def test_a_point_cloud_f_q_trains_and_is_refused_by_the_planner():
+def test_farthest_points_spread_over_the_cloud():
+    corners = torch.tensor([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]], dtype=F64)
+    cloud = torch.cat((corners, 0.4 + 0.2 * torch.rand(60, 2, dtype=F64)))[None]
+    picked = farthest_points(cloud, 4)[0].tolist()
+    assert picked[0] == 0 and sorted(picked) == [0, 1, 2, 3]  # the corners, not the middle
+
+
+def test_pointnet2_features_move_with_the_object_only_through_the_centroids():
+    """A shifted object: its centroids shift with it and its local features stay (the
+    offsets from each centroid are the same)."""
+    enc = PointNet2Encoder(DynamicsSpec(**SPEC, cloud_encoder="pointnet2", cloud_centroids=8,
+                                        cloud_neighbours=4, cloud_local_widths=(8,))).double()
+    points = Workspace().points(F64)
+    def blob(at):  # three discs, no mirror symmetry: no ties among the farthest points
+        x, y = at
+        return torch.stack([disc_sdf(points, (x + dx, y + dy), r) for dx, dy, r in
+                            ((0.0, 0.0, 0.08), (0.07, 0.02, 0.05), (-0.03, 0.08, 0.035))]
+                           ).amin(0)
+
+    grids = torch.stack((blob((0.0, 0.0)), blob((0.03, -0.05))))[:, None]
+    feats = enc.point_features(grids)[:, 0]  # (2, 8, 2 + 8)
+    assert feats.shape == (2, 8, 10)
+    shift = torch.tensor([0.03, -0.05], dtype=F64) * enc.spec.sdf_scale
+    assert torch.allclose(feats[1, :, :2] - feats[0, :, :2], shift.expand(8, 2), atol=1e-12)
+    # the boundary vertices of the shifted grid differ by rounding (~1e-9 m)
+    assert torch.allclose(feats[1, :, 2:], feats[0, :, 2:], atol=1e-6)
+
+
+@pytest.mark.parametrize("encoder", ["pointnet", "pointnet2"])
+def test_a_point_cloud_f_q_trains_and_is_refused_by_the_planner(encoder):
     torch.manual_seed(0)
-    model = RigidMotion(DynamicsSpec(**SPEC)).double()
+    model = RigidMotion(DynamicsSpec(**SPEC, cloud_encoder=encoder)).double()
     points = Workspace().points(F64)
     grids = torch.stack([torch.stack((disc_sdf(points, (0.01 * k, 0.0), 0.08),
                                       disc_sdf(points, (-0.15, 0.0), 0.02),
