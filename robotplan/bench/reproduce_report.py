@@ -94,9 +94,9 @@ def _representations_note(results: dict, sizes) -> str:
             f"{sizes.representation_scenes} scenes of seed 4, training seed 0), one per "
             "object representation (app. A.1: ψ = sign(φ), eq. 10; ψ_s = tanh(b φ), eq. 11), "
             "so they compare the representations at one budget; the shipped F_q trained far "
-            "longer on 15,000 scenes. Longer runs of all five on a GPU, two training seeds "
-            "each: the repository's docs/experiments.md, section 'F_q on other object "
-            "representations'.")
+            "longer on 15,000 scenes. Longer runs on a GPU (all but the PointNet++, two "
+            "training seeds each): the repository's docs/experiments.md, section 'F_q on "
+            "other object representations'.")
 
 
 def _coverage_rows(summary: dict, paper: dict[str, dict[str, float]]) -> list:
