@@ -99,15 +99,22 @@ def _representations_note(results: dict, sizes) -> str:
             "other object representations'.")
 
 
+def _coverage_cells(summary: dict, kind: str) -> tuple:
+    """A benchmark summary's cells for one shape: scenes, open and closed loop coverage
+    as "median (q1)", plan seconds' median."""
+    q, ol = summary["coverage"][kind], summary["open_loop_coverage"][kind]
+    return (q["n"], f"{ol['median']:.3f} ({ol['q1']:.3f})",
+            f"{q['median']:.3f} ({q['q1']:.3f})",
+            f"{summary['plan_seconds'][kind]['median']:.1f}")
+
+
 def _coverage_rows(summary: dict, paper: dict[str, dict[str, float]]) -> list:
     rows = []
-    for kind, q in summary["coverage"].items():
-        ol = summary["open_loop_coverage"][kind]
+    for kind in summary["coverage"]:
+        n, ol, cl, seconds = _coverage_cells(summary, kind)
         ref = paper.get(kind, paper.get("all", {}))
-        rows.append([SHAPE_NAMES.get(kind, kind), q["n"],
-                     f"{ol['median']:.3f} ({ol['q1']:.3f})", f"{q['median']:.3f} ({q['q1']:.3f})",
-                     ", ".join(f"{m} {v:.3f}" for m, v in ref.items()),
-                     f"{summary['plan_seconds'][kind]['median']:.1f}"])
+        rows.append([SHAPE_NAMES.get(kind, kind), n, ol, cl,
+                     ", ".join(f"{m} {v:.3f}" for m, v in ref.items()), seconds])
     return rows
 
 
@@ -141,15 +148,8 @@ def _analytic_rows(results: dict) -> list:
     analytic one, open and closed loop."""
     runs = (("learned (Fig. 3's run)", results["fig3"]["result"]),
             ("analytic", results["fig6"]["result"]))
-    rows = []
-    for kind in runs[0][1]["coverage"]:
-        for label, summary in runs:
-            q, ol = summary["coverage"][kind], summary["open_loop_coverage"][kind]
-            rows.append([SHAPE_NAMES.get(kind, kind), label, q["n"],
-                         f"{ol['median']:.3f} ({ol['q1']:.3f})",
-                         f"{q['median']:.3f} ({q['q1']:.3f})",
-                         f"{summary['plan_seconds'][kind]['median']:.1f}"])
-    return rows
+    return [[SHAPE_NAMES.get(kind, kind), label, *_coverage_cells(summary, kind)]
+            for kind in runs[0][1]["coverage"] for label, summary in runs]
 
 
 def _tab3(summary: dict) -> list:
