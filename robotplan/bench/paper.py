@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from robotplan.bench.hang import PAPER_TAB3
 
-__all__ = ["FIG3", "FIG8", "NOT_RUN", "PAPER_TAB3", "REPRESENTATIONS", "TAB2", "TAB5",
+__all__ = ["FIG3", "FIG5", "FIG8", "NOT_RUN", "PAPER_TAB3", "REPRESENTATIONS", "TAB2", "TAB5",
            "TAB6"]
 
 # Tab. 2: one-step RMSE of φ1_t over X_h, mm, (mean, std), with / without pusher contact
@@ -37,10 +37,17 @@ REPRESENTATIONS = {
 FIG3 = {"box": {"F_flow": 0.997, "F": 0.966}, "lshape": {"F_flow": 0.984, "F": 0.915}}
 FIG8 = {"F_flow": 0.997, "F": 0.920}  # 7 unseen shapes × 3 scenes
 
+# Fig. 5: what the paper's planner did from contact with each representation (its text
+# gives outcomes, no numbers; its occupancy row does not say which ψ)
+FIG5 = {"sdf": "pushed to the goal", "occupancy": "the pusher does not move",
+        "smooth100": "the pusher does not move (occupancy)",
+        "smooth1000": "the pusher does not move (occupancy)",
+        "pointcloud": "some motion, not to the goal"}
+
 # what the paper evaluates that robotplan has no code for yet: (item, what it needs)
 NOT_RUN = [
     ("Tab. 4", "F_flow predicting occupancy measures ψ, ψ_s instead of SDFs"),
-    ("Fig. 5", "planning from contact with the occupancy and point-cloud models (the F_q "
-     "trained on ψ and ψ_s of Tabs. 5–6 plan with `--model DIR`; not run in the report)"),
+    ("Fig. 5, point-cloud row", "a reverse pass from the point-cloud encoder to the grids "
+     "(a program's dynamics row needs it; H_q takes F_q on grids only)"),
     ("Tab. 3 baseline rows", "H_hang on occupancy measures and point clouds"),
 ]

@@ -60,17 +60,24 @@ class ReproduceSizes:
     time_budget: float  # per push scene: no program starts after this many seconds
     representation_scenes: int  # push training scenes (seed 4) of the representation rows
     representation_steps: int  # F_q's training steps per representation (batch 32)
+    contact_push: tuple[str, ...]  # the representations' F_q planned from contact (Fig. 5)
+    # re-plans of the ablation's closed loops (None: the scene class's); without H_coll
+    # plans fail in pybullet, and unbounded re-plans took 9 of the quick run's 42 min
+    # (measured: docs/experiments.md#ablation)
+    ablation_replans: int | None = None
 
 
 QUICK = ReproduceSizes("quick", test_scenes=40, ood_scenes=40, per_scene=10, pose_fit=20,
                        push_scenes=2, ood_push_scenes=4, ablation_scenes=2, hang_scenes=2,
                        hang_methods=("opt_sampling", "opt_only"), time_budget=30.0,
-                       representation_scenes=600, representation_steps=400)
+                       representation_scenes=600, representation_steps=400,
+                       contact_push=("sdf", "occupancy"), ablation_replans=2)
 FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pose_fit=100,
                       push_scenes=50, ood_push_scenes=24, ablation_scenes=20,
                       hang_scenes=150,
                       hang_methods=METHODS, time_budget=100.0,
-                      representation_scenes=15_000, representation_steps=20_000)
+                      representation_scenes=15_000, representation_steps=20_000,
+                      contact_push=("sdf", "occupancy", "smooth100", "smooth1000"))
 
 
 # how the report is written, not what its steps compute: left out of the steps' key
@@ -134,16 +141,17 @@ class _Steps:
 
 
 def _representations(steps: _Steps, out: Path, sizes: ReproduceSizes, data: Callable,
-                     sets: dict[str, Path]) -> dict[str, dict]:
+                     sets: dict[str, Path]) -> tuple[dict[str, dict], dict[str, Path]]:
     """F_q trained alike on each of :data:`REPRESENTATIONS` (the shipped F_q's architecture,
     the same data, seed and steps) and evaluated on each set: ``reps_<set>`` → key → the
-    step result."""
+    step result, and each key's model folder."""
     from robotplan.training.rigid import evaluate_rigid, train_rigid
     from robotplan.training.train import TrainConfig
 
     train = data("data_train_representations", sizes.representation_scenes, 4, "train")
     n, per = sizes.representation_steps, sizes.per_scene
     results: dict[str, dict] = {f"reps_{name}": {} for name in sets}
+    models: dict[str, Path] = {}
     for key, (_label, fields) in REPRESENTATIONS.items():
         flags = "".join(f" {SPEC_FLAGS[k]} {v:g}" if isinstance(v, float)
                         else f" {SPEC_FLAGS[k]} {v}" for k, v in fields.items())
@@ -155,14 +163,14 @@ def _representations(steps: _Steps, out: Path, sizes: ReproduceSizes, data: Call
                                                      kind="rigid", **c), progress=False),
             f"robotplan train push --model rigid --encoder joint --data DATA --steps {n} "
             f"--warmup {cfg['warmup']}{flags}")
-        model = out / trained["folder"] / "model"
+        model = models[key] = out / trained["folder"] / "model"
         for name, folder in sets.items():
             results[f"reps_{name}"][key] = steps.run(
                 f"eval_rigid_{key}_{name}", {"per_scene": per, "data": folder.parent.name,
                                              "model": trained["folder"]},
                 lambda f, m=model, d=folder: evaluate_rigid(m, d, per_scene=per),
                 f"robotplan eval push --model MODEL --data DATA --per-scene {per}")
-    return results
+    return results, models
 
 
 def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
@@ -170,6 +178,7 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
     """Run (or reuse) every item at ``sizes`` and write ``out/report.md`` and
     ``out/report.html``; returns the Markdown report's path. ``workers`` and ``ray`` as for
     ``data push`` and ``bench push``."""
+    from robotplan.bench.contact_push import plan_from_contact
     from robotplan.bench.hang import run_bench_hang
     from robotplan.bench.push import run_bench_push
     from robotplan.training.evaluation import evaluate_push
@@ -204,21 +213,29 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
             f"eval_rigid_{set_name}", {"per_scene": per, "data": folder.parent.name},
             lambda f, d=folder: evaluate_rigid(models["rigid"], d, per_scene=per),
             f"robotplan eval push --model learned/push_rigid --data DATA --per-scene {per}")
-    results.update(_representations(steps, out, sizes, data, {"test": test, "ood": ood}))
+    reps, rep_models = _representations(steps, out, sizes, data, {"test": test, "ood": ood})
+    results.update(reps)
+    results["fig5"] = {key: steps.run(
+        f"contact_push_{key}", {"model": str(rep_models[key].relative_to(out))},
+        lambda f, m=rep_models[key]: plan_from_contact(m),
+        "robotplan bench contact-push --model MODEL") for key in sizes.contact_push}
     results["pose_fit_flow"] = steps.run(
         "pose_fit_flow", {"samples": sizes.pose_fit, "data": test.parent.name},
         lambda f: evaluate_pose_fit(models["flow"], test, samples=sizes.pose_fit,
                                     progress=False),
         f"robotplan eval push --model learned/push_flow --data DATA --pose-fit {sizes.pose_fit}")
 
-    def bench(name: str, scenes: int, shapes: str, program: dict | None = None) -> dict:
+    def bench(name: str, scenes: int, shapes: str, program: dict | None = None,
+              loop: dict | None = None) -> dict:
         params = {"scenes": scenes, "seed": 0, "shapes": shapes,
                   "time_budget": sizes.time_budget, "workers": workers,
-                  "program": program or {}}
-        flags = "".join(f" --program {k}={str(v).lower()}" for k, v in (program or {}).items())
+                  "program": program or {}, **({"loop": loop} if loop else {})}
+        flags = "".join(f" --{kind} {k}={str(v).lower()}"
+                        for kind, settings in (("program", program), ("loop", loop))
+                        for k, v in (settings or {}).items())
         return steps.run(name, params, lambda f: run_bench_push(
             scenes, 0, f / "bench", None, workers, tuple(shapes.split(",")),
-            time_budget=sizes.time_budget, ray=ray, program=program),
+            time_budget=sizes.time_budget, ray=ray, program=program, loop=loop),
             f"robotplan bench push --scenes {scenes} --seed 0 --shapes {shapes} "
             f"--time-budget {sizes.time_budget:g} --workers {workers}{flags}")
 
@@ -226,7 +243,10 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
     results["fig8"] = bench("bench_push_ood", sizes.ood_push_scenes, "ood")
     results["fig6"] = bench("bench_push_analytic", sizes.push_scenes, "box,lshape",
                             ANALYTIC)
-    results["fig11"] = {name: bench(f"ablation_{name}", sizes.ablation_scenes, "box", program)
+    replans = ({"max_replans": sizes.ablation_replans}
+               if sizes.ablation_replans is not None else None)
+    results["fig11"] = {name: bench(f"ablation_{name}", sizes.ablation_scenes, "box", program,
+                                    replans)
                         for name, program in ABLATIONS.items()}
     methods = ",".join(sizes.hang_methods)
     results["tab3"] = steps.run(

@@ -31,6 +31,7 @@ from robotplan.cli.hang_commands import (
 )
 from robotplan.cli.model_commands import (
     cmd_bench,
+    cmd_bench_contact_push,
     cmd_bench_functional,
     cmd_bench_push,
     cmd_data_push,
@@ -76,6 +77,12 @@ def _parser() -> argparse.ArgumentParser:
     bf.add_argument("--no-naive", action="store_true", help="skip the slow naive timing")
     bf.add_argument("--json", action="store_true")
     bf.set_defaults(run=cmd_bench_functional)
+    bc = bsub.add_parser("contact-push", help="plan one straight push from contact with the "
+                         "learned program alone and run it open loop (paper Fig. 5)")
+    bc.add_argument("--model", default=str(learned_dir("push_rigid")), metavar="DIR",
+                    help="a learned dynamics folder on grids (F_q, F_flow or F)")
+    bc.add_argument("--json", action="store_true")
+    bc.set_defaults(run=cmd_bench_contact_push)
     bp = bsub.add_parser("push", help="plan + execute random push scenes (paper Fig. 3)")
     bp.add_argument("--scenes", type=int, default=20, help="scenes per shape type")
     bp.add_argument("--seed", type=int, default=0)

@@ -22,8 +22,8 @@ from robotplan.cli.common import (
 )
 from robotplan.cli.push_options import architecture, architecture_problem
 
-__all__ = ["cmd_bench", "cmd_bench_functional", "cmd_bench_push", "cmd_data_push", "cmd_eval_push",
-           "cmd_train_push"]
+__all__ = ["cmd_bench", "cmd_bench_contact_push", "cmd_bench_functional", "cmd_bench_push",
+           "cmd_data_push", "cmd_eval_push", "cmd_train_push"]
 
 
 def cmd_data_push(args: argparse.Namespace) -> int:
@@ -247,6 +247,24 @@ def cmd_bench_functional(args: argparse.Namespace) -> int:
     result = bench_functional(args.model, configurations=args.configurations,
                               repeats=args.repeats,
                               naive=not args.no_naive)
+    print_result(result, args.json)
+    return 0
+
+
+def cmd_bench_contact_push(args: argparse.Namespace) -> int:
+    from robotplan.bench.contact_push import plan_from_contact
+    from robotplan.models.spec import read_spec
+
+    if not_a_model(args.model):
+        return EXIT_BAD_INPUT
+    if read_spec(args.model).representation == "pointcloud":
+        print(f"error: {args.model}/spec.json: representation: a point-cloud model has no "
+              "gradient to the grids a program needs; give a model on grids",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    result = plan_from_contact(args.model)
+    if not args.json:
+        result = {k: v for k, v in result.items() if k not in ("q_obj", "q_pusher")}
     print_result(result, args.json)
     return 0
 

@@ -91,8 +91,11 @@ def test_each_representation_is_trained_alike_and_set_beside_the_paper(
     sizes = replace(QUICK, per_scene=2, representation_scenes=12, representation_steps=2)
     steps = _Steps(tmp_path, "digest", progress=False)
     sets = {"test": tiny_push_data, "ood": tiny_ood_push_data}
-    reps = _representations(steps, tmp_path, sizes, lambda *args: tiny_push_data, sets)
+    reps, models = _representations(steps, tmp_path, sizes, lambda *args: tiny_push_data,
+                                     sets)
     assert set(reps) == {"reps_test", "reps_ood"}
+    assert list(models) == list(reps["reps_test"])
+    assert all((folder / "weights.pt").is_file() for folder in models.values())
     assert list(reps["reps_test"]) == ["sdf", "occupancy", "smooth100", "smooth1000",
                                        "pointnet", "pointnet2"]
     specs = [json.loads(p.read_text())
@@ -117,17 +120,17 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     tiny = replace(QUICK, name="quick", test_scenes=3, ood_scenes=3, per_scene=3, pose_fit=2,
                    push_scenes=1, ood_push_scenes=1, ablation_scenes=1, hang_scenes=1,
                    hang_methods=("opt_only",), time_budget=5.0, representation_scenes=6,
-                   representation_steps=2)
+                   representation_steps=2, contact_push=("occupancy",))
     md = reproduce(tmp_path, tiny, workers=1, progress=False)
     text = md.read_text()
-    for item in ("Tab. 2", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 6", "Fig. 8", "Fig. 11",
+    for item in ("Tab. 2", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 5", "Fig. 6", "Fig. 8", "Fig. 11",
                  "Tab. 3", "Not run yet", "without H_PoC", "| analytic |"):
         assert item in text, item
     assert "| F_flow | " in text and "| 3.40 ± 1.60 | 1.40 ± 1.80 |" in text
     run = json.loads((tmp_path / "run.json").read_text())
     assert "| F_q on occupancy ψ_s (b = 100), 2 steps |" in text
-    # data, training and evaluation of six representations: 1 + 6 + 12 steps; Fig. 6: 1
-    assert len(run["steps"]) == 35 and run["sizes"]["test_scenes"] == 3
+    # data, training and evaluation of six representations: 1 + 6 + 12 steps; Figs. 5, 6: 1
+    assert len(run["steps"]) == 36 and run["sizes"]["test_scenes"] == 3
     reproduce(tmp_path, tiny, workers=1, progress=False)
     again = json.loads((tmp_path / "run.json").read_text())
     assert [s["folder"] for s in again["steps"]] == [s["folder"] for s in run["steps"]]

@@ -119,6 +119,23 @@ def test_bench_functional_refuses_a_non_model(tmp_path):
     assert res.returncode == 2 and "--model" in res.stderr and "Traceback" not in res.stderr
 
 
+def test_bench_contact_push_refuses_a_non_model_and_a_point_cloud_model(tmp_path, capsys):
+    import torch
+
+    from robotplan.models.dynamics import DynamicsSpec
+    from robotplan.models.rigid import RigidMotion, save_rigid
+
+    res = call(capsys, "bench", "contact-push", "--model", str(tmp_path))
+    assert res.returncode == 2 and "--model" in res.stderr
+    torch.manual_seed(0)
+    cloud = DynamicsSpec(kind="rigid", encoder="joint", representation="pointcloud",
+                         sdf_features=8, point_features=8, hidden=(16, 16))
+    save_rigid(RigidMotion(cloud), tmp_path / "cloud")
+    res = call(capsys, "bench", "contact-push", "--model", str(tmp_path / "cloud"))
+    assert res.returncode == 2 and "\n" not in res.stderr.strip()
+    assert "spec.json: representation" in res.stderr
+
+
 def test_solve_refuses_unsupported_scenes_and_used_folders(tmp_path, capsys):
     # two objects the pusher may both touch: no chain, not planned yet
     text = (TASKS / "three_objects.yaml").read_text().replace("touches: [red]", "")

@@ -1,0 +1,97 @@
+"""The paper's Fig. 5: planning one straight push from contact with a learned model on each
+object representation.
+
+The pusher starts touching the middle of a box's face and the box should end 20 cm straight
+ahead (a pose goal). The learned program alone plans it: the dynamics row of the model
+under test and the goal row, no H_coll, no H_PoC, no quasi-static rows, no kinematic warm
+start, and a start in which nothing moves (the paper: "the only constraint of the
+optimization problem apart from the goal specification is H_F"). The plan is then run open
+loop in pybullet. A model whose grids pass the optimiser no gradient (ψ = sign φ) leaves the
+pusher where it is; one on SDFs pushes the box to the goal.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from robotplan.api import Plan, execute
+from robotplan.models.loading import load_dynamics
+from robotplan.program.push_program import PushProgram
+from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings
+from robotplan.program.skeleton import Phase, Skeleton, space_for
+from robotplan.scene import Scene, parse_scene
+
+__all__ = ["CONTACT_PUSH_SETTINGS", "contact_push_scene", "plan_from_contact"]
+
+BOX = (0.20, 0.12)  # m: the box's sides
+PUSHER_RADIUS = 0.03  # m
+GAP = 0.002  # m between the pusher and the face at the start (the scene check needs air)
+TRAVEL = 0.20  # m straight ahead to the goal
+SUCCESS = 0.95  # coverage of the goal footprint that counts as pushed there (Push-T's)
+
+# the learned program alone, as in the paper's Fig. 5 (see the module docstring); SNOPT has
+# the kinematic stage's iteration budget, as nothing else starts it near a plan
+CONTACT_PUSH_SETTINGS: ProgramSettings = replace(
+    DEFAULT_SETTINGS, warm_start=False, with_collision=False, with_contact=False,
+    cone_in_learned=False, turn_in_learned=False, lever_weight=0.0, dynamics_weight=1.0,
+    iterations=DEFAULT_SETTINGS.warm_iterations)
+
+
+def contact_push_scene() -> Scene:
+    """The box at the origin, the pusher at its west face, the goal ``TRAVEL`` east."""
+    start = -(BOX[0] / 2 + PUSHER_RADIUS + GAP)
+    doc = {"version": 1, "name": "contact_push",
+           "workspace": {"center": [0.0, 0.0], "size": [1.4, 1.4], "resolution": 0.01},
+           "objects": [{"name": "box", "shape": {"type": "box", "size": list(BOX)},
+                        "pose": [0.0, 0.0, 0.0]}],
+           "pushers": [{"name": "pusher", "radius": PUSHER_RADIUS,
+                        "position": [start, 0.0]}],
+           "goal": {"type": "pose", "object": "box", "pose": [TRAVEL, 0.0, 0.0]}}
+    return parse_scene(doc, Path("contact_push.yaml"))
+
+
+def still_guess(scene: Scene, steps: int) -> dict[str, np.ndarray]:
+    """The start of a push of ``steps`` steps in which nothing moves: every state at the
+    scene's start, the contact points on the pusher's surface facing the box."""
+    q_obj = np.tile(np.asarray(scene.bodies["box"].pose, dtype=float), (steps + 1, 1))
+    q_pusher = np.tile(np.asarray(scene.bodies["pusher"].pose[:2], dtype=float),
+                       (steps + 1, 1))
+    toward = q_obj[0, :2] - q_pusher[0]
+    toward /= np.linalg.norm(toward)
+    p = np.tile(q_pusher[0] + PUSHER_RADIUS * toward, (steps, 1))
+    return {"q_obj": q_obj, "q_pusher": q_pusher, "p": p}
+
+
+def plan_from_contact(model_dir: str | Path,
+                      settings: ProgramSettings = CONTACT_PUSH_SETTINGS) -> dict:
+    """Plan :func:`contact_push_scene` with the model in ``model_dir`` (an F_q, F_flow or F on
+    grids) from :func:`still_guess`, run the plan open loop; returns how far the pusher
+    and the box moved in the plan and in pybullet (m), the coverage of the goal footprint,
+    the program's violation and dynamics residual, and seconds."""
+    scene = contact_push_scene()
+    space = space_for(scene)
+    # one push phase (init 0: straight behind the box, as it starts)
+    skeleton = Skeleton((Phase("push", "pusher", "box", init=0),))
+    model = load_dynamics(model_dir).double()
+    t0 = time.perf_counter()
+    program = PushProgram(scene, skeleton, model, space, settings,
+                          guess=still_guess(scene, space.steps_per_phase))
+    sol = program.solve()
+    seconds = time.perf_counter() - t0
+    executed = execute(Plan(scene, "box", sol, sol.success), mode="open_loop")
+    goal = np.array([TRAVEL, 0.0])
+    return {"model": str(model_dir), "violation": float(sol.violation),
+            "solved": bool(sol.success), "dynamics_rms_mm": float(sol.dynamics_rms_mm),
+            "planned_pusher_travel_m": float(np.linalg.norm(sol.q_pusher[-1] - sol.q_pusher[0])),
+            "planned_box_travel_m": float(np.linalg.norm(sol.q_obj[-1, :2] - sol.q_obj[0, :2])),
+            "box_travel_m": float(np.linalg.norm(executed.final_pose[:2] - sol.q_obj[0, :2])),
+            "box_goal_distance_m": float(np.linalg.norm(executed.final_pose[:2] - goal)),
+            "coverage": float(executed.coverage or 0.0),
+            "success": bool((executed.coverage or 0.0) >= SUCCESS),
+            "seconds": round(seconds, 2),
+            "q_obj": np.round(executed.object_poses, 5).tolist(),
+            "q_pusher": np.round(executed.pusher_positions, 5).tolist()}

@@ -1,0 +1,61 @@
+"""Fig. 5's push from contact: the scene, the still start, and a model on ψ = sign(φ),
+which passes the program no gradient through the pusher's grids."""
+
+import numpy as np
+import pytest
+import torch
+
+from robotplan.bench.contact_push import (
+    CONTACT_PUSH_SETTINGS,
+    GAP,
+    PUSHER_RADIUS,
+    TRAVEL,
+    contact_push_scene,
+    plan_from_contact,
+    still_guess,
+)
+from robotplan.models.dynamics import DynamicsSpec
+from robotplan.models.rigid import RigidMotion, save_rigid
+from tests.conftest import TINY_SPEC
+
+SPEC = {k: v for k, v in TINY_SPEC.items() if k != "point_features"}
+
+
+def test_the_pusher_starts_at_the_face_and_the_goal_lies_straight_ahead():
+    scene = contact_push_scene()
+    box, pusher = scene.bodies["box"], scene.bodies["pusher"]
+    gap = float(box.shape.sdf(torch.tensor([pusher.pose[:2]], dtype=torch.float64))[0])
+    assert gap - PUSHER_RADIUS == pytest.approx(GAP, abs=1e-9)
+    assert scene.goal.pose[0] - box.pose[0] == pytest.approx(TRAVEL)
+    assert scene.goal.pose[1] == box.pose[1] and scene.goal.pose[2] == box.pose[2]
+
+
+def test_the_still_start_moves_nothing_and_touches_the_pusher_surface():
+    scene = contact_push_scene()
+    guess = still_guess(scene, 10)
+    assert guess["q_obj"].shape == (11, 3) and guess["q_pusher"].shape == (11, 2)
+    assert np.ptp(guess["q_obj"], axis=0).max() == 0
+    assert np.ptp(guess["q_pusher"], axis=0).max() == 0
+    gaps = np.linalg.norm(guess["p"] - guess["q_pusher"][0], axis=1)
+    assert guess["p"].shape == (10, 2)
+    np.testing.assert_allclose(gaps, PUSHER_RADIUS, atol=1e-12)
+    assert (guess["p"][:, 0] > guess["q_pusher"][0, 0]).all()  # on the side facing the box
+
+
+def test_the_program_holds_the_learned_row_and_the_goal_only():
+    s = CONTACT_PUSH_SETTINGS
+    assert not (s.warm_start or s.with_collision or s.with_contact or s.cone_in_learned
+                or s.turn_in_learned)
+    assert s.lever_weight == 0 and s.dynamics_weight > 0
+
+
+@pytest.mark.slow
+def test_a_model_on_sign_occupancy_leaves_the_pusher_where_it_starts(tmp_path):
+    torch.manual_seed(0)
+    model = RigidMotion(DynamicsSpec(kind="rigid", encoder="joint", representation="occupancy",
+                                     **SPEC))
+    save_rigid(model, tmp_path / "psi")
+    result = plan_from_contact(tmp_path / "psi")
+    assert result["planned_pusher_travel_m"] < 1e-6
+    assert result["box_travel_m"] < 1e-3 and result["coverage"] < 0.05
+    assert not result["success"]
