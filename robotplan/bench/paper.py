@@ -5,13 +5,23 @@ from __future__ import annotations
 
 from robotplan.bench.hang import PAPER_TAB3
 
-__all__ = ["FIG3", "FIG5", "FIG8", "NOT_RUN", "PAPER_TAB3", "REPRESENTATIONS", "TAB2", "TAB5",
-           "TAB6"]
+__all__ = ["FIG3", "FIG5", "FIG8", "FLOW_REPRESENTATIONS", "NOT_RUN", "PAPER_TAB3",
+           "REPRESENTATIONS", "TAB2", "TAB4", "TAB5", "TAB6"]
 
 # Tab. 2: one-step RMSE of φ1_t over X_h, mm, (mean, std), with / without pusher contact
 TAB2 = {"F_flow": {"contact": (3.4, 1.6), "free": (1.4, 1.8)},
         "F": {"contact": (5.8, 1.7), "free": (5.2, 1.6)},
         "no motion": {"contact": (10.8, 3.4), "free": (0.0, 0.0)}}
+
+# Tab. 4: F_flow on each representation, one-step RMSE over X_h of what it reads (φ in mm,
+# ψ × 1000), (mean, std) with / without contact, and its no-motion baseline
+TAB4 = {"sdf": {"F_flow": ((3.4, 1.6), (1.4, 1.8)), "no motion": ((10.8, 3.4), (0.0, 0.0))},
+        "smooth100": {"F_flow": ((59.0, 16.6), (10.0, 11.7)),
+                      "no motion": ((83.6, 25.1), (0.0, 0.0))},
+        "smooth1000": {"F_flow": ((100.2, 19.5), (13.1, 16.7)),
+                       "no motion": ((127.1, 27.0), (0.0, 0.0))},
+        "occupancy": {"F_flow": ((109.7, 18.3), (13.5, 19.5)),
+                      "no motion": ((134.9, 25.7), (0.0, 0.0))}}
 
 # Tab. 5 / Tab. 6: F_q's one-step |Δq| error, (x mm, y mm, α °), by input representation
 TAB5 = {"SDF": (2.1, 2.1, 0.63), "image-conditioned SDF": (2.2, 2.1, 0.63),
@@ -33,6 +43,9 @@ REPRESENTATIONS = {
     "pointnet2": ("PointNet++", {"representation": "pointcloud", "cloud_encoder": "pointnet2"}),
 }
 
+# the representations of Tab. 4's F_flow rows (keys of REPRESENTATIONS)
+FLOW_REPRESENTATIONS = ("sdf", "occupancy", "smooth100", "smooth1000")
+
 # Fig. 3 / Fig. 8: median share of the object inside the goal, open loop, by model
 FIG3 = {"box": {"F_flow": 0.997, "F": 0.966}, "lshape": {"F_flow": 0.984, "F": 0.915}}
 FIG8 = {"F_flow": 0.997, "F": 0.920}  # 7 unseen shapes × 3 scenes
@@ -46,7 +59,6 @@ FIG5 = {"sdf": "pushed to the goal", "occupancy": "the pusher does not move",
 
 # what the paper evaluates that robotplan has no code for yet: (item, what it needs)
 NOT_RUN = [
-    ("Tab. 4", "F_flow predicting occupancy measures ψ, ψ_s instead of SDFs"),
     ("Fig. 5, point-cloud row", "a reverse pass from the point-cloud encoder to the grids "
      "(a program's dynamics row needs it; H_q takes F_q on grids only)"),
     ("Tab. 3 baseline rows", "H_hang on occupancy measures and point clouds"),

@@ -26,7 +26,7 @@ from robotplan.base.resources import (
     skeletons_dir,
 )
 from robotplan.bench.hang import METHODS
-from robotplan.bench.paper import REPRESENTATIONS
+from robotplan.bench.paper import FLOW_REPRESENTATIONS, REPRESENTATIONS
 from robotplan.bench.report import write_report
 from robotplan.bench.reproduce_report import report_blocks
 
@@ -61,6 +61,7 @@ class ReproduceSizes:
     representation_scenes: int  # push training scenes (seed 4) of the representation rows
     representation_steps: int  # F_q's training steps per representation (batch 32)
     contact_push: tuple[str, ...]  # the representations' F_q planned from contact (Fig. 5)
+    flow_steps: int  # F_flow's training steps per representation (Tab. 4; batch 32)
     # re-plans of the ablation's closed loops (None: the scene class's); without H_coll
     # plans fail in pybullet, and unbounded re-plans took 9 of the quick run's 42 min
     # (measured: docs/experiments.md#ablation)
@@ -71,13 +72,15 @@ QUICK = ReproduceSizes("quick", test_scenes=40, ood_scenes=40, per_scene=10, pos
                        push_scenes=2, ood_push_scenes=4, ablation_scenes=2, hang_scenes=2,
                        hang_methods=("opt_sampling", "opt_only"), time_budget=30.0,
                        representation_scenes=600, representation_steps=400,
-                       contact_push=("sdf", "occupancy"), ablation_replans=2)
+                       contact_push=("sdf", "occupancy"), flow_steps=200,
+                       ablation_replans=2)
 FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pose_fit=100,
                       push_scenes=50, ood_push_scenes=24, ablation_scenes=20,
                       hang_scenes=150,
                       hang_methods=METHODS, time_budget=100.0,
                       representation_scenes=15_000, representation_steps=20_000,
-                      contact_push=("sdf", "occupancy", "smooth100", "smooth1000"))
+                      contact_push=("sdf", "occupancy", "smooth100", "smooth1000"),
+                      flow_steps=20_000)
 
 
 # how the report is written, not what its steps compute: left out of the steps' key
@@ -173,6 +176,36 @@ def _representations(steps: _Steps, out: Path, sizes: ReproduceSizes, data: Call
     return results, models
 
 
+def _flow_representations(steps: _Steps, sizes: ReproduceSizes, data: Path, test: Path
+                          ) -> dict[str, dict]:
+    """Tab. 4: F_flow trained alike on the SDFs and on each occupancy measure (the same data,
+    seed and steps), scored on the held-out set in what it reads (φ in mm, ψ × 1000): key →
+    the evaluation step's result."""
+    from robotplan.training.evaluation import evaluate_push
+    from robotplan.training.train import TrainConfig, train
+
+    n, per = sizes.flow_steps, sizes.per_scene
+    results: dict[str, dict] = {}
+    for key in FLOW_REPRESENTATIONS:
+        fields = REPRESENTATIONS[key][1]
+        flags = "".join(f" {SPEC_FLAGS[k]} {v:g}" if isinstance(v, float)
+                        else f" {SPEC_FLAGS[k]} {v}" for k, v in fields.items())
+        cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n, "spec": dict(fields)}
+        trained = steps.run(
+            f"train_flow_{key}", {**cfg, "data": data.parent.name},
+            lambda f, c=cfg: train(TrainConfig(data=str(data), out=str(f / "model"),
+                                               kind="flow", **c), progress=False),
+            f"robotplan train push --model flow --data DATA --steps {n} "
+            f"--warmup {cfg['warmup']}{flags}")
+        model = steps.out / trained["folder"] / "model"
+        results[key] = steps.run(
+            f"eval_flow_{key}", {"per_scene": per, "data": test.parent.name,
+                                 "model": trained["folder"]},
+            lambda f, m=model: evaluate_push(m, test, per_scene=per, progress=False),
+            f"robotplan eval push --model MODEL --data DATA --per-scene {per}")
+    return results
+
+
 def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
               ray: str | None = None, progress: bool = True) -> Path:
     """Run (or reuse) every item at ``sizes`` and write ``out/report.md`` and
@@ -215,6 +248,8 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
             f"robotplan eval push --model learned/push_rigid --data DATA --per-scene {per}")
     reps, rep_models = _representations(steps, out, sizes, data, {"test": test, "ood": ood})
     results.update(reps)
+    results["tab4"] = _flow_representations(steps, sizes, data(
+        "data_train_representations", sizes.representation_scenes, 4, "train"), test)
     results["fig5"] = {key: steps.run(
         f"contact_push_{key}", {"model": str(rep_models[key].relative_to(out))},
         lambda f, m=rep_models[key]: plan_from_contact(m),

@@ -91,6 +91,10 @@ class LearnedDynamics:
 
     def __init__(self, model: PushDynamics, obj: Body, pusher: Body,
                  quadrature: Quadrature, matmul_dtype: torch.dtype | None = None) -> None:
+        if model.spec.representation != "sdf":
+            raise ValueError("H_F needs an F_flow or F on SDFs: a model on occupancy "
+                             f"measures (representation {model.spec.representation!r}) "
+                             "predicts ψ, not φ")
         self.model, self.obj, self.pusher = model.eval(), obj, pusher
         keep_freed_memory()  # its short-lived ~MB tensors would page-fault on every call
         for p in model.parameters():

@@ -52,6 +52,12 @@ class PushDynamics(EncoderPasses, nn.Module):
         self.register_buffer("center", torch.tensor(spec.workspace_center))
         self.register_buffer("half_size", torch.tensor(spec.workspace_size) / 2)
 
+    def values_read(self, phi: Tensor) -> Tensor:
+        """SDF values as the model reads and predicts them: φ, or the occupancy measure of
+        its spec (ψ = sign φ, ψ_s = tanh(b φ)), so that a model on ψ predicts ψ1_t (the
+        paper's Tab. 4)."""
+        return self.encoder.represent(phi)[0]
+
     # --- the split pieces (used as they are by the fast planner path) ---
     def encode(self, grids: Tensor) -> Tensor:
         """Encode single SDF grids ``(M, H, W)`` → ``(M, sdf_features)``."""

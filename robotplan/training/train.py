@@ -97,14 +97,15 @@ def augmented(batch: SampleBatch, cfg: TrainConfig, ws: Workspace, step: int) ->
 
 
 def _target(model: PushDynamics, batch: SampleBatch, pts: torch.Tensor) -> torch.Tensor:
-    now = batch.phi1_now(pts)
-    return now - batch.phi1_prev(pts) if model.spec.kind == "flow" else now
+    now = model.values_read(batch.phi1_now(pts))
+    return now - model.values_read(batch.phi1_prev(pts)) if model.spec.kind == "flow" else now
 
 
 @torch.no_grad()
 def grid_rmse(model: PushDynamics, batch: SampleBatch, ws: Workspace, stride: int = 1,
               chunk: int = 16) -> tuple[np.ndarray, np.ndarray]:
-    """Per-sample RMSE (m) over X_h (eq. 20) of the model and of the "no motion" baseline.
+    """Per-sample RMSE (m; of ψ for a model on an occupancy measure) over X_h (eq. 20) of
+    the model and of the "no motion" baseline.
 
     ``stride`` > 1 evaluates every stride-th grid point in each direction (for quick checks).
     """
@@ -115,7 +116,8 @@ def grid_rmse(model: PushDynamics, batch: SampleBatch, ws: Workspace, stride: in
     for i in range(0, len(batch.radius), chunk):
         sub = batch.slice(i, i + chunk)
         inputs = sub.inputs(full, ws.shape)
-        prev, now = sub.phi1_prev(pts), sub.phi1_now(pts)
+        prev = model.values_read(sub.phi1_prev(pts))
+        now = model.values_read(sub.phi1_now(pts))
         pred = model.predict_next(inputs, pts, prev)
         model_err.append((pred - now).pow(2).mean(1).sqrt())
         base_err.append((prev - now).pow(2).mean(1).sqrt())
@@ -139,7 +141,10 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
     device = torch.device(cfg.device)
     torch.manual_seed(cfg.seed)
     spec = DynamicsSpec(kind=cfg.kind, **cfg.spec)
-    if cfg.kind == "direct" and "out_scale" not in cfg.spec:
+    if "out_scale" not in cfg.spec and spec.representation != "sdf":
+        # ψ changes by up to 2 where the boundary passes in one step
+        spec = DynamicsSpec(**{**asdict(spec), "out_scale": 1.0})
+    elif cfg.kind == "direct" and "out_scale" not in cfg.spec:
         spec = DynamicsSpec(**{**asdict(spec), "out_scale": 0.1})
     model = PushDynamics(spec).to(device)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)

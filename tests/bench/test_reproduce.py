@@ -9,10 +9,17 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from robotplan.bench.paper import TAB5
+from robotplan.bench.paper import FLOW_REPRESENTATIONS, TAB5
 from robotplan.bench.report import write_report
-from robotplan.bench.reproduce import QUICK, _representations, _Steps, inputs_digest, reproduce
-from robotplan.bench.reproduce_report import _analytic_rows, _tab56
+from robotplan.bench.reproduce import (
+    QUICK,
+    _flow_representations,
+    _representations,
+    _Steps,
+    inputs_digest,
+    reproduce,
+)
+from robotplan.bench.reproduce_report import _analytic_rows, _tab4, _tab56
 from robotplan.cli.main import main
 
 
@@ -116,21 +123,39 @@ def test_each_representation_is_trained_alike_and_set_beside_the_paper(
 
 
 @pytest.mark.slow
+def test_tab4_trains_a_flow_on_each_representation_and_scores_it_in_what_it_reads(
+        tiny_push_data, tmp_path):
+    sizes = replace(QUICK, per_scene=2, flow_steps=2)
+    steps = _Steps(tmp_path, "digest", progress=False)
+    results = _flow_representations(steps, sizes, tiny_push_data, tiny_push_data)
+    assert list(results) == list(FLOW_REPRESENTATIONS)
+    assert [r["result"]["representation"] for r in results.values()] == [
+        "sdf", "occupancy", "smooth_occupancy", "smooth_occupancy"]
+    rows = _tab4({"tab4": results}, sizes)
+    assert [row[0] for row in rows[:2]] == ["F_flow on SDF, 2 steps", "no motion, SDF"]
+    assert rows[1][-2:] == ["10.80 ± 3.40", "0.00 ± 0.00"]
+    psi = rows[rows.index(next(r for r in rows if r[0] == "no motion, occupancy ψ = sign(φ)"))]
+    # the same samples: ψ's no-motion error (× 1000) is far above φ's in mm, as the paper's
+    assert float(psi[1].split(" ± ")[0]) > float(rows[1][1].split(" ± ")[0])
+
+
+@pytest.mark.slow
 def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     tiny = replace(QUICK, name="quick", test_scenes=3, ood_scenes=3, per_scene=3, pose_fit=2,
                    push_scenes=1, ood_push_scenes=1, ablation_scenes=1, hang_scenes=1,
                    hang_methods=("opt_only",), time_budget=5.0, representation_scenes=6,
-                   representation_steps=2, contact_push=("occupancy",))
+                   representation_steps=2, contact_push=("occupancy",), flow_steps=2)
     md = reproduce(tmp_path, tiny, workers=1, progress=False)
     text = md.read_text()
-    for item in ("Tab. 2", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 5", "Fig. 6", "Fig. 8", "Fig. 11",
-                 "Tab. 3", "Not run yet", "without H_PoC", "| analytic |"):
+    for item in ("Tab. 2", "Tab. 4", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 5", "Fig. 6",
+                 "Fig. 8", "Fig. 11", "Tab. 3", "Not run yet", "without H_PoC", "| analytic |"):
         assert item in text, item
     assert "| F_flow | " in text and "| 3.40 ± 1.60 | 1.40 ± 1.80 |" in text
     run = json.loads((tmp_path / "run.json").read_text())
     assert "| F_q on occupancy ψ_s (b = 100), 2 steps |" in text
-    # data, training and evaluation of six representations: 1 + 6 + 12 steps; Figs. 5, 6: 1
-    assert len(run["steps"]) == 36 and run["sizes"]["test_scenes"] == 3
+    # data, training and evaluation of six representations: 1 + 6 + 12 steps; Figs. 5, 6: 1;
+    # Tab. 4's four F_flow: 4 + 4
+    assert len(run["steps"]) == 44 and run["sizes"]["test_scenes"] == 3
     reproduce(tmp_path, tiny, workers=1, progress=False)
     again = json.loads((tmp_path / "run.json").read_text())
     assert [s["folder"] for s in again["steps"]] == [s["folder"] for s in run["steps"]]

@@ -156,3 +156,11 @@ def test_bfloat16_head_products_only_where_opted_in_and_the_cpu_multiplies_them(
         assert LearnedDynamics(model32.double(), obj, pusher,
                                quad).matmul_dtype == torch.float64
         model32.float()
+
+
+def test_h_f_refuses_a_model_on_an_occupancy_measure():
+    """H_F compares SDF values; a model on ψ predicts ψ (the paper's Tab. 4 baseline)."""
+    model = PushDynamics(DynamicsSpec(kind="flow", representation="occupancy", **SPEC))
+    obj = Body("obj", "object", Box((0.2, 0.12)), (0, 0, 0), 0.0, 0.06)
+    with pytest.raises(ValueError, match="occupancy"):
+        LearnedDynamics(model, obj, PUSHER, Quadrature.grid(Workspace()))

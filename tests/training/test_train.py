@@ -114,3 +114,32 @@ def test_model_card_lists_the_pose_fit_by_shape_and_in_tab5_terms(tiny_push_data
     card = (out / "MODEL_CARD.md").read_text()
     assert "| box | 3 | 2.5 | 1.5 | 2.0 | 0.25 |" in card
     assert "x 2.4 ± 2.2 mm, y 2.3 ± 1.5 mm, α 1.8 ± 1.7°" in card
+
+
+@pytest.mark.parametrize("representation", ["occupancy", "smooth_occupancy"])
+def test_a_flow_on_an_occupancy_measure_predicts_it(tiny_push_data, tmp_path, representation):
+    """Tab. 4: an F_flow on ψ learns and is scored in ψ (times 1000); its no-motion baseline
+    is the RMSE of ψ1_t − ψ1_{t−1} over X_h, computed here from the samples themselves."""
+    import numpy as np
+
+    from robotplan.training.evaluation import pick_samples
+    from robotplan.training.samples import PushSamples
+
+    cfg = config(tiny_push_data, tmp_path / "m", 40)
+    cfg.spec = {**TINY_SPEC, "representation": representation}
+    last = train(cfg, progress=False)
+    model = load_model(tmp_path / "m")
+    assert model.spec.representation == representation and model.spec.out_scale == 1.0
+    assert np.isfinite(last["val_rmse_mm"]["contact"])
+    result = evaluate_push(tmp_path / "m", tiny_push_data, per_scene=3, progress=False)
+    assert result["representation"] == representation
+    samples = PushSamples(tiny_push_data)
+    idx = pick_samples(samples, 3, 0)
+    b = samples.batch(idx, dtype=torch.float64)
+    grid = model.spec.workspace().points(torch.float64).reshape(1, -1, 2)
+    psi = model.double().values_read
+    base = (psi(b.phi1_now(grid)) - psi(b.phi1_prev(grid))).pow(2).mean(1).sqrt() * 1e3
+    contact = samples.contact[idx]
+    assert result["baseline_rmse_mm"]["contact"] == pytest.approx(
+        float(base[torch.as_tensor(contact)].mean()), rel=1e-3)
+    assert 0 < result["baseline_rmse_mm"]["contact"] <= 2000
