@@ -72,7 +72,7 @@ QUICK = ReproduceSizes("quick", test_scenes=40, ood_scenes=40, per_scene=10, pos
                        push_scenes=2, ood_push_scenes=4, ablation_scenes=2, hang_scenes=2,
                        hang_methods=("opt_sampling", "opt_only"), time_budget=30.0,
                        representation_scenes=600, representation_steps=400,
-                       contact_push=("sdf", "occupancy"), flow_steps=200,
+                       contact_push=("sdf", "occupancy"), flow_steps=100,
                        ablation_replans=2)
 FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pose_fit=100,
                       push_scenes=50, ood_push_scenes=24, ablation_scenes=20,
@@ -190,7 +190,8 @@ def _flow_representations(steps: _Steps, sizes: ReproduceSizes, data: Path, test
         fields = REPRESENTATIONS[key][1]
         flags = "".join(f" {SPEC_FLAGS[k]} {v:g}" if isinstance(v, float)
                         else f" {SPEC_FLAGS[k]} {v}" for k, v in fields.items())
-        cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n, "spec": dict(fields)}
+        cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n,
+               "val_samples": min(128, n), "spec": dict(fields)}
         trained = steps.run(
             f"train_flow_{key}", {**cfg, "data": data.parent.name},
             lambda f, c=cfg: train(TrainConfig(data=str(data), out=str(f / "model"),
