@@ -62,9 +62,9 @@ class ReproduceSizes:
     representation_steps: int  # F_q's training steps per representation (batch 32)
     contact_push: tuple[str, ...]  # the representations' F_q planned from contact (Fig. 5)
     flow_steps: int  # F_flow's training steps per representation (Tab. 4; batch 32)
-    # re-plans of the ablation's closed loops (None: the scene class's); without H_coll
-    # plans fail in pybullet, and unbounded re-plans took 9 of the quick run's 42 min
-    # (measured: docs/experiments.md#ablation)
+    # re-plans of the ablation's closed loops (None: the scene class's): plans through the
+    # object fail in pybullet, and re-planning them up to the class's limit dominates a
+    # quick run's time (measured: docs/experiments.md#ablation)
     ablation_replans: int | None = None
 
 
@@ -143,6 +143,12 @@ class _Steps:
             print(text, flush=True)
 
 
+def _spec_flags(fields: dict) -> str:
+    """The ``train push`` options that set these DynamicsSpec ``fields``."""
+    return "".join(f" {SPEC_FLAGS[k]} {v:g}" if isinstance(v, float)
+                   else f" {SPEC_FLAGS[k]} {v}" for k, v in fields.items())
+
+
 def _representations(steps: _Steps, out: Path, sizes: ReproduceSizes, data: Callable,
                      sets: dict[str, Path]) -> tuple[dict[str, dict], dict[str, Path]]:
     """F_q trained alike on each of :data:`REPRESENTATIONS` (the shipped F_q's architecture,
@@ -156,8 +162,7 @@ def _representations(steps: _Steps, out: Path, sizes: ReproduceSizes, data: Call
     results: dict[str, dict] = {f"reps_{name}": {} for name in sets}
     models: dict[str, Path] = {}
     for key, (_label, fields) in REPRESENTATIONS.items():
-        flags = "".join(f" {SPEC_FLAGS[k]} {v:g}" if isinstance(v, float)
-                        else f" {SPEC_FLAGS[k]} {v}" for k, v in fields.items())
+        flags = _spec_flags(fields)
         cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n,
                "spec": {"encoder": "joint", **fields}}
         trained = steps.run(
@@ -188,8 +193,7 @@ def _flow_representations(steps: _Steps, sizes: ReproduceSizes, data: Path, test
     results: dict[str, dict] = {}
     for key in FLOW_REPRESENTATIONS:
         fields = REPRESENTATIONS[key][1]
-        flags = "".join(f" {SPEC_FLAGS[k]} {v:g}" if isinstance(v, float)
-                        else f" {SPEC_FLAGS[k]} {v}" for k, v in fields.items())
+        flags = _spec_flags(fields)
         cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n,
                "val_samples": min(128, n), "spec": dict(fields)}
         trained = steps.run(
