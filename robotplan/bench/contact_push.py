@@ -25,7 +25,8 @@ from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings
 from robotplan.program.skeleton import Phase, Skeleton, space_for
 from robotplan.scene import Scene, parse_scene
 
-__all__ = ["CONTACT_PUSH_SETTINGS", "contact_push_scene", "plan_from_contact"]
+__all__ = ["CONTACT_PUSH_SETTINGS", "contact_push_scene", "plan_from_contact",
+           "plot_contact_pushes", "still_guess"]
 
 BOX = (0.20, 0.12)  # m: the box's sides
 PUSHER_RADIUS = 0.03  # m
@@ -98,3 +99,41 @@ def plan_from_contact(model_dir: str | Path,
             "seconds": round(seconds, 2),
             "q_obj": np.round(executed.object_poses, 5).tolist(),
             "q_pusher": np.round(executed.pusher_positions, 5).tolist()}
+
+
+def plot_contact_pushes(results: dict[str, dict], labels: dict[str, str], path: Path) -> None:
+    """One panel per model: the box at its start (grey), at the goal (dashed) and where
+    pybullet left it (coloured), and the pusher's executed path; ``results``: key → the
+    result of :func:`plan_from_contact`, ``labels``: key → panel title."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Polygon
+
+    def outline(pose) -> np.ndarray:
+        x, y, yaw = pose
+        corners = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * np.array(BOX) / 2
+        c, s = np.cos(yaw), np.sin(yaw)
+        return corners @ np.array([[c, s], [-s, c]]) + np.array([x, y])
+
+    fig, axes = plt.subplots(1, len(results), figsize=(3.2 * len(results), 2.6), dpi=120,
+                             squeeze=False)
+    for ax, (key, r) in zip(axes[0], results.items(), strict=True):
+        q_obj, q_pusher = np.asarray(r["q_obj"]), np.asarray(r["q_pusher"])
+        ax.add_patch(Polygon(outline(q_obj[0]), closed=True, fc="0.85", ec="0.5"))
+        ax.add_patch(Polygon(outline((TRAVEL, 0.0, 0.0)), closed=True, fill=False,
+                             ec="tab:green", ls="--"))
+        ax.add_patch(Polygon(outline(q_obj[-1]), closed=True, fc="tab:blue", alpha=0.5,
+                             ec="tab:blue"))
+        ax.plot(q_pusher[:, 0], q_pusher[:, 1], color="tab:red", lw=1.5)
+        ax.add_patch(plt.Circle(tuple(q_pusher[-1]), PUSHER_RADIUS, color="tab:red",
+                                alpha=0.6))
+        ax.set_title(f"{labels.get(key, key)}\ncoverage {r['coverage']:.2f}", fontsize=8)
+        ax.set_xlim(-0.25, 0.5)
+        ax.set_ylim(-0.15, 0.15)
+        ax.set_aspect("equal")
+        ax.tick_params(labelsize=6)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)

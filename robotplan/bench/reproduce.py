@@ -216,7 +216,7 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
     """Run (or reuse) every item at ``sizes`` and write ``out/report.md`` and
     ``out/report.html``; returns the Markdown report's path. ``workers`` and ``ray`` as for
     ``data push`` and ``bench push``."""
-    from robotplan.bench.contact_push import plan_from_contact
+    from robotplan.bench.contact_push import plan_from_contact, plot_contact_pushes
     from robotplan.bench.hang import run_bench_hang
     from robotplan.bench.push import run_bench_push
     from robotplan.training.evaluation import evaluate_push
@@ -295,6 +295,10 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
                                  workers=workers, progress=False,
                                  methods=sizes.hang_methods, ray=ray),
         f"robotplan bench hang --scenes {sizes.hang_scenes} --seed 2 --methods {methods}")
+    if results["fig5"]:
+        plot_contact_pushes({k: v["result"] for k, v in results["fig5"].items()},
+                            {k: REPRESENTATIONS[k][0] for k in results["fig5"]},
+                            out / "fig5_contact_push.png")
     for key in ("fig3", "fig8"):  # the box plots sit beside the report
         plot = out / results[key]["folder"] / "bench" / "coverage.png"
         if plot.is_file():

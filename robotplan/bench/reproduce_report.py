@@ -248,6 +248,8 @@ def report_blocks(results: dict, sizes, log: list[dict], out: Path) -> list[Bloc
                          "box moved in pybullet, cm", "box off the goal, cm",
                          "goal coverage", "H_q residual, mm RMS", "paper"],
                _contact_push_rows(results, sizes)),
+              ("image", "fig5_contact_push.png", "Fig. 5: the box at its start (grey), the "
+               "goal (dashed), where pybullet left it (blue), the pusher's path (red)"),
               ("p", "The pusher starts touching the middle of a 20 × 12 cm box's face; the "
                     "box should end 20 cm straight ahead (a pose goal). The program holds "
                     "the F_q row of Tabs. 5–6's model (as a cost, weight 1 per mm²) and the "
