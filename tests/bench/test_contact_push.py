@@ -12,6 +12,7 @@ from robotplan.bench.contact_push import (
     TRAVEL,
     contact_push_scene,
     plan_from_contact,
+    plot_contact_pushes,
     still_guess,
 )
 from robotplan.models.dynamics import DynamicsSpec
@@ -59,3 +60,17 @@ def test_a_model_on_sign_occupancy_leaves_the_pusher_where_it_starts(tmp_path):
     assert result["planned_pusher_travel_m"] < 1e-6
     assert result["box_travel_m"] < 1e-3 and result["coverage"] < 0.05
     assert not result["success"]
+
+
+def test_the_figure_draws_a_panel_per_model(tmp_path):
+    from PIL import Image
+
+    still = still_guess(contact_push_scene(), 10)
+    moved = {**still, "q_obj": still["q_obj"] + [TRAVEL, 0.0, 0.0]}
+    results = {key: {"q_obj": r["q_obj"].tolist(), "q_pusher": r["q_pusher"].tolist(),
+                     "coverage": c} for key, r, c in (("a", still, 0.0), ("b", moved, 1.0))}
+    plot_contact_pushes(results, {"a": "A", "b": "B"}, tmp_path / "fig5.png")
+    one = tmp_path / "one.png"
+    plot_contact_pushes({"a": results["a"]}, {"a": "A"}, one)
+    wide, narrow = Image.open(tmp_path / "fig5.png"), Image.open(one)
+    assert wide.size[0] > 1.8 * narrow.size[0] and wide.size[1] == narrow.size[1]
