@@ -68,8 +68,10 @@ class ReproduceSizes:
     ablation_replans: int | None = None
 
 
+# one scene per shape: the next scenes' searches alone took 9 of a 45-minute quick run
+# (measured: docs/experiments.md#reproduce-quick)
 QUICK = ReproduceSizes("quick", test_scenes=40, ood_scenes=40, per_scene=10, pose_fit=20,
-                       push_scenes=2, ood_push_scenes=4, ablation_scenes=2, hang_scenes=2,
+                       push_scenes=1, ood_push_scenes=4, ablation_scenes=1, hang_scenes=2,
                        hang_methods=("opt_sampling", "opt_only"), time_budget=30.0,
                        representation_scenes=600, representation_steps=400,
                        contact_push=("sdf", "occupancy"), flow_steps=100,
