@@ -6,7 +6,7 @@ from __future__ import annotations
 from robotplan.bench.hang import PAPER_TAB3
 
 __all__ = ["FIG3", "FIG5", "FIG8", "FLOW_REPRESENTATIONS", "NOT_RUN", "PAPER_TAB3",
-           "REPRESENTATIONS", "TAB2", "TAB4", "TAB5", "TAB6"]
+           "REPRESENTATIONS", "SPEC_FLAGS", "TAB2", "TAB4", "TAB5", "TAB6", "spec_flags"]
 
 # Tab. 2: one-step RMSE of φ1_t over X_h, mm, (mean, std), with / without pusher contact
 TAB2 = {"F_flow": {"contact": (3.4, 1.6), "free": (1.4, 1.8)},
@@ -45,6 +45,17 @@ REPRESENTATIONS = {
 
 # the representations of Tab. 4's F_flow rows (keys of REPRESENTATIONS)
 FLOW_REPRESENTATIONS = ("sdf", "occupancy", "smooth100", "smooth1000")
+
+# the `train push` option of each DynamicsSpec field a representation sets
+SPEC_FLAGS = {"representation": "--representation", "occupancy_sharpness": "--sharpness",
+              "cloud_encoder": "--cloud-encoder"}
+
+
+def spec_flags(fields: dict) -> str:
+    """The ``train push`` options that set these DynamicsSpec ``fields``."""
+    return "".join(f" {SPEC_FLAGS[k]} {v:g}" if isinstance(v, float)
+                   else f" {SPEC_FLAGS[k]} {v}" for k, v in fields.items())
+
 
 # Fig. 3 / Fig. 8: median share of the object inside the goal, open loop, by model
 FIG3 = {"box": {"F_flow": 0.997, "F": 0.966}, "lshape": {"F_flow": 0.984, "F": 0.915}}

@@ -1,34 +1,25 @@
 """``robotplan reproduce``: the paper's tables and figures from our code, beside its numbers.
 
-Each item is a step (data, evaluation, benchmark) with its parameters; a step's result is
-kept in ``OUT/steps/<name>-<key>/result.json``, where the key hashes the step's name, its
-parameters and the content of the code, skeleton tables, robot descriptions and learned
-models, so a second run reuses every step whose inputs did not change and reruns the rest.
-The report (``OUT/report.md``, ``OUT/report.html``) is written from the step results.
+Each item is a step (data, training, evaluation, benchmark: :mod:`robotplan.bench.steps`),
+kept and reused while its inputs do not change. The report (``OUT/report.md``,
+``OUT/report.html``) is written from the step results.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import shutil
-import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from robotplan.base.files import write_atomically
-from robotplan.base.resources import (
-    DYNAMICS_FOLDERS,
-    data_root,
-    learned_dir,
-    robots_dir,
-    skeletons_dir,
-)
+from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
 from robotplan.bench.hang import METHODS
-from robotplan.bench.paper import FLOW_REPRESENTATIONS, REPRESENTATIONS
+from robotplan.bench.paper import FLOW_REPRESENTATIONS, REPRESENTATIONS, spec_flags
 from robotplan.bench.report import write_report
 from robotplan.bench.reproduce_report import report_blocks
+from robotplan.bench.steps import Steps, inputs_digest
 
 __all__ = ["ABLATIONS", "ANALYTIC", "FULL", "QUICK", "ReproduceSizes", "inputs_digest", "reproduce"]
 
@@ -38,9 +29,6 @@ ABLATIONS = {"no_collision": {"with_collision": False}, "no_contact": {"with_con
 # the paper's Fig. 6: the analytic pushing model in place of the learned one (the kinematic
 # program's quasi-static push is the plan)
 ANALYTIC = {"learned_stage": False}
-# the `train push` option of each DynamicsSpec field a representation sets
-SPEC_FLAGS = {"representation": "--representation", "occupancy_sharpness": "--sharpness",
-              "cloud_encoder": "--cloud-encoder"}
 
 
 @dataclass(frozen=True)
@@ -62,9 +50,8 @@ class ReproduceSizes:
     representation_steps: int  # F_q's training steps per representation (batch 32)
     contact_push: tuple[str, ...]  # the representations' F_q planned from contact (Fig. 5)
     flow_steps: int  # F_flow's training steps per representation (Tab. 4; batch 32)
-    # re-plans of the ablation's closed loops (None: the scene class's): plans through the
-    # object fail in pybullet, and re-planning them up to the class's limit dominates a
-    # quick run's time (measured: docs/experiments.md#ablation)
+    # re-plans of the ablation's closed loops (None: the scene class's): re-planning plans
+    # through the object dominates a quick run's time (docs/experiments.md#reproduce-quick)
     ablation_replans: int | None = None
 
 
@@ -85,73 +72,7 @@ FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pos
                       flow_steps=20_000)
 
 
-# how the report is written, not what its steps compute: left out of the steps' key
-REPORT_ONLY = frozenset({"bench/paper.py", "bench/report.py", "bench/reproduce_report.py"})
-
-
-def inputs_digest() -> str:
-    """SHA-256 of the package's code (but the report's formatting, ``REPORT_ONLY``) and of
-    the skeleton tables, robot descriptions and learned models it reads: what every step's
-    result depends on beside its parameters."""
-    h = hashlib.sha256()
-    package = Path(__file__).resolve().parents[1]
-    roots = [(package, ("*.py", "*.c")), (skeletons_dir(), ("*",)), (robots_dir(), ("*",)),
-             (data_root() / "learned", ("*",))]
-    for root, patterns in roots:
-        files = sorted({p for pat in patterns for p in root.rglob(pat) if p.is_file()
-                        and "__pycache__" not in p.parts
-                        and not (root == package
-                                 and p.relative_to(root).as_posix() in REPORT_ONLY)})
-        for p in files:
-            h.update(str(p.relative_to(root)).encode())
-            h.update(p.read_bytes())
-    return h.hexdigest()
-
-
-class _Steps:
-    """Runs steps, or reuses their kept results (see the module docstring)."""
-
-    def __init__(self, out: Path, digest: str, progress: bool) -> None:
-        self.out, self.digest, self.progress = out, digest, progress
-        self.log: list[dict] = []
-
-    def run(self, name: str, params: dict, fn: Callable[[Path], dict], command: str) -> dict:
-        key = hashlib.sha256(json.dumps({"name": name, "params": params,
-                                         "inputs": self.digest}, sort_keys=True,
-                                        default=str).encode()).hexdigest()[:12]
-        folder = self.out / "steps" / f"{name}-{key}"
-        done = folder / "result.json"
-        if done.is_file():
-            result = json.loads(done.read_text())
-            self._say(f"{name}: reused ({folder.relative_to(self.out)})")
-        else:
-            if folder.exists():  # an interrupted run of this step: start it over
-                shutil.rmtree(folder)
-            folder.mkdir(parents=True)
-            self._say(f"{name}: running `{command}` …")
-            t0 = time.time()
-            result = {"result": fn(folder), "seconds": round(time.time() - t0, 1),
-                      "command": command, "params": params}
-            write_atomically(done, lambda tmp: tmp.write_text(json.dumps(result, indent=1,
-                                                                          default=str)))
-            self._say(f"{name}: {result['seconds']} s")
-        result["folder"] = str(folder.relative_to(self.out))
-        self.log.append({"name": name, "folder": result["folder"],
-                         "seconds": result["seconds"], "command": result["command"]})
-        return result
-
-    def _say(self, text: str) -> None:
-        if self.progress:
-            print(text, flush=True)
-
-
-def _spec_flags(fields: dict) -> str:
-    """The ``train push`` options that set these DynamicsSpec ``fields``."""
-    return "".join(f" {SPEC_FLAGS[k]} {v:g}" if isinstance(v, float)
-                   else f" {SPEC_FLAGS[k]} {v}" for k, v in fields.items())
-
-
-def _representations(steps: _Steps, out: Path, sizes: ReproduceSizes, data: Callable,
+def _representations(steps: Steps, out: Path, sizes: ReproduceSizes, data: Callable,
                      sets: dict[str, Path]) -> tuple[dict[str, dict], dict[str, Path]]:
     """F_q trained alike on each of :data:`REPRESENTATIONS` (the shipped F_q's architecture,
     the same data, seed and steps) and evaluated on each set: ``reps_<set>`` → key → the
@@ -164,7 +85,7 @@ def _representations(steps: _Steps, out: Path, sizes: ReproduceSizes, data: Call
     results: dict[str, dict] = {f"reps_{name}": {} for name in sets}
     models: dict[str, Path] = {}
     for key, (_label, fields) in REPRESENTATIONS.items():
-        flags = _spec_flags(fields)
+        flags = spec_flags(fields)
         cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n,
                "spec": {"encoder": "joint", **fields}}
         trained = steps.run(
@@ -183,7 +104,7 @@ def _representations(steps: _Steps, out: Path, sizes: ReproduceSizes, data: Call
     return results, models
 
 
-def _flow_representations(steps: _Steps, sizes: ReproduceSizes, data: Path, test: Path
+def _flow_representations(steps: Steps, sizes: ReproduceSizes, data: Path, test: Path
                           ) -> dict[str, dict]:
     """Tab. 4: F_flow trained alike on the SDFs and on each occupancy measure (the same data,
     seed and steps), scored on the held-out set in what it reads (φ in mm, ψ × 1000): key →
@@ -195,7 +116,7 @@ def _flow_representations(steps: _Steps, sizes: ReproduceSizes, data: Path, test
     results: dict[str, dict] = {}
     for key in FLOW_REPRESENTATIONS:
         fields = REPRESENTATIONS[key][1]
-        flags = _spec_flags(fields)
+        flags = spec_flags(fields)
         cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n,
                "val_samples": min(128, n), "spec": dict(fields)}
         trained = steps.run(
@@ -227,7 +148,7 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
     from robotplan.training.rigid import evaluate_rigid
 
     out.mkdir(parents=True, exist_ok=True)
-    steps = _Steps(out, inputs_digest(), progress)
+    steps = Steps(out, inputs_digest(), progress)
     models = {kind: learned_dir(folder) for kind, folder in DYNAMICS_FOLDERS.items()}
 
     def data(name: str, scenes: int, seed: int, shapes: str) -> Path:

@@ -15,35 +15,11 @@ from robotplan.bench.reproduce import (
     QUICK,
     _flow_representations,
     _representations,
-    _Steps,
-    inputs_digest,
     reproduce,
 )
 from robotplan.bench.reproduce_report import _analytic_rows, _tab4, _tab56
+from robotplan.bench.steps import Steps
 from robotplan.cli.main import main
-
-
-def test_a_step_is_reused_until_its_parameters_or_inputs_change(tmp_path):
-    calls = []
-
-    def step(folder):
-        calls.append(folder)
-        (folder / "made.txt").write_text("x")
-        return {"value": len(calls)}
-
-    steps = _Steps(tmp_path, "digest-a", progress=False)
-    first = steps.run("s", {"n": 1}, step, "cmd")
-    again = steps.run("s", {"n": 1}, step, "cmd")
-    assert first["result"] == again["result"] == {"value": 1} and len(calls) == 1
-    assert steps.run("s", {"n": 2}, step, "cmd")["result"] == {"value": 2}
-    other_code = _Steps(tmp_path, "digest-b", progress=False)
-    assert other_code.run("s", {"n": 1}, step, "cmd")["result"] == {"value": 3}
-    assert len({c.name for c in calls}) == 3  # each in a folder of its own
-    assert [s["name"] for s in steps.log] == ["s", "s", "s"]
-
-
-def test_the_inputs_digest_is_stable():
-    assert inputs_digest() == inputs_digest() and len(inputs_digest()) == 64
 
 
 def test_report_tables_and_an_embedded_figure(tmp_path):
@@ -96,7 +72,7 @@ def test_each_representation_is_trained_alike_and_set_beside_the_paper(
     paper's own rows for ψ_s (b = 100), PointNet and PointNet++ are no longer marked "paper
     only" once ours sit beside them."""
     sizes = replace(QUICK, per_scene=2, representation_scenes=12, representation_steps=2)
-    steps = _Steps(tmp_path, "digest", progress=False)
+    steps = Steps(tmp_path, "digest", progress=False)
     sets = {"test": tiny_push_data, "ood": tiny_ood_push_data}
     reps, models = _representations(steps, tmp_path, sizes, lambda *args: tiny_push_data,
                                      sets)
@@ -126,7 +102,7 @@ def test_each_representation_is_trained_alike_and_set_beside_the_paper(
 def test_tab4_trains_a_flow_on_each_representation_and_scores_it_in_what_it_reads(
         tiny_push_data, tmp_path):
     sizes = replace(QUICK, per_scene=2, flow_steps=2)
-    steps = _Steps(tmp_path, "digest", progress=False)
+    steps = Steps(tmp_path, "digest", progress=False)
     results = _flow_representations(steps, sizes, tiny_push_data, tiny_push_data)
     assert list(results) == list(FLOW_REPRESENTATIONS)
     assert [r["result"]["representation"] for r in results.values()] == [
