@@ -72,33 +72,44 @@ FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pos
                       flow_steps=20_000)
 
 
+def _trained(steps: Steps, kind: str, key: str, cfg: dict, data: Path) -> str:
+    """Train (or reuse) one ``kind`` model (``"rigid"``: F_q, ``"flow"``: F_flow) of
+    representation ``key`` on ``data`` with the TrainConfig fields ``cfg``: the step's
+    folder (under the output folder)."""
+    from robotplan.training.rigid import train_rigid
+    from robotplan.training.train import TrainConfig, train
+
+    fit = train_rigid if kind == "rigid" else train
+    spec = dict(cfg["spec"])
+    encoder = f" --encoder {spec.pop('encoder')}" if "encoder" in spec else ""
+    return steps.run(
+        f"train_{kind}_{key}", {**cfg, "data": data.parent.name},
+        lambda f: fit(TrainConfig(data=str(data), out=str(f / "model"), kind=kind, **cfg),
+                      progress=False),
+        f"robotplan train push --model {kind}{encoder} --data DATA --steps {cfg['steps']} "
+        f"--warmup {cfg['warmup']}{spec_flags(spec)}")["folder"]
+
+
 def _representations(steps: Steps, out: Path, sizes: ReproduceSizes, data: Callable,
                      sets: dict[str, Path]) -> tuple[dict[str, dict], dict[str, Path]]:
     """F_q trained alike on each of :data:`REPRESENTATIONS` (the shipped F_q's architecture,
     the same data, seed and steps) and evaluated on each set: ``reps_<set>`` → key → the
     step result, and each key's model folder."""
-    from robotplan.training.rigid import evaluate_rigid, train_rigid
-    from robotplan.training.train import TrainConfig
+    from robotplan.training.rigid import evaluate_rigid
 
     train = data("data_train_representations", sizes.representation_scenes, 4, "train")
     n, per = sizes.representation_steps, sizes.per_scene
     results: dict[str, dict] = {f"reps_{name}": {} for name in sets}
     models: dict[str, Path] = {}
     for key, (_label, fields) in REPRESENTATIONS.items():
-        flags = spec_flags(fields)
         cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n,
                "spec": {"encoder": "joint", **fields}}
-        trained = steps.run(
-            f"train_rigid_{key}", {**cfg, "data": train.parent.name},
-            lambda f, c=cfg: train_rigid(TrainConfig(data=str(train), out=str(f / "model"),
-                                                     kind="rigid", **c), progress=False),
-            f"robotplan train push --model rigid --encoder joint --data DATA --steps {n} "
-            f"--warmup {cfg['warmup']}{flags}")
-        model = models[key] = out / trained["folder"] / "model"
+        trained = _trained(steps, "rigid", key, cfg, train)
+        model = models[key] = out / trained / "model"
         for name, folder in sets.items():
             results[f"reps_{name}"][key] = steps.run(
                 f"eval_rigid_{key}_{name}", {"per_scene": per, "data": folder.parent.name,
-                                             "model": trained["folder"]},
+                                             "model": trained},
                 lambda f, m=model, d=folder: evaluate_rigid(m, d, per_scene=per),
                 f"robotplan eval push --model MODEL --data DATA --per-scene {per}")
     return results, models
@@ -110,25 +121,17 @@ def _flow_representations(steps: Steps, sizes: ReproduceSizes, data: Path, test:
     seed and steps), scored on the held-out set in what it reads (φ in mm, ψ × 1000): key →
     the evaluation step's result."""
     from robotplan.training.evaluation import evaluate_push
-    from robotplan.training.train import TrainConfig, train
 
     n, per = sizes.flow_steps, sizes.per_scene
     results: dict[str, dict] = {}
     for key in FLOW_REPRESENTATIONS:
-        fields = REPRESENTATIONS[key][1]
-        flags = spec_flags(fields)
         cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n,
-               "val_samples": min(128, n), "spec": dict(fields)}
-        trained = steps.run(
-            f"train_flow_{key}", {**cfg, "data": data.parent.name},
-            lambda f, c=cfg: train(TrainConfig(data=str(data), out=str(f / "model"),
-                                               kind="flow", **c), progress=False),
-            f"robotplan train push --model flow --data DATA --steps {n} "
-            f"--warmup {cfg['warmup']}{flags}")
-        model = steps.out / trained["folder"] / "model"
+               "val_samples": min(128, n), "spec": dict(REPRESENTATIONS[key][1])}
+        trained = _trained(steps, "flow", key, cfg, data)
+        model = steps.out / trained / "model"
         results[key] = steps.run(
             f"eval_flow_{key}", {"per_scene": per, "data": test.parent.name,
-                                 "model": trained["folder"]},
+                                 "model": trained},
             lambda f, m=model: evaluate_push(m, test, per_scene=per, progress=False),
             f"robotplan eval push --model MODEL --data DATA --per-scene {per}")
     return results
