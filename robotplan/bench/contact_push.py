@@ -17,13 +17,16 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import torch
 
 from robotplan.api import Plan, execute
+from robotplan.geometry.transforms import planar_to_world
 from robotplan.models.loading import load_dynamics
 from robotplan.program.push_program import PushProgram
 from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings
 from robotplan.program.skeleton import Phase, Skeleton, space_for
 from robotplan.scene import Scene, parse_scene
+from robotplan.sdf import Box
 
 __all__ = ["CONTACT_PUSH_SETTINGS", "contact_push_scene", "plan_from_contact",
            "plot_contact_pushes", "still_guess"]
@@ -111,11 +114,10 @@ def plot_contact_pushes(results: dict[str, dict], labels: dict[str, str], path: 
     import matplotlib.pyplot as plt
     from matplotlib.patches import Polygon
 
+    corners = torch.as_tensor(Box(BOX).outline(), dtype=torch.float64)
+
     def outline(pose) -> np.ndarray:
-        x, y, yaw = pose
-        corners = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * np.array(BOX) / 2
-        c, s = np.cos(yaw), np.sin(yaw)
-        return corners @ np.array([[c, s], [-s, c]]) + np.array([x, y])
+        return planar_to_world(corners, torch.as_tensor(pose, dtype=torch.float64)).numpy()
 
     fig, axes = plt.subplots(1, len(results), figsize=(3.2 * len(results), 2.6), dpi=120,
                              squeeze=False)

@@ -65,8 +65,7 @@ FIG8 = {"F_flow": 0.997, "F": 0.920}  # 7 unseen shapes × 3 scenes
 # gives outcomes, no numbers; its occupancy row does not say which ψ)
 FIG5 = {"sdf": "pushed to the goal", "occupancy": "the pusher does not move",
         "smooth100": "the pusher does not move (occupancy)",
-        "smooth1000": "the pusher does not move (occupancy)",
-        "pointcloud": "some motion, not to the goal"}
+        "smooth1000": "the pusher does not move (occupancy)"}
 
 # what the paper evaluates that robotplan has no code for yet: (item, what it needs)
 NOT_RUN = [

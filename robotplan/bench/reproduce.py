@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import shutil
-from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -90,14 +89,13 @@ def _trained(steps: Steps, kind: str, key: str, cfg: dict, data: Path) -> str:
         f"--warmup {cfg['warmup']}{spec_flags(spec)}")["folder"]
 
 
-def _representations(steps: Steps, out: Path, sizes: ReproduceSizes, data: Callable,
+def _representations(steps: Steps, out: Path, sizes: ReproduceSizes, train: Path,
                      sets: dict[str, Path]) -> tuple[dict[str, dict], dict[str, Path]]:
     """F_q trained alike on each of :data:`REPRESENTATIONS` (the shipped F_q's architecture,
-    the same data, seed and steps) and evaluated on each set: ``reps_<set>`` → key → the
-    step result, and each key's model folder."""
+    the same ``train`` data, seed and steps) and evaluated on each set: ``reps_<set>`` →
+    key → the step result, and each key's model folder."""
     from robotplan.training.rigid import evaluate_rigid
 
-    train = data("data_train_representations", sizes.representation_scenes, 4, "train")
     n, per = sizes.representation_steps, sizes.per_scene
     results: dict[str, dict] = {f"reps_{name}": {} for name in sets}
     models: dict[str, Path] = {}
@@ -177,10 +175,10 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
             f"eval_rigid_{set_name}", {"per_scene": per, "data": folder.parent.name},
             lambda f, d=folder: evaluate_rigid(models["rigid"], d, per_scene=per),
             f"robotplan eval push --model learned/push_rigid --data DATA --per-scene {per}")
-    reps, rep_models = _representations(steps, out, sizes, data, {"test": test, "ood": ood})
+    train = data("data_train_representations", sizes.representation_scenes, 4, "train")
+    reps, rep_models = _representations(steps, out, sizes, train, {"test": test, "ood": ood})
     results.update(reps)
-    results["tab4"] = _flow_representations(steps, sizes, data(
-        "data_train_representations", sizes.representation_scenes, 4, "train"), test)
+    results["tab4"] = _flow_representations(steps, sizes, train, test)
     results["fig5"] = {key: steps.run(
         f"contact_push_{key}", {"model": str(rep_models[key].relative_to(out))},
         lambda f, m=rep_models[key]: plan_from_contact(m),
