@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import torch
 from torch import Tensor
 
@@ -10,7 +12,8 @@ from robotplan.functionals.windows import body_aabb, margin, window_bound_gradie
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle
 
-__all__ = ["Collision", "FixedCollision", "SweptClearance", "face_contact_overlap"]
+__all__ = ["Collision", "FixedCollision", "SweptClearance", "crossing_depth",
+           "face_contact_overlap"]
 
 
 class Collision(Functional):
@@ -141,6 +144,17 @@ class SweptClearance(Functional):
         J_prev[..., :2] = (1.0 - s) * d_point
         J_now[..., :2] = s * d_point
         return phi - self.radius, [d_pose, J_prev, J_now]
+
+
+def crossing_depth(body: Body, disc: Body, X_WB: Tensor, x_prev: Tensor, x: Tensor,
+                   spacing: float, samples: int = 7) -> float:
+    """How deep (m) a disc's straight moves ``x_prev → x`` ``(T, 2)`` cross ``body`` at
+    ``X_WB`` ``(T, 3)`` (:class:`SweptClearance` at points ``spacing`` apart, at least
+    ``samples`` per move); 0 where every move stays clear."""
+    longest = float(torch.linalg.vector_norm(x - x_prev, dim=-1).max()) if len(x) else 0.0
+    count = max(samples, math.ceil(longest / spacing))
+    gaps = SweptClearance(body, disc, count)(X_WB, x_prev, x)
+    return max(0.0, -float(gaps.min())) if gaps.numel() else 0.0
 
 
 def face_contact_overlap(body: Body, a: float = 500.0, depth: float = 0.0) -> float:

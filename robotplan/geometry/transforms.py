@@ -20,6 +20,7 @@ import torch
 from torch import Tensor
 
 __all__ = [
+    "carry_with_body",
     "perturbed_poses",
     "planar_to_body",
     "planar_to_world",
@@ -61,6 +62,12 @@ def planar_to_world(points_B: Tensor, X_WB: Tensor) -> Tensor:
     t, c, s = _planar_parts(X_WB)
     x, y = points_B[..., 0], points_B[..., 1]
     return torch.stack((c * x - s * y, s * x + c * y), dim=-1) + t
+
+
+def carry_with_body(points_W: Tensor, X_from: Tensor, X_to: Tensor) -> Tensor:
+    """Table-frame points ``(..., N, 2)`` moved rigidly with a body from ``X_from`` to
+    ``X_to`` ``(..., 3)``: they keep their place in the body's frame."""
+    return planar_to_world(planar_to_body(points_W, X_from), X_to)
 
 
 def quaternion_to_matrix(quat: Tensor) -> Tensor:

@@ -3,11 +3,18 @@ push and the costs (paper eq. 2; :class:`PushRows`)."""
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 import torch
 
 from robotplan.functionals import Collision, ContactPoint, GoalRegion
-from robotplan.functionals.collision import FixedCollision, SweptClearance, face_contact_overlap
+from robotplan.functionals.collision import (
+    FixedCollision,
+    SweptClearance,
+    crossing_depth,
+    face_contact_overlap,
+)
 from robotplan.functionals.goal import PoseError
 from robotplan.functionals.sticking import (
     CornerClearance,
@@ -19,6 +26,7 @@ from robotplan.functionals.sticking import (
     convex_corners,
     turning_radius,
 )
+from robotplan.geometry.transforms import carry_with_body
 from robotplan.program.bridge import bridge, stepwise
 from robotplan.program.dynamics_rows import DynamicsRows
 from robotplan.program.row_table import RowSpec
@@ -132,20 +140,24 @@ class PushRows(DynamicsRows):
                            -scale * s.swept_tolerance, np.inf, spec.row)
 
     def swept_shortfall(self, q_obj: np.ndarray, q_pusher: np.ndarray) -> float:
-        """How far (in the swept row's scaled units) the plan's free moves cross the object
-        deeper than ``swept_check_depth``, checked at points ``swept_check_spacing`` apart:
-        the row's few samples cannot see the object inside a long move (0 without the row)."""
+        """How far (in the swept row's scaled units) the plan's moves cross the object, at
+        points ``swept_check_spacing`` apart: free moves beyond ``swept_check_depth`` (the
+        row's samples miss it in long moves), push steps' moves seen from the object beyond
+        ``push_check_depth`` (rows hold at their end states only). 0 without the row."""
         check = getattr(self, "_swept_check", None)
         s = self.settings
         if check is None or s.swept_check_spacing is None:
             return 0.0
         free, scale = check
-        longest = float(np.linalg.norm(q_pusher[free] - q_pusher[free - 1], axis=1).max())
-        samples = max(s.swept_samples, int(np.ceil(longest / s.swept_check_spacing)))
-        H = SweptClearance(self.obj, self.pusher, samples)
-        gaps = H(torch.from_numpy(q_obj[free]), torch.from_numpy(q_pusher[free - 1]),
-                 torch.from_numpy(q_pusher[free]))
-        return scale * max(0.0, -float(gaps.min()) - s.swept_check_depth)
+        q1, q2 = torch.from_numpy(q_obj), torch.from_numpy(q_pusher[:, :2])
+        depth = partial(crossing_depth, self.obj, self.pusher, spacing=s.swept_check_spacing,
+                        samples=s.swept_samples)
+        beyond = depth(q1[free], q2[free - 1], q2[free]) - s.swept_check_depth
+        push = self.push_steps
+        if len(push):
+            start = carry_with_body(q2[push - 1, None], q1[push - 1], q1[push])[:, 0]
+            beyond = max(beyond, depth(q1[push], start, q2[push]) - s.push_check_depth)
+        return scale * max(0.0, beyond)
 
     def _add_obstacle_collision(self, spec: RowSpec) -> None:
         """H_coll of the object and of the actor with every obstacle, in every step."""

@@ -55,6 +55,12 @@ class ProgramSettings:
     # docs/experiments.md#swept-clearance)
     swept_check_spacing: float | None = 0.01
     swept_check_depth: float = 0.01
+    # the same check on push steps, the pusher's move seen from the object (its start carried
+    # by the object's step): a push step's rows hold at its end states only, and a re-plan
+    # hopped the pusher 5 cm deep through a T between two faces in one step, flinging it 22
+    # cm off; the plans that executed well cross at most 1.1 cm (a slide round a corner)
+    # (measured: docs/experiments.md#swept-clearance)
+    push_check_depth: float = 0.02
     goal_tol: float = 0.003  # share of the object's area allowed outside the goal (or off its pose)
     # plan into the region shrunk by this much (m), at most a third of the room the object
     # has when aligned (region inradius − half its longer side), so tight fits stay feasible

@@ -3,6 +3,7 @@ import torch
 from scipy.spatial.transform import Rotation
 
 from robotplan.geometry.transforms import (
+    carry_with_body,
     planar_to_body,
     planar_to_world,
     quaternion_to_matrix,
@@ -18,6 +19,21 @@ def test_planar_round_trip_and_broadcast(rng):
     assert body.shape == (7, 50, 2)
     back = planar_to_world(body, poses)
     assert torch.allclose(back, pts.expand(7, 50, 2), atol=1e-12)
+
+
+def test_carried_points_keep_their_place_on_the_body(rng):
+    """Points carried from X_from to X_to have the same body coordinates at both; a
+    quarter turn about the body's origin takes (1, 0) off it to (0, 1)."""
+    pts = torch.from_numpy(rng.uniform(-1, 1, (4, 6, 2)))
+    X_from = torch.from_numpy(rng.uniform(-1, 1, (4, 3)) * [1, 1, 3])
+    X_to = torch.from_numpy(rng.uniform(-1, 1, (4, 3)) * [1, 1, 3])
+    moved = carry_with_body(pts, X_from, X_to)
+    gap = planar_to_body(moved, X_to) - planar_to_body(pts, X_from)
+    assert float(gap.abs().max()) < 1e-12
+    quarter = carry_with_body(torch.tensor([[1.0, 0.0]], dtype=torch.float64),
+                              torch.zeros(3, dtype=torch.float64),
+                              torch.tensor([0.0, 0.0, np.pi / 2], dtype=torch.float64))
+    assert float((quarter - torch.tensor([[0.0, 1.0]], dtype=torch.float64)).abs().max()) < 1e-12
 
 
 def test_planar_matches_rotation_matrix(rng):

@@ -9,6 +9,7 @@ import torch
 from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoDiff
 
 from robotplan import load_scene
+from robotplan.functionals.collision import crossing_depth
 from robotplan.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.models.rigid import RigidMotion
 from robotplan.program.push_program import PushProgram
@@ -324,3 +325,36 @@ def test_a_free_move_through_the_object_is_seen_by_the_dense_check():
     assert worst["swept"] >= prog.swept_shortfall(q_obj, q_pusher)
     unchecked = build(kinematic=True, swept_check_spacing=None)
     assert unchecked.swept_shortfall(q_obj, q_pusher) == 0.0
+
+
+def _rotation(yaw: float) -> np.ndarray:
+    return np.array([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
+
+
+def test_a_push_step_hopping_through_the_object_is_seen_by_the_dense_check():
+    """Push steps are checked as the object sees them (the pusher's start carried by the
+    object's step): the guess's pushes, which keep their contact, are clear; a step that
+    hops to the opposite face through the centre crosses the box by its half width plus the
+    pusher's radius (scaled ×100 beyond ``push_check_depth``); a contact that keeps its
+    place while the box turns a quarter under it is clear, though its straight move in the
+    table frame cuts through the box."""
+    prog = build(kinematic=True)
+    q_obj, q_pusher = prog.guess["q_obj"].copy(), prog.guess["q_pusher"].copy()
+    assert prog.swept_shortfall(q_obj, q_pusher) == 0.0
+    t = int(prog.push_steps[len(prog.push_steps) // 2])
+    centre, yaw = q_obj[t, :2], q_obj[t, 2]
+    hop = q_pusher.copy()
+    hop[t] = centre - (q_pusher[t] - centre)
+    s = prog.settings
+    deep = min(prog.obj.shape.size) / 2 + prog.pusher.shape.radius - s.push_check_depth
+    assert prog.swept_shortfall(q_obj, hop) >= 100 * deep * 0.95
+
+    turned_obj, carried = q_obj.copy(), q_pusher.copy()
+    turned_obj[t:, 2] += np.pi / 2
+    contact_B = _rotation(yaw).T @ (q_pusher[t - 1] - q_obj[t - 1, :2])
+    carried[t:] = centre + (_rotation(yaw + np.pi / 2) @ contact_B)
+    assert prog.swept_shortfall(turned_obj, carried) == 0.0
+    in_table_frame = crossing_depth(
+        prog.obj, prog.pusher, torch.from_numpy(turned_obj[t:t + 1]),
+        torch.from_numpy(carried[t - 1:t]), torch.from_numpy(carried[t:t + 1]), 0.01)
+    assert in_table_frame > s.push_check_depth
