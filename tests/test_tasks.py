@@ -1,5 +1,5 @@
 """Every task script runs through the facade: its fast variant (one given skeleton), and
-its full skeleton search (slow). Free-pusher fast variants run by default; one learned
+its full skeleton search (slow). The L-shape's fast variant runs by default; one learned
 program of the arm, chain and obstacle scenes costs 30–90 s on two cores, so their fast
 variants run with the slow tests."""
 
@@ -11,7 +11,9 @@ import pytest
 from tests.conftest import ROOT
 
 SCRIPTS = sorted(p.stem for p in (ROOT / "tasks").glob("*.py") if p.stem != "task_cli")
-DEFAULT_FAST = {"box_push", "lshape_push", "box_goal_sweep"}
+# one script runs by default: box_push's and box_goal_sweep's fast variants solve box_push
+# with push@0 as tests/test_api.py and `make demo` do, so they run with the slow tests
+DEFAULT_FAST = {"lshape_push"}
 
 
 def _run(script: str, out, *flags: str) -> str:

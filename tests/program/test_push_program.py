@@ -144,7 +144,8 @@ def test_constraint_gradients_match_finite_differences(weight, rigid):
 
 def test_solve_skeleton_stops_where_the_kinematics_cannot_push():
     """box_push's goal is 0.36 m away; at 1 cm per push step one push covers 0.1 m, so the
-    kinematic stage fails and the learned program is never started."""
+    kinematic stage fails (after 30 major iterations: no number of them can reach the goal)
+    and the learned program is never started."""
     from robotplan.program.solution import FEASIBLE
     from robotplan.program.solve import solve_skeleton
 
@@ -153,7 +154,8 @@ def test_solve_skeleton_stops_where_the_kinematics_cannot_push():
     model = PushDynamics(DynamicsSpec(**TINY))
     sol = solve_skeleton(scene, parse_skeleton("push@2", "pusher", "box"), model,
                          replace(load_skeleton_space(), init_frame="table"),
-                         ProgramSettings(warm_max_step=0.01, warm_max_turn=0.02))
+                         ProgramSettings(warm_max_step=0.01, warm_max_turn=0.02,
+                                         warm_iterations=30, warm_restarts=0))
     assert sol.violation > FEASIBLE and "kinematic stage infeasible" in sol.status
     assert "H_F" not in sol.timings and sol.dynamics_mm2.size == 0
 

@@ -90,6 +90,7 @@ def test_restarts_stop_at_the_budget(problem):
     assert not sol.feasible and sol.restarts < 20 and sol.evaluations >= 30
 
 
+@pytest.mark.slow  # robust_samples is off by default; its nine programs take ~10 s
 def test_a_robust_search_goes_on_past_a_pose_whose_neighbourhood_it_rejects(problem):
     """With ``robust_samples`` a feasible pose ends the restarts only when H_hang's median
     about it is ≤ robust_kappa; when none is, every restart runs and the feasible pose of
