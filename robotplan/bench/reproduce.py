@@ -89,7 +89,7 @@ def _trained(steps: Steps, kind: str, key: str, cfg: dict, data: Path) -> str:
         f"--warmup {cfg['warmup']}{spec_flags(spec)}")["folder"]
 
 
-def _representations(steps: Steps, out: Path, sizes: ReproduceSizes, train: Path,
+def _representations(steps: Steps, sizes: ReproduceSizes, train: Path,
                      sets: dict[str, Path]) -> tuple[dict[str, dict], dict[str, Path]]:
     """F_q trained alike on each of :data:`REPRESENTATIONS` (the shipped F_q's architecture,
     the same ``train`` data, seed and steps) and evaluated on each set: ``reps_<set>`` →
@@ -103,7 +103,7 @@ def _representations(steps: Steps, out: Path, sizes: ReproduceSizes, train: Path
         cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n,
                "spec": {"encoder": "joint", **fields}}
         trained = _trained(steps, "rigid", key, cfg, train)
-        model = models[key] = out / trained / "model"
+        model = models[key] = steps.out / trained / "model"
         for name, folder in sets.items():
             results[f"reps_{name}"][key] = steps.run(
                 f"eval_rigid_{key}_{name}", {"per_scene": per, "data": folder.parent.name,
@@ -176,7 +176,7 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
             lambda f, d=folder: evaluate_rigid(models["rigid"], d, per_scene=per),
             f"robotplan eval push --model learned/push_rigid --data DATA --per-scene {per}")
     train = data("data_train_representations", sizes.representation_scenes, 4, "train")
-    reps, rep_models = _representations(steps, out, sizes, train, {"test": test, "ood": ood})
+    reps, rep_models = _representations(steps, sizes, train, {"test": test, "ood": ood})
     results.update(reps)
     results["tab4"] = _flow_representations(steps, sizes, train, test)
     results["fig5"] = {key: steps.run(

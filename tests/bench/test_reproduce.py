@@ -74,7 +74,7 @@ def test_each_representation_is_trained_alike_and_set_beside_the_paper(
     sizes = replace(QUICK, per_scene=2, representation_scenes=12, representation_steps=2)
     steps = Steps(tmp_path, "digest", progress=False)
     sets = {"test": tiny_push_data, "ood": tiny_ood_push_data}
-    reps, models = _representations(steps, tmp_path, sizes, tiny_push_data, sets)
+    reps, models = _representations(steps, sizes, tiny_push_data, sets)
     assert set(reps) == {"reps_test", "reps_ood"}
     assert list(models) == list(reps["reps_test"])
     assert all((folder / "weights.pt").is_file() for folder in models.values())
