@@ -14,9 +14,11 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from multiprocessing import get_context
 from pathlib import Path
+from queue import SimpleQueue
 
 import numpy as np
 import torch
@@ -29,7 +31,7 @@ from robotplan.program.solve import solve_skeleton
 from robotplan.scene import Scene
 
 __all__ = ["PATIENCE_S", "SearchResult", "is_solved", "meets_constraints", "merge_results",
-           "search_push", "stops_search"]
+           "past_budget", "run_in_pool", "search_push", "stops_search"]
 
 # residual RMS (mm) below which plans rank alike, and the default good-enough residual
 GOOD_RMS_MM = ProgramSettings.good_rms_mm
@@ -115,13 +117,46 @@ def stops_search(sol: Solution, holds_solved: bool, elapsed: float,
                  time_budget: float | None, patience: float, exhaustive: bool,
                  good_rms_mm: float = GOOD_RMS_MM) -> bool:
     """Whether the search stops on collecting ``sol``, ``elapsed`` seconds in: past the time
-    budget always; otherwise (unless ``exhaustive``) on a good-enough plan (residual at most
-    ``good_rms_mm``), or past ``patience`` seconds with a solved plan in hand
-    (``holds_solved``, ``sol`` included)."""
-    if time_budget is not None and elapsed > time_budget:
+    budget with a solved plan in hand (``holds_solved``, ``sol`` included); otherwise (unless
+    ``exhaustive``) on a good-enough plan (residual at most ``good_rms_mm``), or past
+    ``patience`` seconds with a solved plan in hand. Past the budget without one it waits
+    for the programs already running (:func:`may_start` starts no more): a pose goal's
+    fitted programs run a minute or more each, and the one still running is often the one
+    that plans (measured: docs/experiments.md#pose-goals)."""
+    if past_budget(elapsed, time_budget) and holds_solved:
         return True
     return not exhaustive and (good_enough(sol, good_rms_mm)
                                or (holds_solved and elapsed > patience))
+
+
+def past_budget(elapsed: float, time_budget: float | None) -> bool:
+    """Whether ``elapsed`` seconds are past ``time_budget`` (None: no budget)."""
+    return time_budget is not None and elapsed > time_budget
+
+
+def run_in_pool(solve: Callable, items: list, workers: int, initializer: Callable,
+                initargs: tuple, collect: Callable[[object], bool],
+                may_start: Callable[[], bool]) -> None:
+    """``solve`` each of ``items`` in order in a pool of ``workers`` forked processes (each
+    set up by ``initializer(*initargs)``), handing every result to ``collect`` as it comes;
+    stop when ``collect`` says so (the programs still running are dropped), and start an
+    item only while ``may_start()``. An error in a worker is raised here."""
+    finished: SimpleQueue = SimpleQueue()
+    pending, running = list(items), 0
+    with get_context("fork").Pool(workers, initializer, initargs) as pool:
+        while True:
+            while pending and running < workers and may_start():
+                pool.apply_async(solve, (pending.pop(0),), callback=finished.put,
+                                 error_callback=finished.put)
+                running += 1
+            if running == 0:
+                return
+            result = finished.get()
+            running -= 1
+            if isinstance(result, BaseException):
+                raise result
+            if collect(result):
+                return
 
 
 def order_candidates(scene: Scene, skeletons: list[Skeleton],
@@ -157,7 +192,8 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
     """Solve the skeletons (a process per core), most promising first, and pick the best;
     unless ``exhaustive``, stop at the first good-enough plan (``settings.good_rms_mm``)
     or, after ``patience`` seconds, at the first program collected while a solved plan is in
-    hand; start no program after ``time_budget`` seconds (the best so far wins).
+    hand; start no program after ``time_budget`` seconds and stop there once a solved plan
+    is in hand, else when the programs running end (the best so far wins).
     ``guesses``: the learned program's initial guess by skeleton (a warm start skips the
     kinematic stage). ``ordered``: the skeletons come most promising first already."""
     from tqdm import tqdm
@@ -180,17 +216,16 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
         return stops_search(sol, holds_solved, time.time() - t0, time_budget, patience,
                             exhaustive, settings.good_rms_mm)
 
+    def may_start() -> bool:
+        return not past_budget(time.time() - t0, time_budget)
+
     if workers <= 1:
         _init_worker(*args)
         for sk in queue:
-            if collect(_solve(sk)):
+            if not may_start() or collect(_solve(sk)):
                 break
     else:
-        with get_context("fork").Pool(workers, _init_worker, args) as pool:
-            for sol in pool.imap_unordered(_solve, queue):
-                if collect(sol):
-                    pool.terminate()
-                    break
+        run_in_pool(_solve, queue, workers, _init_worker, args, collect, may_start)
     bar.close()
     order = {sk: i for i, sk in enumerate(queue)}
     solutions.sort(key=lambda s: order[s.skeleton])
