@@ -120,7 +120,7 @@ def stops_search(sol: Solution, holds_solved: bool, elapsed: float,
     budget with a solved plan in hand (``holds_solved``, ``sol`` included); otherwise (unless
     ``exhaustive``) on a good-enough plan (residual at most ``good_rms_mm``), or past
     ``patience`` seconds with a solved plan in hand. Past the budget without one it waits
-    for the programs already running (:func:`may_start` starts no more): a pose goal's
+    for the programs already running (:func:`search_push` starts no more): a pose goal's
     fitted programs run a minute or more each, and the one still running is often the one
     that plans (measured: docs/experiments.md#pose-goals)."""
     if past_budget(elapsed, time_budget) and holds_solved:
@@ -192,8 +192,9 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
     """Solve the skeletons (a process per core), most promising first, and pick the best;
     unless ``exhaustive``, stop at the first good-enough plan (``settings.good_rms_mm``)
     or, after ``patience`` seconds, at the first program collected while a solved plan is in
-    hand; start no program after ``time_budget`` seconds and stop there once a solved plan
-    is in hand, else when the programs running end (the best so far wins).
+    hand; start no program after ``time_budget`` seconds once one has been collected, and
+    stop there once a solved plan is in hand, else when the programs running end (the best
+    so far wins).
     ``guesses``: the learned program's initial guess by skeleton (a warm start skips the
     kinematic stage). ``ordered``: the skeletons come most promising first already."""
     from tqdm import tqdm
@@ -216,8 +217,8 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
         return stops_search(sol, holds_solved, time.time() - t0, time_budget, patience,
                             exhaustive, settings.good_rms_mm)
 
-    def may_start() -> bool:
-        return not past_budget(time.time() - t0, time_budget)
+    def may_start() -> bool:  # past the budget only while nothing has been collected
+        return not past_budget(time.time() - t0, time_budget) or not solutions
 
     if workers <= 1:
         _init_worker(*args)
