@@ -6,7 +6,8 @@ path of the object's centre made of straight segments along the axes of the obje
 frame (for a box: along its face normals), each one push from the face behind it, that
 keeps the whole footprint ``clearance`` away from every obstacle. :func:`face_routes`
 enumerates the rectilinear routes of up to three segments (an L around a corner, or a
-detour to either side of each obstacle), shortest first; :func:`routed_candidates` turns
+detour to either side of each obstacle), shortest first, each ending where the object first
+lies inside the goal region; :func:`routed_candidates` turns
 them into skeletons whose push phases carry the route's waypoints (``Phase.via``) as the
 initial guess, with phases long enough for the longest push.
 
@@ -30,12 +31,13 @@ import torch
 from robotplan.functionals.clearance import densify, obstacle_clearance
 from robotplan.functionals.sticking import centroid
 from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
-from robotplan.scene import Scene
+from robotplan.scene import Body, Scene
 from robotplan.sdf import Shape2D
 
 __all__ = ["Route", "centred_pushes", "face_routes", "routed_candidates"]
 
 ROUTE_CLEARANCE = 0.04  # m between the routed footprint and every obstacle
+GOAL_INSIDE = 0.01  # m: a route ends where the footprint lies this far inside the goal region
 MAX_STEPS_PER_PHASE = 30  # longer segments are split into several pushes
 
 
@@ -114,14 +116,37 @@ def centred_pushes(shape: Shape2D, radius: float, tilt_deg: float = 5.0) -> set[
     return out
 
 
+def _inside(region: Body, outline: np.ndarray, xy: np.ndarray, margin: float) -> bool:
+    """Whether the footprint ``outline (V, 2)`` (object frame axes in the table frame) at
+    ``xy`` lies ``margin`` inside ``region``."""
+    points = torch.as_tensor(outline + xy, dtype=torch.float64)
+    return float(region.sdf(points).max()) <= -margin
+
+
+def _trim_to_region(legs: list[tuple[int, float]], start: np.ndarray, R: np.ndarray,
+                    outline: np.ndarray, region: Body | None) -> list[tuple[int, float]]:
+    """Drop the route's last legs while the object already lies GOAL_INSIDE within the
+    goal region where they begin: the region's centre is only where a route aims, and a
+    push of a few centimetres more is a phase (reach + push) the program must also solve."""
+    while region is not None and len(legs) > 1:
+        before = start + np.sum([np.eye(2)[a] * x for a, x in legs[:-1]], axis=0) @ R.T
+        if not _inside(region, outline, before, GOAL_INSIDE):
+            break
+        legs = legs[:-1]
+    return legs
+
+
 def face_routes(scene: Scene, obj: str, goal_xy: np.ndarray,
                 clearance: float = ROUTE_CLEARANCE, limit: int = 3,
-                pushable: set[int] | None = None) -> list[Route]:
+                pushable: set[int] | None = None, region: Body | None = None
+                ) -> list[Route]:
     """Rectilinear routes of ``obj``'s centre from its start to ``goal_xy`` along its start
     axes, of at most three segments, keeping its footprint (at its start yaw) ``clearance``
     from every obstacle: the two L-shaped routes (either axis first) and, for each axis,
     detours that pass each obstacle on either side; only directions in ``pushable`` (all by
-    default). The ``limit`` shortest, fewest segments first among equal lengths."""
+    default). With the goal ``region``, a route ends at the first waypoint where the
+    footprint lies inside it (:func:`_trim_to_region`). The ``limit`` shortest, fewest
+    segments first among equal lengths."""
     body = scene.bodies[obj]
     start = np.array(body.pose[:2], dtype=float)
     yaw = float(body.pose[2])
@@ -137,8 +162,9 @@ def face_routes(scene: Scene, obj: str, goal_xy: np.ndarray,
                          rim[:, axis].min() - local[:, axis].max() - clearance):
                 plans.append([(axis, side), (other, d[other]), (axis, d[axis] - side)])
     routes: dict[tuple, Route] = {}
+    outline = local @ R.T  # the footprint at its start yaw, about its centre
     for plan in plans:
-        legs = _legs(plan)
+        legs = _trim_to_region(_legs(plan), start, R, outline, region)
         if not legs:
             continue
         dirs = tuple(a + (2 if x < 0 else 0) for a, x in legs)
@@ -166,14 +192,16 @@ def _split(route: Route, longest: float) -> Route:
 
 
 def routed_candidates(scene: Scene, actor: str, obj: str, space: SkeletonSpace,
-                      goal_xy: np.ndarray, speed: float, max_pushes: int = 4,
+                      region: Body, speed: float, max_pushes: int = 4,
                       ) -> tuple[SkeletonSpace, list[Skeleton]]:
-    """Skeletons that push ``obj`` along :func:`face_routes` (reach + push per segment,
+    """Skeletons that push ``obj`` along :func:`face_routes` to the goal ``region``'s
+    centre, each ending where the object lies inside it (reach + push per segment,
     the push from the face behind the segment, ``via`` the segment's end), and the space
     they need: init points in the object's frame, enough steps per phase for the longest
     push at ``speed`` m per step (two steps for contact), at most MAX_STEPS_PER_PHASE."""
     pushable = centred_pushes(scene.bodies[obj].shape, scene.bodies[actor].shape.radius)
-    routes = face_routes(scene, obj, goal_xy, pushable=pushable)
+    routes = face_routes(scene, obj, np.array(region.pose[:2], dtype=float),
+                         pushable=pushable, region=region)
     longest = (MAX_STEPS_PER_PHASE - 2) * speed
     routes = [r for r in (_split(r, longest) for r in routes) if len(r.directions) <= max_pushes]
     if not routes:

@@ -11,7 +11,6 @@ from dataclasses import replace
 from functools import cache
 from pathlib import Path
 
-import numpy as np
 import yaml
 
 from robotplan.base.resources import DYNAMICS_FOLDERS, skeletons_dir
@@ -179,8 +178,7 @@ def _search_routes(scene: Scene, obj: str, actor: str, model_dir: Path,
     region = scene.goal_region
     routed, skeletons = space, []
     if region is not None:
-        routed, skeletons = routed_candidates(scene, actor, obj, space,
-                                              np.array(region.pose[:2], dtype=float),
+        routed, skeletons = routed_candidates(scene, actor, obj, space, region,
                                               settings.guess_speed)
     if not quiet:
         print(f"no plan with up to {max_pushes} pushes; trying {len(skeletons)} routes around "

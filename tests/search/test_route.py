@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import torch
 
 from robotplan import load_scene
 from robotplan.program.push_program import PushProgram
@@ -28,6 +29,22 @@ def test_routes_pass_the_wall_on_either_side_with_clearance():
     assert north.directions == (1, 0, 3)  # +y, +x, −y in the box's frame
 
 
+def test_a_route_ends_where_the_object_lies_inside_the_goal_region():
+    scene = load_scene(TASKS / "variants" / "obstacle_push_rect_box.yaml")
+    region = scene.goal_region
+    centre = np.array(region.pose[:2])
+    aimed = face_routes(scene, "box", centre)
+    ended = face_routes(scene, "box", centre, region=region)
+    assert all(np.allclose(r.waypoints[-1], centre) for r in aimed)
+    south = next(r for r in ended if r.directions[0] == 3)  # south of the wall, then east
+    # 2 cm short of the centre the turned box lies inside the region already: no third push
+    assert south.directions == (3, 0) and np.linalg.norm(south.waypoints[-1] - centre) < 0.03
+    outline = scene.bodies["box"].outline_world(np.append(south.waypoints[-1], 0.4))
+    assert float(region.sdf(torch.as_tensor(outline)).max()) <= -0.01 + 1e-9
+    # the north route ends above the region: it keeps its leg down into it
+    assert any(r.directions == (1, 0, 3) for r in ended)
+
+
 def test_clear_rejects_a_path_through_the_wall_and_off_the_table():
     scene = load_scene(TASKS / "obstacle_push.yaml")
     assert not _clear(scene, "box", np.array([[-0.25, 0.0], GOAL]), 0.0, 0.0)
@@ -47,7 +64,8 @@ def test_routes_without_obstacles_are_the_two_l_shapes(box_scene):
 
 def test_routed_skeletons_push_from_behind_and_the_guess_follows_the_route():
     scene = load_scene(TASKS / "obstacle_push.yaml")
-    space, skeletons = routed_candidates(scene, "pusher", "box", space_for(scene), GOAL, 0.027)
+    space, skeletons = routed_candidates(scene, "pusher", "box", space_for(scene),
+                                          scene.goal_region, 0.027)
     # the longest push, 0.63 m at 2.7 cm a step, plus two steps into contact
     assert space.steps_per_phase == 26 and space.init_frame == "object"
     north = next(sk for sk in skeletons if sk.phases[1].via[1] > 0)
@@ -65,7 +83,8 @@ def test_routed_skeletons_push_from_behind_and_the_guess_follows_the_route():
 
 def test_long_segments_are_split_into_several_pushes():
     scene = load_scene(TASKS / "obstacle_push.yaml")
-    space, skeletons = routed_candidates(scene, "pusher", "box", space_for(scene), GOAL, 0.01,
+    space, skeletons = routed_candidates(scene, "pusher", "box", space_for(scene),
+                                          scene.goal_region, 0.01,
                                           max_pushes=5)
     # 28 steps of 1 cm: the 0.63 m push is split in three (0.21 m, 23 steps)
     assert space.steps_per_phase == 27
