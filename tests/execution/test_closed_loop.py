@@ -12,6 +12,7 @@ import robotplan
 from robotplan import load_scene
 from robotplan.execution.closed_loop import (
     LoopSettings,
+    _goal_met,
     departure,
     execute_closed_loop,
     follow_object,
@@ -226,6 +227,28 @@ def test_closed_loop_reaches_a_pose_goal_that_open_loop_misses():
     closed = robotplan.execute(planned)
     assert closed.coverage >= max(0.95, open_loop.coverage)
     assert closed.replans and all(r.step > 0 for r in closed.replans)
+
+
+def test_at_the_plan_end_a_pose_goal_is_met_from_pose_coverage_on():
+    """The loop stops closing a pose goal once the object covers ``pose_coverage`` of its
+    target footprint, at or above Push-T's success (0.95): a closing push from there can
+    leave it lower as often as higher."""
+    from robotplan.bench.push_scenes import draw_scene
+    from robotplan.execution.execute import outcome
+    from robotplan.scene.loader import parse_scene
+
+    scene = parse_scene(draw_scene(4, 0, "pose"))
+    obj = scene.goal.object
+    settings = loop_settings_for(scene)
+    assert 0.95 <= settings.pose_coverage < 1.0
+    target = np.array(scene.goal.pose)
+    shifted = [target + np.array([dx, 0.0, 0.0]) for dx in np.linspace(0, 0.02, 201)]
+    covered = [outcome(scene, scene.bodies[obj], q, np.zeros(2), 0.0)[0] for q in shifted]
+    above = next(q for q, c in zip(shifted[::-1], covered[::-1], strict=True)
+                 if c >= settings.pose_coverage)
+    below = next(q for q, c in zip(shifted, covered, strict=True) if c < settings.pose_coverage)
+    assert _goal_met(scene, obj, Observation({obj: above}), settings)
+    assert not _goal_met(scene, obj, Observation({obj: below}), settings)
 
 
 @pytest.mark.parametrize("fresh_beyond_drift", [True, False])
