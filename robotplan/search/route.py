@@ -37,7 +37,9 @@ from robotplan.sdf import Shape2D
 __all__ = ["Route", "centred_pushes", "face_routes", "routed_candidates"]
 
 ROUTE_CLEARANCE = 0.04  # m between the routed footprint and every obstacle
-GOAL_INSIDE = 0.01  # m: a route ends where the footprint lies this far inside the goal region
+# m: a route ends where the footprint (at its start yaw) lies this far inside the goal
+# region: beyond the region's inset that the program plans into (goal_inset, 2 cm)
+GOAL_INSIDE = 0.03
 MAX_STEPS_PER_PHASE = 30  # longer segments are split into several pushes
 
 
