@@ -171,18 +171,14 @@ def execute(planned: Plan, scene: Scene | None = None, *, mode: str = "closed_lo
 def _replanner(planned: Plan):
     """:func:`plan` from an observed scene, as ``planned`` was made, warm started from the
     current plan's ``tail`` (None: a fresh search), a fresh search following when the tail
-    does not solve only if ``fresh``, with ``more_pushes`` pushes more than ``planned``'s
-    search allowed."""
+    does not solve only if ``fresh``."""
     options = dict(planned.options)
     model = options.pop("model", None)
-    pushes = options.pop("max_pushes", 2)
 
-    def replan(observed: Scene, tail: Solution | None, fresh: bool, more_pushes: int = 0
-               ) -> Plan:
+    def replan(observed: Scene, tail: Solution | None, fresh: bool) -> Plan:
         warm = Plan(observed, planned.obj, tail, True) if tail is not None else None
-        return plan(observed, model, **options, max_pushes=pushes + more_pushes,
-                    progress=False, quiet=True, time_budget=REPLAN_BUDGET, warm_start=warm,
-                    fallback=fresh)
+        return plan(observed, model, **options, progress=False, quiet=True,
+                    time_budget=REPLAN_BUDGET, warm_start=warm, fallback=fresh)
 
     return replan
 

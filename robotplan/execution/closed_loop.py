@@ -9,8 +9,7 @@ skeleton search when that does not plan; at a phase's end with ``fresh_beyond_dr
 when the object is beyond ``drift`` / ``drift_yaw``) when an object is further than
 ``drift`` / ``drift_yaw`` from the plan's state t, or further than the tighter
 ``phase_drift`` / ``phase_drift_yaw`` at the end of a phase; when the plan has run out and
-the goal is not met it plans afresh from the observed scene, and when that does not plan,
-``end_retries`` times more with one push more each. A re-plan is taken only if its
+the goal is not met it plans afresh from the observed scene. A re-plan is taken only if its
 plan is solved (every constraint met, plausible under the learned dynamics; as a last
 resort every constraint met is enough: at the plan's end with ``adopt_feasible_at_end``, at a
 gross phase-end departure with ``last_resort_beyond_drift``); otherwise the current
@@ -79,10 +78,9 @@ class Replan:
 
 
 # a re-planner: (observed scene, tail of the current plan to start from or None, whether a
-# fresh search may follow when the tail does not solve, pushes more than the first plan's
-# search allowed) → an object with ``best`` (Solution | None) and ``solved``
-# (robotplan.api.Plan)
-Replanner = Callable[[Scene, "Solution | None", bool, int], object]
+# fresh search may follow when the tail does not solve) → an object with ``best``
+# (Solution | None) and ``solved`` (robotplan.api.Plan)
+Replanner = Callable[[Scene, "Solution | None", bool], object]
 
 
 def _wrap(angle: float) -> float:
@@ -198,9 +196,10 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
         command = {k: v[0] for k, v in loop.drive.items()}
         while True:
             if loop.t == len(loop.substeps):
-                if _goal_met(scene, obj, seen, settings) or not _close(loop, scene, seen,
-                                                                       replan, settings,
-                                                                       report):
+                if _goal_met(scene, obj, seen, settings) or not _ask(
+                        loop, scene, seen, _last_push(loop), "goal not met at the plan's end",
+                        replan, settings, report, fresh=True,
+                        last_resort=settings.adopt_feasible_at_end):
                     break
                 continue
             target = {k: v[loop.t + 1] for k, v in loop.drive.items()}
@@ -249,32 +248,16 @@ def _last_push(loop: _Loop) -> Solution | None:
     return solution_tail(loop.plan, (len(phases) - 2) * loop.T)
 
 
-def _close(loop: _Loop, scene: Scene, seen: Observation, replan: Replanner,
-           settings: LoopSettings, report) -> bool:
-    """The plan has run out short of the goal: plan its last reach and push again from
-    ``seen`` and a fresh search after it; when neither plans, fresh searches with one push
-    more each, ``end_retries`` times. Whether a plan was adopted."""
-    reason = "goal not met at the plan's end"
-    for more in range(settings.end_retries + 1):
-        tail = _last_push(loop) if more == 0 else None
-        label = reason if more == 0 else f"{reason}, searching with {more} push(es) more"
-        if _ask(loop, scene, seen, tail, label, replan, settings, report, fresh=True,
-                last_resort=settings.adopt_feasible_at_end, more_pushes=more):
-            return True
-    return False
-
-
 def _ask(loop: _Loop, scene: Scene, seen: Observation, tail: Solution | None, reason: str,
          replan: Replanner, settings: LoopSettings, report, fresh: bool = False,
-         last_resort: bool = False, more_pushes: int = 0) -> bool:
-    """Re-plan from ``seen`` (a fresh search after ``tail`` only if ``fresh``; with
-    ``more_pushes`` pushes more than the plan's search allowed); adopt the new plan when it
-    is solved or, as a ``last_resort``, when it meets the constraints. Whether it was
-    adopted."""
+         last_resort: bool = False) -> bool:
+    """Re-plan from ``seen`` (a fresh search after ``tail`` only if ``fresh``); adopt the
+    new plan when it is solved or, as a ``last_resort``, when it meets the constraints.
+    Whether it was adopted."""
     if len(loop.replans) >= settings.max_replans:
         return False
     t0 = time.perf_counter()
-    result = replan(_observed_scene(scene, seen), tail, fresh, more_pushes)
+    result = replan(_observed_scene(scene, seen), tail, fresh)
     best = getattr(result, "best", None)
     solved = bool(getattr(result, "solved", False)) and best is not None
     adopted = solved or (last_resort and best is not None

@@ -48,10 +48,6 @@ class LoopSettings:
     # would otherwise stop short of the goal, and it re-plans again if pybullet departs
     # (measured: docs/experiments.md#last-resort)
     adopt_feasible_at_end: bool = True
-    # at the plan's end with the goal not met and no plan from the observed pose, fresh
-    # searches with one push more each, this many times; 0: the loop stops there (the
-    # ``pose`` overlay: docs/experiments.md#end-retries)
-    end_retries: int = 0
     # the largest scaled constraint violation such a last-resort plan may have: three times
     # the bound of a solved plan; the re-plans that ended L-shapes below 0.9 at 0.01
     # violated by 0.011-0.017 (measured: docs/experiments.md#last-resort)

@@ -134,7 +134,7 @@ def _box_moved(planned):
     return planned.scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
 
 
-def _implausible_when_fresh(observed, tail, fresh, more_pushes=0):
+def _implausible_when_fresh(observed, tail, fresh):
     """A re-planner that plans nothing from a tail alone; asked for a fresh search it returns
     a real plan from the observed scene that meets every constraint, flagged not solved (as
     one the learned dynamics call implausible)."""
@@ -178,7 +178,7 @@ def test_a_departure_whose_tail_does_not_plan_asks_for_a_fresh_search(box_plan,
     search is asked at once only if ``fresh_after_miss``, and at the plan's end always."""
     calls = []
 
-    def nothing_plans(observed, tail, fresh, more_pushes=0):
+    def nothing_plans(observed, tail, fresh):
         calls.append((tail is not None, fresh))
         return robotplan.Plan(observed, "box", None, False)
 
@@ -259,7 +259,7 @@ def test_a_gross_departure_at_a_phase_end_asks_for_a_fresh_search(box_plan,
     ``fresh_beyond_drift``."""
     calls = []
 
-    def nothing_plans(observed, tail, fresh, more_pushes=0):
+    def nothing_plans(observed, tail, fresh):
         calls.append((len(calls), tail is not None, fresh))
         return robotplan.Plan(observed, "box", None, False)
 
@@ -302,34 +302,3 @@ def test_a_gross_phase_end_departure_takes_a_last_resort_plan_only_when_asked(bo
     at_phase_end = [r for r in ex.replans if r.reason.endswith("at the end of a phase")]
     assert at_phase_end and not at_phase_end[0].solved
     assert at_phase_end[0].adopted == beyond_drift
-
-
-def test_at_the_plan_end_a_search_that_does_not_plan_is_followed_by_one_with_a_push_more(
-        box_plan):
-    """The box 6 cm off and turned: nothing plans on the way, nor at the plan's end with the
-    plan's own number of pushes; a fresh search with one push more returns a real plan of
-    the observed scene. With ``end_retries`` the loop asks for it, goes on with it and ends
-    nearer the goal; without, it stops short."""
-    runs = {}
-    for retries in (0, 1):
-        asked = []
-
-        def only_with_a_push_more(observed, tail, fresh, more_pushes=0, asked=asked):
-            asked.append(more_pushes)
-            if more_pushes == 0:
-                return robotplan.Plan(observed, "box", None, False)
-            return robotplan.plan(observed, workers=1, max_pushes=2 + more_pushes,
-                                  progress=False, quiet=True)
-
-        settings = LoopSettings(fresh_beyond_drift=False, last_resort_beyond_drift=False,
-                                end_retries=retries, max_replans=5)
-        ex = execute_closed_loop(_box_moved(box_plan), "box", box_plan.best,
-                                 only_with_a_push_more, settings)
-        retried = [r for r in ex.replans if r.reason.endswith("1 push(es) more")]
-        assert len(retried) == asked.count(1) and max(asked) == retries
-        if retries:
-            assert retried[0].adopted and len(ex.plans) >= 2
-        else:
-            assert len(ex.plans) == 1
-        runs[retries] = ex.coverage
-    assert runs[0] < 0.9 and runs[1] > runs[0] + 0.1
