@@ -29,7 +29,6 @@ from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
 from robotplan.scene import Scene
 from robotplan.search.planner import SearchResult, search_push
 from robotplan.search.pose_pushes import (
-    FIT_TOLERANCE,
     INIT_DIRECTIONS_DEG,
     STANDOFF,
     PosePushes,
@@ -165,7 +164,7 @@ def pose_candidates(scene: Scene, obj: str, actor: str, space: SkeletonSpace,
     for pushes in () if given is not None else (max_pushes, max_pushes + 1):
         fits = [f for f in fit_pose_pushes(scene, obj, actor, target, pushes,
                                            turn_gain=gain)
-                if f.error <= FIT_TOLERANCE]
+                if f.within]
         if fits:  # one push more only when none fits
             break
     if not fits:

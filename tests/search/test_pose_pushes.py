@@ -9,12 +9,14 @@ import torch
 from robotplan.functionals.sticking import QuasiStaticPush
 from robotplan.scene.loader import parse_scene
 from robotplan.search.pose_pushes import (
+    FIT_SHARE,
     FIT_TOLERANCE,
     PosePushes,
     TurningBody,
     faces_of,
     fit_pose_pushes,
     push_arc,
+    rotation,
 )
 from robotplan.search.pose_search import pose_guess
 
@@ -86,3 +88,26 @@ def test_fit_reaches_a_pose_made_by_two_pushes(shape):
         end = pose_guess(scene, "object", "pusher", fit, 20)["q_obj"][-1]
         miss = np.hypot(*(end[:2] - goal[:2])) + body.radius * abs(end[2] - goal[2])
         assert fit.error > FIT_TOLERANCE or miss < 2 * FIT_TOLERANCE
+
+
+@pytest.mark.parametrize("shape", [BOX, TEE])
+def test_a_turn_in_place_near_the_target_is_fitted_with_two_pushes(shape):
+    """The object 1.7° from its target about its centroid (a few millimetres at its turning
+    radius, under FIT_TOLERANCE): one push turns it only along an arc, so none counts as
+    reaching the target; the fits must leave at most FIT_SHARE of the start's error, which
+    two pushes do."""
+    start = parse_scene(scene_doc(shape, [0.0, 0.0, 0.3]))
+    body = TurningBody(start, "object", 1.0)
+    yaw0, yaw = 0.3, 0.3 + 0.03
+    c_W = rotation(yaw0) @ body.c_B  # the centroid stays where it is
+    goal = (*(c_W - rotation(yaw) @ body.c_B), yaw)
+    scene = parse_scene(scene_doc(shape, [float(v) for v in goal]))
+    start_error = body.radius * 0.03
+    assert start_error < FIT_TOLERANCE
+    one = fit_pose_pushes(scene, "object", "pusher", goal, max_pushes=1)
+    assert one and not any(f.within for f in one)
+    assert all(f.tolerance == pytest.approx(FIT_SHARE * start_error) for f in one)
+    two = fit_pose_pushes(scene, "object", "pusher", goal, max_pushes=2)
+    assert two[0].within and len(two[0].faces) == 2
+    assert two[0].error <= FIT_SHARE * start_error
+    assert min(two[0].lengths) > 0.0005  # both push: neither is a placeholder
