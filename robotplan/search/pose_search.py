@@ -29,6 +29,7 @@ from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
 from robotplan.scene import Scene
 from robotplan.search.planner import SearchResult, search_push
 from robotplan.search.pose_pushes import (
+    FIT_TOLERANCE,
     INIT_DIRECTIONS_DEG,
     STANDOFF,
     PosePushes,
@@ -149,7 +150,8 @@ def pose_candidates(scene: Scene, obj: str, actor: str, space: SkeletonSpace,
                     target: tuple[float, float, float] | None = None
                     ) -> tuple[SkeletonSpace, list[Skeleton], dict[Skeleton, dict]]:
     """Skeletons of the fitted pushes (:func:`fit_pose_pushes`) to ``target`` (default:
-    the scene's pose goal), their initial guesses, and the space they need (init points at
+    the scene's pose goal; those that count as reaching it, else those within
+    FIT_TOLERANCE), their initial guesses, and the space they need (init points at
     the object frame's face normals, enough steps per phase for the longest push at the
     guess's speed and the kinematic stage's turn per step); the turning law of
     ``settings``. A ``given`` skeleton fixes the faces' classes (its pushes' init points,
@@ -161,12 +163,15 @@ def pose_candidates(scene: Scene, obj: str, actor: str, space: SkeletonSpace,
         classes = tuple(p.init for p in given.phases if p.mode == "push")
         fits = fit_pose_pushes(scene, obj, actor, target, len(classes),
                                turn_gain=gain, classes=classes)
+    loose: list[PosePushes] = []
     for pushes in () if given is not None else (max_pushes, max_pushes + 1):
-        fits = [f for f in fit_pose_pushes(scene, obj, actor, target, pushes,
-                                           turn_gain=gain)
-                if f.within]
+        found = fit_pose_pushes(scene, obj, actor, target, pushes, turn_gain=gain)
+        fits = [f for f in found if f.within]
         if fits:  # one push more only when none fits
             break
+        loose = loose or [f for f in found if f.error <= FIT_TOLERANCE]
+    # near the target no close fit may exist: then those within FIT_TOLERANCE
+    fits = fits or loose
     if not fits:
         return space, [], {}
     body = TurningBody(scene, obj, gain)

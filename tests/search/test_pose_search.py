@@ -51,6 +51,25 @@ def test_a_given_skeleton_fixes_the_faces_of_the_fit():
     assert not np.allclose(g["q_obj"][-1], g["q_obj"][0])  # it pushes
 
 
+def test_without_a_close_fit_the_fits_within_fit_tolerance_are_candidates(monkeypatch):
+    """Where no fit leaves FIT_SHARE of the start's error (here: a share of zero), the
+    candidates are the fits within FIT_TOLERANCE, not none."""
+    from robotplan.search import pose_pushes
+
+    scene = parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)]))
+    settings = settings_for(scene)
+    space = load_skeleton_space()
+    _, close, _ = pose_candidates(scene, "object", "pusher", space, settings)
+    monkeypatch.setattr(pose_pushes, "FIT_SHARE", 0.0)
+    fits = pose_pushes.fit_pose_pushes(scene, "object", "pusher", tuple(scene.goal.pose),
+                                       turn_gain=settings.turn_gain)
+    assert fits and not any(f.within for f in fits)
+    _, loose, guesses = pose_candidates(scene, "object", "pusher", space, settings)
+    assert loose and set(loose) == set(guesses)
+    assert len(loose) == sum(f.error <= pose_pushes.FIT_TOLERANCE for f in fits)
+    assert close  # with the shipped share, the close fits are candidates
+
+
 def region_doc(size: list[float], yaw: float, region: list[float]) -> dict:
     """A box of ``size`` at ``yaw`` and a box region of ``region`` 35 cm east of it."""
     doc = scene_doc({"type": "box", "size": size}, [0.0, 0.0, 0.0])
