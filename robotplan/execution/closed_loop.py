@@ -9,12 +9,13 @@ skeleton search when that does not plan; at a phase's end with ``fresh_beyond_dr
 when the object is beyond ``drift`` / ``drift_yaw``) when an object is further than
 ``drift`` / ``drift_yaw`` from the plan's state t, or further than the tighter
 ``phase_drift`` / ``phase_drift_yaw`` at the end of a phase; when the plan has run out and
-the goal is not met it plans afresh from the observed scene. A re-plan is taken only if its
-plan is solved (every constraint met, plausible under the learned dynamics; as a last
-resort every constraint met is enough: at the plan's end with ``adopt_feasible_at_end``, at a
-gross phase-end departure with ``last_resort_beyond_drift``); otherwise the current
-plan goes on, and mid-phase drift does not trigger another re-plan before the next phase
-boundary.
+the goal is not met it plans afresh from the observed scene. With ``stop_when_lost``, an
+object beyond ``drift`` / ``drift_yaw`` once the re-plans are spent ends the execution.
+A re-plan is taken only if its plan is solved (every constraint met, plausible under the
+learned dynamics; as a last resort every constraint met is enough: at the plan's end with
+``adopt_feasible_at_end``, at a gross phase-end departure with
+``last_resort_beyond_drift``); otherwise the current plan goes on, and mid-phase drift
+does not trigger another re-plan before the next phase boundary.
 
 The thresholds are :class:`LoopSettings`, with overlays per scene class in
 ``skeletons/loop.yaml`` (:func:`loop_settings_for`: a chain re-plans from larger departures
@@ -190,6 +191,7 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
     settings = settings or loop_settings_for(scene)
     observe = observe or (lambda seen: seen)
     loop = _Loop(scene, obj, sol, physics)
+    stopped = None
     with SceneWorld(scene, obj, physics) as world:
         truth = [world.observe()]
         seen = observe(truth[-1])
@@ -233,10 +235,18 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
                 if not _ask(loop, scene, seen, tail, f"{reason} {where}", replan, settings,
                             report, fresh=settings.fresh_after_miss or bool(gross),
                             last_resort=settings.last_resort_beyond_drift and bool(gross)):
+                    lost = departure(loop.planned_poses(), seen.poses, settings.drift,
+                                     settings.drift_yaw)
+                    if (settings.stop_when_lost and lost
+                            and len(loop.replans) >= settings.max_replans):
+                        stopped = f"{lost} {where} with no re-plans left"
+                        if report is not None:
+                            report(f"stopped at step {len(loop.executed)}: {stopped}")
+                        break
                     loop.calm_until = (loop.t // loop.T + 1) * loop.T
         ex = recorded(scene, obj, truth, world.obstacle_contact, sorted(world.forbidden),
                       loop.executed, physics)
-    ex.mode, ex.replans, ex.plans = "closed_loop", loop.replans, loop.plans
+    ex.mode, ex.replans, ex.plans, ex.stopped = "closed_loop", loop.replans, loop.plans, stopped
     return ex
 
 

@@ -48,6 +48,8 @@ class Execution:
     replans: list = field(default_factory=list)  # robotplan.execution.closed_loop.Replan
     # (step, Solution): the plans executed, each from the executed step it started at
     plans: list = field(default_factory=list)
+    # why a closed loop stopped before its plan's end (LoopSettings.stop_when_lost), or None
+    stopped: str | None = None
 
 
 def reach_substeps(q_pusher: np.ndarray, push_step: np.ndarray, physics: Physics = PHYSICS

@@ -56,6 +56,10 @@ class LoopSettings:
     # plan rather than the stale one, which pushes where the object is not
     # (measured: docs/experiments.md#last-resort)
     last_resort_beyond_drift: bool = True
+    # off by default: with no re-plans left, an object beyond drift / drift_yaw of the plan
+    # ends the execution where it is, rather than the stale plan pushing where the object
+    # is not (a pose goal's box driven 40 cm off; measured: docs/experiments.md#close-fits)
+    stop_when_lost: bool = False
     # off by default: carrying the pusher with a turned object turns the push with it, which
     # can drive the object further off (measured: docs/experiments.md#closed-loop)
     follow_object: bool = False

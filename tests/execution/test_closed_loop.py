@@ -190,6 +190,28 @@ def test_a_departure_whose_tail_does_not_plan_asks_for_a_fresh_search(box_plan,
     assert not any(r.solved for r in ex.replans) and len(ex.plans) == 1
 
 
+@pytest.mark.parametrize("stop_when_lost", [True, False])
+def test_an_object_lost_with_no_re_plans_left_ends_the_run_only_when_asked(box_plan,
+                                                                          stop_when_lost):
+    """The box 6 cm off (beyond ``drift``) and the one re-plan plans nothing: with
+    ``stop_when_lost`` the run ends there and says why; without it the stale plan runs to
+    its end."""
+    moved = _box_moved(box_plan)
+    settings = LoopSettings(stop_when_lost=stop_when_lost, max_replans=1)
+    ex = execute_closed_loop(moved, "box", box_plan.best, _nothing_plans, settings)
+    assert len(ex.replans) == 1 and not ex.replans[0].adopted
+    planned_steps = len(box_plan.best.q_obj) - 1
+    if stop_when_lost:
+        assert "box" in ex.stopped and "no re-plans left" in ex.stopped
+        assert len(ex.object_poses) - 1 == ex.replans[0].step < planned_steps
+    else:
+        assert ex.stopped is None and len(ex.object_poses) - 1 == planned_steps
+
+
+def _nothing_plans(observed, tail, fresh):
+    return robotplan.Plan(observed, "box", None, False)
+
+
 @pytest.mark.slow
 def test_closed_loop_recovers_an_arm_push_when_the_box_is_not_where_it_was_planned():
     """The left iiwa's two pushes are planned for the box where the scene puts it; the box
