@@ -124,7 +124,8 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
                                   progress, exhaustive, quiet, time_budget, guesses, program)
     if not result.solved and guesses is not None and fallback:  # the old skeleton is lost
         again, more = search_scene(scene, model_dir, solver, workers, None, max_pushes,
-                                   progress, exhaustive, quiet, time_budget, program=program)
+                                   progress, exhaustive, quiet, time_budget, program=program,
+                                   replan=True)
         result, spaces = merge_results(result, again), {**spaces, **more}
     if not quiet:
         kind = dynamics_kind(model_dir)

@@ -249,17 +249,22 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
                  skeleton: str | Skeleton | None = None, max_pushes: int = 2,
                  progress: bool = True, exhaustive: bool = False, quiet: bool = False,
                  time_budget: float | None = None, guesses: dict[Skeleton, dict] | None = None,
-                 program: Mapping[str, object] | None = None
+                 program: Mapping[str, object] | None = None, replan: bool = False
                  ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
     """Search the scene's candidates tier by tier, then routes around obstacles when nothing
     plans; the result and each candidate's skeleton space (by ``id`` of its solution).
     ``guesses``: initial guesses of the learned program by skeleton (warm starts). A free
     pusher's region goal without obstacles that the plain tier does not plan gets the
     fitted pushes' tier, even past ``time_budget`` (at most four programs). ``program``:
-    a user's program settings (:func:`~robotplan.program.settings.with_overrides`)."""
+    a user's program settings (:func:`~robotplan.program.settings.with_overrides`).
+    ``replan``: a fresh search during execution; a pose goal's then runs with the
+    ``replan`` overlay's budget too."""
     obj, actors = check_supported(scene)
     settings = with_overrides(settings_for(scene, solver, dynamics_kind(model_dir)), program)
-    if guesses:  # a re-plan from an earlier plan: the `replan` overlay's budget
+    # a re-plan from an earlier plan: the `replan` overlay's budget; so is a pose goal's
+    # fresh search while executing, whose fitted guesses start near a plan, where the first
+    # plan's budget made re-plans of 15-57 s (measured: docs/experiments.md#close-fits)
+    if guesses or (replan and scene.goal.type == "pose"):
         settings = program_settings("replan", base=settings)
     result, spaces = SearchResult(None), {}  # spaces: a skeleton may recur in two tiers
     space = space_for(scene)

@@ -139,17 +139,30 @@ def test_a_warm_started_search_plans_with_the_replan_overlay(monkeypatch):
     assert warm.good_rms_mm == fresh.good_rms_mm  # the scene's own overlays stay
 
 
+def _box_pose_goal(monkeypatch, record):
+    """``tasks/box_push.yaml`` and the same box asked 15 cm on and turned 0.8 rad (a pose
+    goal), with ``record`` in place of every ``search_push``."""
+    from dataclasses import replace
+
+    import robotplan.search.pose_search as pose_search
+    from robotplan.scene.schema import PoseGoal
+
+    monkeypatch.setattr(search_module, "search_push", record)
+    monkeypatch.setattr(pose_search, "search_push", record)
+    region = load_scene(TASKS / "box_push.yaml")
+    x, y, yaw = region.objects[0].pose
+    return region, replace(region, goal=PoseGoal(region.objects[0].name,
+                                                 (x + 0.15, y, yaw + 0.8)))
+
+
 def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
     """A pose goal's tier is the pushes fitted in closed form, each with its own guess in a
     space of object-frame face normals; the plain tier follows only when no program of it
     was solved (nothing fitted)."""
-    from dataclasses import replace
-
     import numpy as np
 
     import robotplan.search.pose_search as pose_search
     from robotplan.program.solution import Solution
-    from robotplan.scene.schema import PoseGoal
 
     calls = []
 
@@ -160,11 +173,8 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
                           np.zeros((1, 2))) for sk in skeletons[:1] if guesses]
         return SearchResult(tried[0] if tried else None, tried, 1.0)
 
-    monkeypatch.setattr(search_module, "search_push", record)
-    monkeypatch.setattr(pose_search, "search_push", record)
-    scene = load_scene(TASKS / "box_push.yaml")
-    x, y, yaw = scene.objects[0].pose
-    scene = replace(scene, goal=PoseGoal(scene.objects[0].name, (x + 0.15, y, yaw + 0.8)))
+    _, scene = _box_pose_goal(monkeypatch, record)
+    yaw = scene.objects[0].pose[2]
     model = TASKS.parent / "learned" / "push_rigid"
     search_module.search_scene(scene, model, quiet=True, progress=False)
     (fitted, space, guesses, settings), = calls  # an unsolved fitted plan: no plain tier
@@ -179,6 +189,32 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
     search_module.search_scene(scene, model, quiet=True, progress=False)
     plain, plain_space, none, _ = calls[-1]
     assert len(plain) > len(fitted) and none is None and plain_space.init_frame == "goal"
+
+
+def test_a_fresh_search_while_executing_a_pose_goal_plans_with_the_replan_overlay(monkeypatch):
+    """``replan=True`` (the closed loop's fresh search) gives a pose goal's fitted pushes the
+    ``replan`` overlay's budget; a region goal's fresh search keeps its scene's settings."""
+    from robotplan.program.settings import load_overlays
+
+    calls = []
+
+    def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
+               time_budget, space, guesses=None, ordered=False):
+        calls.append((scene.goal.type, settings))
+        return SearchResult(None, [], 1.0)
+
+    region, pose = _box_pose_goal(monkeypatch, record)
+    model = TASKS.parent / "learned" / "push_rigid"
+    overlay = load_overlays()["replan"]
+    for scene in (pose, region):
+        for replan in (False, True):
+            calls.clear()
+            search_module.search_scene(scene, model, quiet=True, progress=False,
+                                       replan=replan)
+            kind, settings = calls[0]
+            assert kind == scene.goal.type
+            with_overlay = all(getattr(settings, k) == v for k, v in overlay.items())
+            assert with_overlay == (replan and scene is pose), (kind, replan)
 
 
 def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(monkeypatch):
