@@ -258,13 +258,10 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     fitted pushes' tier, even past ``time_budget`` (at most four programs). ``program``:
     a user's program settings (:func:`~robotplan.program.settings.with_overrides`).
     ``replan``: a fresh search during execution; a pose goal's then runs with the
-    ``replan`` overlay's budget too."""
+    ``replan`` overlay's budget first and its own where that does not solve."""
     obj, actors = check_supported(scene)
     settings = with_overrides(settings_for(scene, solver, dynamics_kind(model_dir)), program)
-    # a re-plan from an earlier plan: the `replan` overlay's budget; so is a pose goal's
-    # fresh search while executing, whose fitted guesses start near a plan, where the first
-    # plan's budget made re-plans of 15-57 s (measured: docs/experiments.md#close-fits)
-    if guesses or (replan and scene.goal.type == "pose"):
+    if guesses:  # a re-plan from an earlier plan: the `replan` overlay's budget
         settings = program_settings("replan", base=settings)
     result, spaces = SearchResult(None), {}  # spaces: a skeleton may recur in two tiers
     space = space_for(scene)
@@ -272,10 +269,21 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
             and _chain_target(scene) is None):
         given = (parse_skeleton(skeleton, actors[0], obj) if isinstance(skeleton, str)
                  else skeleton)
-        posed, result = search_pose(scene, obj, actors[0], model_dir, settings, space,
-                                    max_pushes, workers, progress, exhaustive, quiet,
-                                    time_budget, given)
-        spaces.update({id(s): posed for s in result.candidates})
+        # a fresh search while executing: the `replan` overlay's budget first, as the
+        # fitted guesses start near a plan and the first plan's budget made re-plans of
+        # 15-57 s; that budget where it does not solve (measured:
+        # docs/experiments.md#close-fits)
+        budgets = (program_settings("replan", base=settings), settings) if replan else (
+            settings,)
+        for budget in budgets:
+            left = None if time_budget is None else max(0.0, time_budget - result.seconds)
+            posed, more = search_pose(scene, obj, actors[0], model_dir, budget, space,
+                                      max_pushes, workers, progress, exhaustive, quiet,
+                                      left, given)
+            spaces.update({id(s): posed for s in more.candidates})
+            result = merge_results(result, more)
+            if result.solved:
+                break
         if result.candidates:  # the plain tier's pushes do not turn: it plans no pose goal
             return result, spaces
     for candidates, space in candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet):

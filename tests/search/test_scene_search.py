@@ -193,14 +193,15 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
 
 def test_a_fresh_search_while_executing_a_pose_goal_plans_with_the_replan_overlay(monkeypatch):
     """``replan=True`` (the closed loop's fresh search) gives a pose goal's fitted pushes the
-    ``replan`` overlay's budget; a region goal's fresh search keeps its scene's settings."""
+    ``replan`` overlay's budget, and where that solves nothing its own; a region goal's
+    fresh search keeps its scene's settings."""
     from robotplan.program.settings import load_overlays
 
     calls = []
 
     def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
                time_budget, space, guesses=None, ordered=False):
-        calls.append((scene.goal.type, settings))
+        calls.append((scene.goal.type, settings, guesses is not None))
         return SearchResult(None, [], 1.0)
 
     region, pose = _box_pose_goal(monkeypatch, record)
@@ -211,10 +212,14 @@ def test_a_fresh_search_while_executing_a_pose_goal_plans_with_the_replan_overla
             calls.clear()
             search_module.search_scene(scene, model, quiet=True, progress=False,
                                        replan=replan)
-            kind, settings = calls[0]
-            assert kind == scene.goal.type
-            with_overlay = all(getattr(settings, k) == v for k, v in overlay.items())
-            assert with_overlay == (replan and scene is pose), (kind, replan)
+            assert all(kind == scene.goal.type for kind, _, _ in calls)
+            with_overlay = [all(getattr(s, k) == v for k, v in overlay.items())
+                            for _, s, _ in calls]
+            assert with_overlay[0] == (replan and scene is pose), replan
+            fitted = [w for w, (_, _, guessed) in zip(with_overlay, calls, strict=True)
+                      if guessed]
+            if scene is pose:  # then the plain tier, as nothing was solved
+                assert fitted == ([True, False] if replan else [False])
 
 
 def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(monkeypatch):
