@@ -27,7 +27,7 @@ from robotplan.program.settings import ProgramSettings
 from robotplan.program.settings import settings_for as program_settings
 from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
 from robotplan.scene import Scene
-from robotplan.search.planner import SearchResult, search_push
+from robotplan.search.planner import SearchResult, merge_results, search_push
 from robotplan.search.pose_pushes import (
     FIT_TOLERANCE,
     INIT_DIRECTIONS_DEG,
@@ -39,7 +39,7 @@ from robotplan.search.pose_pushes import (
     rotation,
 )
 
-__all__ = ["pose_candidates", "pose_guess", "region_target", "search_pose",
+__all__ = ["pose_candidates", "pose_guess", "region_target", "search_pose", "search_pose_budgets",
            "search_region_fits"]
 
 MAX_STEPS_PER_PHASE = 30
@@ -212,6 +212,26 @@ def search_pose(scene: Scene, obj: str, actor: str, model_dir: Path,
     # the fits' own order: the least pushing first
     return posed, search_push(scene, model_dir, skeletons, settings, workers, progress,
                               exhaustive, time_budget, posed, guesses=guesses, ordered=True)
+
+
+def search_pose_budgets(scene: Scene, obj: str, actor: str, model_dir: Path,
+                        budgets: tuple[ProgramSettings, ...], space: SkeletonSpace,
+                        max_pushes: int, workers: int, progress: bool, exhaustive: bool,
+                        quiet: bool, time_budget: float | None, given: Skeleton | None = None
+                        ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
+    """:func:`search_pose` with each of ``budgets`` (program settings) in turn until one
+    solves, within ``time_budget`` s in all; the merged result and each candidate's space
+    (by ``id`` of its solution)."""
+    result, spaces = SearchResult(None), {}
+    for budget in budgets:
+        left = None if time_budget is None else max(0.0, time_budget - result.seconds)
+        posed, more = search_pose(scene, obj, actor, model_dir, budget, space, max_pushes,
+                                  workers, progress, exhaustive, quiet, left, given)
+        spaces.update({id(s): posed for s in more.candidates})
+        result = merge_results(result, more)
+        if result.solved:
+            break
+    return result, spaces
 
 
 def search_region_fits(scene: Scene, obj: str, actor: str, model_dir: Path,

@@ -31,7 +31,7 @@ from robotplan.program.skeleton import (
 from robotplan.program.solution import Solution
 from robotplan.scene import Scene
 from robotplan.search.planner import FEASIBLE, SearchResult, merge_results, search_push
-from robotplan.search.pose_search import search_pose, search_region_fits
+from robotplan.search.pose_search import search_pose_budgets, search_region_fits
 from robotplan.search.route import routed_candidates
 
 __all__ = ["DYNAMICS_CLASSES", "UnsupportedScene", "budget_spent", "candidate_table",
@@ -267,23 +267,12 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     space = space_for(scene)
     if (scene.goal.type == "pose" and not guesses and not scene.robots
             and _chain_target(scene) is None):
-        given = (parse_skeleton(skeleton, actors[0], obj) if isinstance(skeleton, str)
-                 else skeleton)
-        # a fresh search while executing: the `replan` overlay's budget first, as the
-        # fitted guesses start near a plan and the first plan's budget made re-plans of
-        # 15-57 s; that budget where it does not solve (measured:
-        # docs/experiments.md#close-fits)
-        budgets = (program_settings("replan", base=settings), settings) if replan else (
-            settings,)
-        for budget in budgets:
-            left = None if time_budget is None else max(0.0, time_budget - result.seconds)
-            posed, more = search_pose(scene, obj, actors[0], model_dir, budget, space,
-                                      max_pushes, workers, progress, exhaustive, quiet,
-                                      left, given)
-            spaces.update({id(s): posed for s in more.candidates})
-            result = merge_results(result, more)
-            if result.solved:
-                break
+        given = parse_skeleton(skeleton, actors[0], obj) if isinstance(skeleton, str) else skeleton
+        # executing: the re-plans' budget first, faster (docs/experiments.md#close-fits)
+        budgets = (program_settings("replan", base=settings), settings) if replan else (settings,)
+        result, spaces = search_pose_budgets(scene, obj, actors[0], model_dir, budgets, space,
+                                             max_pushes, workers, progress, exhaustive, quiet,
+                                             time_budget, given)
         if result.candidates:  # the plain tier's pushes do not turn: it plans no pose goal
             return result, spaces
     for candidates, space in candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet):
