@@ -230,16 +230,16 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
             if reason is not None:
                 where = "at the end of a phase" if at_boundary else "mid-phase"
                 tail = solution_tail(loop.plan, loop.t)
-                gross = at_boundary and settings.fresh_beyond_drift and departure(
-                    loop.planned_poses(), seen.poses, settings.drift, settings.drift_yaw)
+                # beyond drift / drift_yaw: mid-phase the departure itself
+                beyond = departure(loop.planned_poses(), seen.poses, settings.drift,
+                                   settings.drift_yaw) if at_boundary else reason
+                gross = at_boundary and settings.fresh_beyond_drift and beyond is not None
                 if not _ask(loop, scene, seen, tail, f"{reason} {where}", replan, settings,
-                            report, fresh=settings.fresh_after_miss or bool(gross),
-                            last_resort=settings.last_resort_beyond_drift and bool(gross)):
-                    lost = departure(loop.planned_poses(), seen.poses, settings.drift,
-                                     settings.drift_yaw)
-                    if (settings.stop_when_lost and lost
+                            report, fresh=settings.fresh_after_miss or gross,
+                            last_resort=settings.last_resort_beyond_drift and gross):
+                    if (settings.stop_when_lost and beyond is not None
                             and len(loop.replans) >= settings.max_replans):
-                        stopped = f"{lost} {where} with no re-plans left"
+                        stopped = f"{beyond} {where} with no re-plans left"
                         if report is not None:
                             report(f"stopped at step {len(loop.executed)}: {stopped}")
                         break
