@@ -52,9 +52,9 @@ def bench_scene(index: int, seed: int, model_dir: str | Path,
                 settings: HangSettings = HANG_DEFAULTS,
                 methods: tuple[str, ...] = METHODS) -> dict:
     """Every method on scene ``index``; the found poses checked by a drop."""
-    import torch
+    from robotplan.base.threads import one_thread
 
-    torch.set_num_threads(1)
+    one_thread()
     hook, mug = _scene(index, seed)
     problem = HangProblem(load_hang_model(model_dir), mug, hook)
     rng = np.random.default_rng([seed, index, 1])

@@ -21,8 +21,8 @@ from pathlib import Path
 from queue import SimpleQueue
 
 import numpy as np
-import torch
 
+from robotplan.base.threads import one_thread
 from robotplan.functionals.clearance import OBSTACLE_MARGIN, obstacle_clearance
 from robotplan.program.settings import ProgramSettings
 from robotplan.program.skeleton import Skeleton, SkeletonSpace, space_for
@@ -62,7 +62,7 @@ def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings,
                  space: SkeletonSpace, guesses: dict[Skeleton, dict] | None = None) -> None:
     from robotplan.models.loading import load_dynamics
 
-    torch.set_num_threads(1)  # one thread per process (docs/experiments.md#torch-threads)
+    one_thread()  # one process per core (robotplan.base.threads)
     _worker.update(scene=scene, model=load_dynamics(model_dir), settings=settings,
                    space=space, guesses=guesses or {})
 

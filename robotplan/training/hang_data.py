@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from robotplan.base.threads import one_thread
 from robotplan.base.units import check_ray
 from robotplan.execution.hang_world import HANG_PHYSICS, HangWorld
 from robotplan.geometry.transforms import perturbed_poses, quaternion_to_matrix, uniform_poses
@@ -174,7 +175,7 @@ def _make_shard(args: tuple) -> tuple[dict[str, np.ndarray], int]:
     """Scenes ``first ≤ i < last`` of ``seed``, dropped in this worker's pybullet: the
     shard's arrays and its number of samples."""
     first, last, seed, spec = args
-    torch.set_num_threads(1)
+    one_thread()
     scenes = [simulate_hang_scene(i, seed, spec) for i in range(first, last)]
     arrays = dict(
         scene_index=np.arange(first, last),

@@ -22,8 +22,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
-import torch
 
+from robotplan.base.threads import one_thread
 from robotplan.base.units import check_ray
 from robotplan.execution.hang_world import HANG_PHYSICS, HangWorld
 from robotplan.models.hang import load_hang_model
@@ -72,7 +72,7 @@ def _mine_shard(args: tuple) -> tuple[dict[str, np.ndarray], int]:
     """Scenes ``first ≤ i < last`` of ``data``, mined with a model and a pybullet client of
     this worker: the shard's arrays and its number of poses."""
     first, last, data, model_dir, seed, spec = args
-    torch.set_num_threads(1)
+    one_thread()
     model = load_hang_model(model_dir)
     rows = []
     for i in range(first, last):

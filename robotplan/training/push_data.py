@@ -173,9 +173,9 @@ def _make_shard(args: tuple[int, int, int, PushDataSpec]) -> tuple[dict[str, np.
     """Scenes ``first ≤ i < last`` of ``seed``, simulated in a pybullet client of this
     worker: the shard's arrays and its number of samples."""
     first, last, seed, spec = args
-    import torch
+    from robotplan.base.threads import one_thread
 
-    torch.set_num_threads(1)
+    one_thread()
     world = PushWorld()
     try:
         records = [simulate_scene(i, seed, spec, world) for i in range(first, last)]
