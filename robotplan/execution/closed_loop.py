@@ -24,8 +24,9 @@ at a phase's end).
 Between re-plans a free pusher may follow the object (``follow_object``, off by default):
 in push steps its planned position is carried by the rigid motion that takes the planned
 object pose to the observed one, so it keeps the planned point of contact on the object. Or
-it may steer (``steer_gain``, off by default): keep the planned push direction and move
-sideways with the object and against its turn (:func:`steer_pusher`).
+the acting free pusher or arm may steer (``steer_gain``, off by default): keep the planned
+push direction and move sideways with the object and against its turn
+(:func:`steer_pusher`; an arm's joints follow its tip to first order).
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ from robotplan.execution.loop_settings import (
 )
 from robotplan.execution.scene_world import Observation, SceneWorld, actuation
 from robotplan.execution.sim import PHYSICS, Physics
+from robotplan.execution.steering import follow_object, steer_actor, steer_pusher
 from robotplan.program.solution import Solution
 from robotplan.program.tail import solution_tail
 from robotplan.scene import Scene
@@ -98,36 +100,6 @@ def departure(planned: dict[str, np.ndarray], seen: dict[str, np.ndarray], far: 
         if gap > far or turn > far_yaw:
             return f"{name} {1000 * gap:.1f} mm / {math.degrees(turn):.1f}° off the plan"
     return None
-
-
-def follow_object(target: np.ndarray, planned_pose: np.ndarray, seen_pose: np.ndarray
-                  ) -> np.ndarray:
-    """The pusher target ``(x, y)`` carried by the rigid motion from the object's
-    ``planned_pose`` to its ``seen_pose``."""
-    turn = float(seen_pose[2] - planned_pose[2])
-    c, s = math.cos(turn), math.sin(turn)
-    rel = np.asarray(target, dtype=float) - planned_pose[:2]
-    return seen_pose[:2] + np.array([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]])
-
-
-def steer_pusher(target: np.ndarray, start: np.ndarray, planned_pose: np.ndarray,
-                 seen_pose: np.ndarray, gain: float, limit: float) -> np.ndarray:
-    """A free pusher's step target ``(x, y)`` moved sideways to its planned step from
-    ``start``: by how far the object's centre is off the plan sideways, so that the contact
-    keeps its planned offset from the centre, plus ``gain`` × the object's yaw off the plan
-    (at most ``limit`` m in all), so that the push turns the object back.
-
-    A push along d at a contact left of the centre turns the object clockwise (the torque
-    r × F = −r_⊥ |F|), so a yaw error e > 0 (turned counter-clockwise too far) moves the
-    contact to the left, by ``gain · e``."""
-    step = np.asarray(target, dtype=float) - np.asarray(start, dtype=float)
-    length = float(np.hypot(*step))
-    if length < 1e-6:
-        return np.asarray(target, dtype=float)
-    left = np.array([-step[1], step[0]]) / length
-    yaw_off = _wrap(float(seen_pose[2] - planned_pose[2]))
-    side = float((seen_pose[:2] - planned_pose[:2]) @ left) + gain * yaw_off
-    return np.asarray(target, dtype=float) + float(np.clip(side, -limit, limit)) * left
 
 
 def _observed_scene(scene: Scene, seen: Observation) -> Scene:
@@ -209,11 +181,8 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
                 name = world.pusher.name
                 target[name] = follow_object(target[name], loop.plan.q_obj[loop.t],
                                              seen.poses[obj])
-            elif settings.steer_gain and world.pusher is not None and loop.pushing():
-                name = world.pusher.name
-                target[name] = steer_pusher(target[name], loop.drive[name][loop.t],
-                                            loop.plan.q_obj[loop.t], seen.poses[obj],
-                                            settings.steer_gain, settings.steer_limit)
+            elif settings.steer_gain and loop.pushing():
+                steer_actor(world, loop, target, seen.poses[obj], settings)
             world.run_step(command, target, loop.substeps[loop.t])
             loop.executed.append(loop.substeps[loop.t])
             command, loop.t = target, loop.t + 1

@@ -16,13 +16,17 @@ JOINT_FORCE = 300.0  # N·m: the iiwa 14's largest joint torques are 320 N·m
 # pybullet's default gain (0.1) lags behind a planned reach; 1.0 tracks it at the planned
 # speeds (measured: docs/experiments.md#arm-position-gain)
 POSITION_GAIN = 1.0
+DAMPING = 0.01  # m: the damped least-squares step of :meth:`Arm.steered` near singularities
 
 
 class Arm:
-    """One arm in a :class:`PushWorld`: ``drive(q)`` sets its joint targets."""
+    """One arm in a :class:`PushWorld`: ``drive(q)`` sets its joint targets. ``flange``: the
+    link the tip sphere is fixed to, at ``tip_offset`` in that link's (URDF) frame."""
 
-    def __init__(self, world: PushWorld, body: int, joints: list[int], tip: int) -> None:
+    def __init__(self, world: PushWorld, body: int, joints: list[int], tip: int,
+                 flange: int, tip_offset: np.ndarray) -> None:
         self.world, self.body, self.joints, self.tip = world, body, joints, tip
+        self.flange, self.tip_offset = flange, np.asarray(tip_offset, dtype=float)
 
     def drive(self, q: np.ndarray) -> None:
         pb, c = self.world.pb, self.world.client
@@ -32,6 +36,21 @@ class Arm:
                                      positionGains=[POSITION_GAIN] * len(self.joints),
                                      velocityGains=[1.0] * len(self.joints),
                                      physicsClientId=c)
+
+    def tip_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """``(3, dof)``: the tip centre's linear velocity per joint velocity at joints ``q``."""
+        zeros = [0.0] * len(self.joints)
+        linear, _ = self.world.pb.calculateJacobian(
+            self.body, self.flange, self.tip_offset.tolist(), list(map(float, q)), zeros, zeros,
+            physicsClientId=self.world.client)
+        return np.asarray(linear, dtype=float)
+
+    def steered(self, q: np.ndarray, shift: np.ndarray) -> np.ndarray:
+        """Joint angles near ``q`` that move the tip centre by ``shift (3,)`` m in the world
+        frame, to first order: one damped least-squares step on :meth:`tip_jacobian`."""
+        J = self.tip_jacobian(q)
+        step = J.T @ np.linalg.solve(J @ J.T + DAMPING**2 * np.eye(3), np.asarray(shift, float))
+        return np.asarray(q, dtype=float) + step
 
     def tip_position(self) -> np.ndarray:
         pos, _ = self.world.pb.getBasePositionAndOrientation(self.tip,
@@ -79,6 +98,6 @@ def add_arm(world: PushWorld, spec: RobotSpec) -> Arm:
         pb.setCollisionFilterPair(body, tip, link, -1, 0, physicsClientId=c)
         pb.setCollisionFilterPair(body, world.table, link, -1, 0, physicsClientId=c)
     pb.setCollisionFilterPair(tip, world.table, -1, -1, 0, physicsClientId=c)
-    arm = Arm(world, body, joints, tip)
+    arm = Arm(world, body, joints, tip, flange, np.asarray(model.tip.offset))
     arm.drive(q0)
     return arm
