@@ -58,12 +58,29 @@ class SearchResult:
         return self.best is not None and is_solved(self.best)
 
 
-def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings,
-                 space: SkeletonSpace, guesses: dict[Skeleton, dict] | None = None) -> None:
+_models: dict[tuple, object] = {}
+
+
+def _dynamics(model_dir: str):
+    """The learned dynamics of ``model_dir``, loaded once per process and version of the
+    folder's files: the search loads it before it forks, so its workers (and the closed
+    loop's re-plans, each a search) start without reading it again."""
     from robotplan.models.loading import load_dynamics
 
+    folder = Path(model_dir)
+    files = tuple(sorted((f.name, f.stat().st_mtime_ns, f.stat().st_size)
+                         for f in folder.iterdir() if f.is_file()))
+    key = (str(folder.resolve()), files)
+    if key not in _models:
+        _models.clear()  # one folder at a time: a process plans with one model
+        _models[key] = load_dynamics(folder)
+    return _models[key]
+
+
+def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings,
+                 space: SkeletonSpace, guesses: dict[Skeleton, dict] | None = None) -> None:
     one_thread()  # one process per core (robotplan.base.threads)
-    _worker.update(scene=scene, model=load_dynamics(model_dir), settings=settings,
+    _worker.update(scene=scene, model=_dynamics(model_dir), settings=settings,
                    space=space, guesses=guesses or {})
 
 
@@ -226,6 +243,7 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
             if not may_start() or collect(_solve(sk)):
                 break
     else:
+        _dynamics(str(model_dir))  # loaded here, inherited by the forked workers
         run_in_pool(_solve, queue, workers, _init_worker, args, collect, may_start)
     bar.close()
     order = {sk: i for i, sk in enumerate(queue)}
