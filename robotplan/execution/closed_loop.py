@@ -181,7 +181,7 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
                 name = world.pusher.name
                 target[name] = follow_object(target[name], loop.plan.q_obj[loop.t],
                                              seen.poses[obj])
-            elif settings.steer_gain and loop.pushing():
+            elif settings.steer_gain:
                 steer_actor(world, loop, target, seen.poses[obj], settings)
             world.run_step(command, target, loop.substeps[loop.t])
             loop.executed.append(loop.substeps[loop.t])

@@ -63,16 +63,18 @@ class LoopSettings:
     # off by default: carrying the pusher with a turned object turns the push with it, which
     # can drive the object further off (measured: docs/experiments.md#closed-loop)
     follow_object: bool = False
-    # m of sideways pusher offset per rad of the object's yaw off the plan in push steps and
-    # the largest offset (steer_pusher); 0, off: no gain helped beyond the scatter between
-    # scenes (measured: docs/experiments.md#closed-loop)
+    # m of sideways offset of the acting pusher or arm tip per rad of the object's yaw off
+    # the plan in push steps and the largest offset (steer_pusher); 0, off: for free pushers
+    # no gain helped beyond the scatter between scenes (measured:
+    # docs/experiments.md#closed-loop); arms steer (the `arms` overlay)
     steer_gain: float = 0.0
     steer_limit: float = 0.03
 
 
-LOOP_CLASSES = ("chains", "pose")
-"""Scene classes with their own closed-loop settings: ``chains``, scenes in which the pusher
-pushes one object into another; ``pose``, pose goals."""
+LOOP_CLASSES = ("arms", "chains", "pose")
+"""Scene classes with their own closed-loop settings: ``arms``, scenes pushed by robot arms;
+``chains``, scenes in which the pusher pushes one object into another; ``pose``, pose
+goals."""
 
 
 @cache

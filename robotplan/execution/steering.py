@@ -50,11 +50,14 @@ def steer_pusher(target: np.ndarray, start: np.ndarray, planned_pose: np.ndarray
 
 def steer_actor(world: SceneWorld, loop, target: dict[str, np.ndarray],
                 seen_pose: np.ndarray, settings: LoopSettings) -> None:
-    """Steer the acting actor's step ``target`` (actor → state, in place) by
+    """In push steps, steer the acting actor's step ``target`` (actor → state, in place) by
     :func:`steer_pusher`: a free pusher's position; an arm's joints, moved so that its tip
     shifts sideways to the object's planned step as a free pusher would (``Arm.steered``).
     ``loop``: the closed loop's state (its plan, the step ``t``, steps per phase ``T`` and
     the free pusher's planned positions ``drive``)."""
+    phase = loop.plan.skeleton.phases[loop.t // loop.T]
+    if phase.mode != "push":
+        return
     planned = loop.plan.q_obj
     gain, limit = settings.steer_gain, settings.steer_limit
     if world.pusher is not None:
@@ -62,7 +65,7 @@ def steer_actor(world: SceneWorld, loop, target: dict[str, np.ndarray],
         target[name] = steer_pusher(target[name], loop.drive[name][loop.t], planned[loop.t],
                                     seen_pose, gain, limit)
         return
-    actor = loop.plan.skeleton.phases[loop.t // loop.T].actor
+    actor = phase.actor
     if actor in world.arms:
         ahead = planned[loop.t + 1, :2]
         shift = steer_pusher(ahead, planned[loop.t, :2], planned[loop.t], seen_pose, gain,
