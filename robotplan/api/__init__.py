@@ -99,7 +99,8 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
          workers: int = 2, skeleton: str | Skeleton | None = None, max_pushes: int = 2,
          progress: bool = True, exhaustive: bool = False, quiet: bool = False,
          time_budget: float | None = None, warm_start: Plan | None = None,
-         fallback: bool = True, program: Mapping[str, object] | None = None) -> Plan:
+         fallback: bool = True, program: Mapping[str, object] | None = None,
+         replan: bool = False) -> Plan:
     """Search the scene's skeletons and solve their programs; no simulator runs.
 
     ``model``: the learned dynamics' folder (default: the shipped model of the scene's class,
@@ -110,6 +111,8 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     ``fallback`` is False). ``program``: program settings that win over those of the
     scene's class (:class:`~robotplan.program.settings.ProgramSettings` fields, e.g.
     ``{"with_contact": False}``); its re-plans keep them.
+    ``replan``: a re-plan during execution (the closed loop's): a pose goal's fresh search
+    runs the ``replan`` overlay's smaller budget first.
     """
     if isinstance(scene.goal, HangGoal):  # kinematic: a pose of the mug, no skeleton
         return plan_hang(scene, model)
@@ -121,7 +124,8 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
         guesses = {warm_start.best.skeleton: warm_guess(scene, warm_start.best)}
     obj, _actors = check_supported(scene)
     result, spaces = search_scene(scene, model_dir, solver, workers, skeleton, max_pushes,
-                                  progress, exhaustive, quiet, time_budget, guesses, program)
+                                  progress, exhaustive, quiet, time_budget, guesses, program,
+                                  replan=replan)
     if not result.solved and guesses is not None and fallback:  # the old skeleton is lost
         again, more = search_scene(scene, model_dir, solver, workers, None, max_pushes,
                                    progress, exhaustive, quiet, time_budget, program=program,
@@ -179,7 +183,7 @@ def _replanner(planned: Plan):
     def replan(observed: Scene, tail: Solution | None, fresh: bool) -> Plan:
         warm = Plan(observed, planned.obj, tail, True) if tail is not None else None
         return plan(observed, model, **options, progress=False, quiet=True,
-                    time_budget=REPLAN_BUDGET, warm_start=warm, fallback=fresh)
+                    time_budget=REPLAN_BUDGET, warm_start=warm, fallback=fresh, replan=True)
 
     return replan
 

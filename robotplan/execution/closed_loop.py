@@ -9,7 +9,8 @@ skeleton search when that does not plan; at a phase's end with ``fresh_beyond_dr
 when the object is beyond ``drift`` / ``drift_yaw``) when an object is further than
 ``drift`` / ``drift_yaw`` from the plan's state t, or further than the tighter
 ``phase_drift`` / ``phase_drift_yaw`` at the end of a phase; when the plan has run out and
-the goal is not met it plans afresh from the observed scene. With ``stop_when_lost``, an
+the goal is not met it plans the last push again from the observed scene (unless
+``redo_last_push`` is off), then afresh. With ``stop_when_lost``, an
 object beyond ``drift`` / ``drift_yaw`` once the re-plans are spent ends the execution.
 A re-plan is taken only if its plan is solved (every constraint met, plausible under the
 learned dynamics; as a last resort every constraint met is enough: at the plan's end with
@@ -170,8 +171,9 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
         command = {k: v[0] for k, v in loop.drive.items()}
         while True:
             if loop.t == len(loop.substeps):
+                redo = _last_push(loop) if settings.redo_last_push else None
                 if _goal_met(scene, obj, seen, settings) or not _ask(
-                        loop, scene, seen, _last_push(loop), "goal not met at the plan's end",
+                        loop, scene, seen, redo, "goal not met at the plan's end",
                         replan, settings, report, fresh=True,
                         last_resort=settings.adopt_feasible_at_end):
                     break

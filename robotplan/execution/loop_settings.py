@@ -43,6 +43,11 @@ class LoopSettings:
     # fresh search at once: the stale plan pushes where the object is not and drove it
     # 17-48 cm off on the push benchmark (measured: docs/experiments.md#closed-loop)
     fresh_beyond_drift: bool = True
+    # at the plan's end with the goal not met, the plan's last reach and push are tried
+    # again from where the object is before a fresh search; off (pose goals): the fresh
+    # search at once, where the redone push almost never solved
+    # (measured: docs/experiments.md#close-fits)
+    redo_last_push: bool = True
     # at the plan's end with the goal not met, a re-plan that meets every constraint is taken
     # even when the learned dynamics call it implausible (residual beyond 10 mm): the loop
     # would otherwise stop short of the goal, and it re-plans again if pybullet departs

@@ -324,3 +324,21 @@ def test_a_gross_phase_end_departure_takes_a_last_resort_plan_only_when_asked(bo
     at_phase_end = [r for r in ex.replans if r.reason.endswith("at the end of a phase")]
     assert at_phase_end and not at_phase_end[0].solved
     assert at_phase_end[0].adopted == beyond_drift
+
+
+@pytest.mark.parametrize("redo_last_push", [True, False])
+def test_at_the_plan_end_the_last_push_is_redone_first_only_when_asked(box_plan,
+                                                                       redo_last_push):
+    """The box 6 cm off and nothing plans: at the plan's end the re-planner gets the plan's
+    last push to redo (``redo_last_push``) or none, and may search afresh either way."""
+    calls = []
+
+    def nothing_plans(observed, tail, fresh):
+        calls.append((tail is not None, fresh))
+        return robotplan.Plan(observed, "box", None, False)
+
+    moved = _box_moved(box_plan)
+    settings = LoopSettings(redo_last_push=redo_last_push, max_replans=8)
+    ex = execute_closed_loop(moved, "box", box_plan.best, nothing_plans, settings)
+    assert ex.replans[-1].reason == "goal not met at the plan's end"
+    assert calls[-1] == (redo_last_push, True)
