@@ -40,6 +40,7 @@ from robotplan.program.solution import Solution
 from robotplan.program.solve import warm_guess
 from robotplan.scene import Scene
 from robotplan.scene.schema import HangGoal
+from robotplan.search.fallback import side_by_side, tail_and_fresh
 from robotplan.search.planner import FEASIBLE, PLAUSIBLE_RMS_MM, merge_results
 from robotplan.search.scene_search import (
     UnsupportedScene,
@@ -108,7 +109,8 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     skeleton (in the CLI's notation, or a ``Skeleton``) instead of the search.
     ``warm_start``: an earlier plan of this scene (at other poses): its skeleton is tried
     first, from its trajectories; a fresh search follows when that does not solve (unless
-    ``fallback`` is False). ``program``: program settings that win over those of the
+    ``fallback`` is False; for a free pusher's pose goal the two run side by side,
+    :mod:`robotplan.search.fallback`). ``program``: program settings that win over those of the
     scene's class (:class:`~robotplan.program.settings.ProgramSettings` fields, e.g.
     ``{"with_contact": False}``); its re-plans keep them.
     ``replan``: a re-plan during execution (the closed loop's): a pose goal's fresh search
@@ -123,14 +125,18 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
         skeleton = warm_start.best.skeleton
         guesses = {warm_start.best.skeleton: warm_guess(scene, warm_start.best)}
     obj, _actors = check_supported(scene)
-    result, spaces = search_scene(scene, model_dir, solver, workers, skeleton, max_pushes,
-                                  progress, exhaustive, quiet, time_budget, guesses, program,
-                                  replan=replan)
-    if not result.solved and guesses is not None and fallback:  # the old skeleton is lost
-        again, more = search_scene(scene, model_dir, solver, workers, None, max_pushes,
-                                   progress, exhaustive, quiet, time_budget, program=program,
-                                   replan=True)
-        result, spaces = merge_results(result, again), {**spaces, **more}
+    if fallback and side_by_side(scene, workers, guesses):  # the tail and a fresh search
+        result, spaces = tail_and_fresh(scene, model_dir, solver, skeleton, guesses, max_pushes,
+                                        progress, exhaustive, quiet, time_budget, program)
+    else:
+        result, spaces = search_scene(scene, model_dir, solver, workers, skeleton, max_pushes,
+                                      progress, exhaustive, quiet, time_budget, guesses,
+                                      program, replan=replan)
+        if not result.solved and guesses is not None and fallback:  # the old skeleton is lost
+            again, more = search_scene(scene, model_dir, solver, workers, None, max_pushes,
+                                       progress, exhaustive, quiet, time_budget,
+                                       program=program, replan=True)
+            result, spaces = merge_results(result, again), {**spaces, **more}
     if not quiet:
         kind = dynamics_kind(model_dir)
         named = ", the default for this scene's class" if model is None else ""

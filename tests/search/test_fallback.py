@@ -1,0 +1,49 @@
+"""A re-plan's tail and fresh search side by side (robotplan.search.fallback)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import robotplan
+from robotplan.bench.push_scenes import draw_scene
+from robotplan.program.tail import solution_tail
+from robotplan.scene.loader import parse_scene
+from robotplan.search.fallback import side_by_side
+
+
+@pytest.fixture(scope="module")
+def pose_plan():
+    scene = parse_scene(draw_scene(4, 0, "pose"))
+    planned = robotplan.plan(scene, workers=2, progress=False, quiet=True)
+    assert planned.solved
+    return planned
+
+
+def test_only_a_free_pushers_pose_re_plan_with_two_workers_runs_side_by_side(pose_plan):
+    scene = pose_plan.scene
+    assert side_by_side(scene, 2, {"tail": None})
+    assert not side_by_side(scene, 1, {"tail": None}) and not side_by_side(scene, 2, None)
+
+
+@pytest.mark.parametrize(("dx", "turn_deg", "tail_solves"), [(0.008, 5.0, True),
+                                                             (0.02, 8.0, False)])
+def test_side_by_side_plans_what_the_sequence_plans(pose_plan, dx, turn_deg, tail_solves):
+    """Re-planned after its first push from ``dx`` m and ``turn_deg`` off: the tail and
+    the fresh search side by side (2 workers) give the plan the tail-then-fresh sequence
+    gives (1 worker): the tail's alone where it solves, else the fresh search's too."""
+    best, obj = pose_plan.best, pose_plan.obj
+    T = (len(best.q_obj) - 1) // len(best.skeleton.phases)
+    x, y, yaw = best.q_obj[2 * T]
+    observed = pose_plan.scene.with_state({obj: (x + dx, y, yaw + np.radians(turn_deg))})
+    tail = solution_tail(best, 2 * T)
+    warm = robotplan.Plan(observed, obj, tail, True)
+    both, sequence = (robotplan.plan(observed, workers=w, warm_start=warm, progress=False,
+                                     quiet=True, time_budget=20.0, replan=True)
+                      for w in (2, 1))
+    assert both.solved and sequence.solved
+    assert [c.skeleton for c in both.candidates] == [c.skeleton for c in sequence.candidates]
+    assert [c.violation for c in both.candidates] == [c.violation for c in sequence.candidates]
+    assert both.best.skeleton == sequence.best.skeleton and both.space == sequence.space
+    assert (len(both.candidates) == 1) == tail_solves
+    assert both.candidates[0].skeleton == tail.skeleton
