@@ -46,7 +46,7 @@ class LoopSettings:
     # at the plan's end with the goal not met, the plan's last reach and push are tried
     # again from where the object is before a fresh search; off (pose goals): the fresh
     # search at once, where the redone push almost never solved
-    # (measured: docs/experiments.md#close-fits)
+    # (measured: docs/experiments.md#side-by-side)
     redo_last_push: bool = True
     # at the plan's end with the goal not met, a re-plan that meets every constraint is taken
     # even when the learned dynamics call it implausible (residual beyond 10 mm): the loop
