@@ -176,12 +176,7 @@ def test_a_departure_whose_tail_does_not_plan_asks_for_a_fresh_search(box_plan,
                                                                       fresh_after_miss):
     """The re-planner is asked with the plan's tail first; when that does not plan, a fresh
     search is asked at once only if ``fresh_after_miss``, and at the plan's end always."""
-    calls = []
-
-    def nothing_plans(observed, tail, fresh):
-        calls.append((tail is not None, fresh))
-        return robotplan.Plan(observed, "box", None, False)
-
+    calls, nothing_plans = _recording_nothing_plans()
     moved = _box_moved(box_plan)
     settings = LoopSettings(fresh_after_miss=fresh_after_miss, max_replans=3)
     ex = execute_closed_loop(moved, "box", box_plan.best, nothing_plans, settings)
@@ -210,6 +205,18 @@ def test_an_object_lost_with_no_re_plans_left_ends_the_run_only_when_asked(box_p
 
 def _nothing_plans(observed, tail, fresh):
     return robotplan.Plan(observed, "box", None, False)
+
+
+def _recording_nothing_plans():
+    """A re-planner that plans nothing, and the list of how it was asked: whether with a
+    tail, and whether a fresh search may follow."""
+    calls: list[tuple[bool, bool]] = []
+
+    def nothing_plans(observed, tail, fresh):
+        calls.append((tail is not None, fresh))
+        return _nothing_plans(observed, tail, fresh)
+
+    return calls, nothing_plans
 
 
 @pytest.mark.slow
@@ -331,12 +338,7 @@ def test_at_the_plan_end_the_last_push_is_redone_first_only_when_asked(box_plan,
                                                                        redo_last_push):
     """The box 6 cm off and nothing plans: at the plan's end the re-planner gets the plan's
     last push to redo (``redo_last_push``) or none, and may search afresh either way."""
-    calls = []
-
-    def nothing_plans(observed, tail, fresh):
-        calls.append((tail is not None, fresh))
-        return robotplan.Plan(observed, "box", None, False)
-
+    calls, nothing_plans = _recording_nothing_plans()
     moved = _box_moved(box_plan)
     settings = LoopSettings(redo_last_push=redo_last_push, max_replans=8)
     ex = execute_closed_loop(moved, "box", box_plan.best, nothing_plans, settings)
