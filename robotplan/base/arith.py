@@ -1,10 +1,10 @@
 """One arithmetic on every x86-64 CPU the planner runs on.
 
 Plans move with the last bit of the SDF values (SNOPT's path through a non-convex program
-branches on them), so the default arithmetic must not follow the CPU. PyTorch, MKL and
-oneDNN pick their kernels by CPU features at first use: AVX-512 reductions sum in another
-order than AVX2 ones, and oneDNN multiplies in bfloat16 or AMX where the CPU has them.
-Importing robotplan pins all three to the AVX2 kernels, which every x86-64 CPU of these
+branches on them), so the default arithmetic must not follow the CPU. PyTorch, MKL,
+oneDNN and OpenBLAS pick their kernels by CPU features at first use: AVX-512 reductions sum
+in another order than AVX2 ones, and oneDNN multiplies in bfloat16 or AMX where the CPU has
+them. Importing robotplan pins all four to the AVX2 kernels, which every x86-64 CPU of these
 machines has (:data:`PINNED`), unless the variables are already set.
 
 Opt-ins, for a user who trades reproducibility across machines for speed:
@@ -23,9 +23,12 @@ import os
 
 __all__ = ["BFLOAT16_CPU_FLAGS", "PINNED", "bfloat16_head", "cpu_flags", "pin_arithmetic"]
 
-PINNED = {"ATEN_CPU_CAPABILITY": "avx2", "MKL_CBWR": "AVX2", "ONEDNN_MAX_CPU_ISA": "AVX2"}
+PINNED = {"ATEN_CPU_CAPABILITY": "avx2", "MKL_CBWR": "AVX2", "ONEDNN_MAX_CPU_ISA": "AVX2",
+          "OPENBLAS_CORETYPE": "Haswell"}
 """Environment read by PyTorch (its vectorised kernels), MKL (conditional numerical
-reproducibility) and oneDNN (the highest instruction set it dispatches to)."""
+reproducibility), oneDNN (the highest instruction set it dispatches to) and the OpenBLAS
+that numpy and scipy bring (its kernels: Haswell's are AVX2; it picks SkylakeX's AVX-512
+ones where the CPU has them)."""
 
 BFLOAT16_CPU_FLAGS = ("avx512_bf16", "amx_bf16")
 """CPU features (``/proc/cpuinfo`` flags) with native bfloat16 dot products."""

@@ -232,6 +232,35 @@ def _capability(**env: str) -> str:
     return res.stdout.strip()
 
 
+def _blas_cores(**env: str) -> str:
+    """The kernel family of every OpenBLAS numpy and scipy load, in a fresh interpreter that
+    imports robotplan first."""
+    clean = {k: v for k, v in os.environ.items()
+             if k not in ("OPENBLAS_CORETYPE", "ROBOTPLAN_CPU_FEATURES")}
+    code = ("import robotplan, ctypes, numpy, scipy.linalg\n"
+            "from robotplan.base.threads import blas_libraries\n"
+            "names = set()\n"
+            "for path in blas_libraries():\n"
+            "    lib = ctypes.CDLL(str(path))\n"
+            "    for n in ('scipy_openblas_get_corename64_', 'scipy_openblas_get_corename',\n"
+            "              'openblas_get_corename'):\n"
+            "        f = getattr(lib, n, None)\n"
+            "        if f is not None:\n"
+            "            f.restype = ctypes.c_char_p\n"
+            "            names.add(f().decode())\n"
+            "            break\n"
+            "print(','.join(sorted(names)))")
+    res = subprocess.run([sys.executable, "-c", code], env={**clean, **env},
+                         capture_output=True, text=True, check=True)
+    return res.stdout.strip()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/maps")
+def test_importing_robotplan_pins_openblas_to_its_avx2_kernels():
+    assert _blas_cores() == "Haswell"
+    assert _blas_cores(OPENBLAS_CORETYPE="Sandybridge") == "Sandybridge"  # the user's own
+
+
 def test_importing_robotplan_pins_the_libraries_to_one_kernel_family():
     """The same arithmetic on every CPU: AVX2 kernels in PyTorch, MKL and oneDNN unless the
     user opts in to the CPU's own (ROBOTPLAN_CPU_FEATURES=native)."""
