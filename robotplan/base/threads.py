@@ -16,7 +16,7 @@ from pathlib import Path
 
 import torch
 
-__all__ = ["blas_libraries", "blas_threads", "one_thread"]
+__all__ = ["blas_cores", "blas_libraries", "blas_threads", "one_thread"]
 
 # the setters OpenBLAS exports: plain builds, and the numpy / scipy wheels' prefixed ones
 # (``64_``: the 64-bit integer interface numpy uses)
@@ -24,6 +24,8 @@ _SETTERS = ("openblas_set_num_threads", "openblas_set_num_threads64_",
             "scipy_openblas_set_num_threads", "scipy_openblas_set_num_threads64_")
 _GETTERS = ("openblas_get_num_threads", "openblas_get_num_threads64_",
             "scipy_openblas_get_num_threads", "scipy_openblas_get_num_threads64_")
+_CORE_NAMES = ("openblas_get_corename", "scipy_openblas_get_corename",
+               "scipy_openblas_get_corename64_")
 
 
 def blas_libraries() -> list[Path]:
@@ -33,26 +35,39 @@ def blas_libraries() -> list[Path]:
         lines = Path("/proc/self/maps").read_text().splitlines()
     except OSError:
         return []
-    paths = {line.split(maxsplit=5)[5] for line in lines if len(line.split(maxsplit=5)) == 6}
-    return sorted(Path(p) for p in paths if "openblas" in Path(p).name.lower())
+    fields = (line.split(maxsplit=5) for line in lines)
+    paths = {Path(f[5]) for f in fields if len(f) == 6}  # the mapped file, where there is one
+    return sorted(p for p in paths if "openblas" in p.name.lower())
 
 
-def _call_first(lib: ctypes.CDLL, names: tuple[str, ...], *args: int) -> int | None:
+def _call_first(lib: ctypes.CDLL, names: tuple[str, ...], *args: int, restype=ctypes.c_int):
+    """What the first of ``names`` that ``lib`` exports returns (None: it has none)."""
     for name in names:
         fn = getattr(lib, name, None)
         if fn is not None:
-            return int(fn(*args) or 0)
+            fn.restype = restype
+            return fn(*args)
     return None
+
+
+def _per_library(names: tuple[str, ...], restype=ctypes.c_int) -> dict[str, object]:
+    out = {}
+    for path in blas_libraries():
+        value = _call_first(ctypes.CDLL(str(path)), names, restype=restype)
+        if value is not None:
+            out[path.name] = value
+    return out
 
 
 def blas_threads() -> dict[str, int]:
     """Threads per loaded OpenBLAS library, by file name."""
-    out = {}
-    for path in blas_libraries():
-        n = _call_first(ctypes.CDLL(str(path)), _GETTERS)
-        if n is not None:
-            out[path.name] = n
-    return out
+    return _per_library(_GETTERS)
+
+
+def blas_cores() -> dict[str, str]:
+    """The kernel family (``Haswell``, ``SkylakeX``, …) per loaded OpenBLAS library, by file
+    name (:data:`robotplan.base.arith.PINNED` pins it)."""
+    return {k: v.decode() for k, v in _per_library(_CORE_NAMES, ctypes.c_char_p).items()}
 
 
 def one_thread() -> None:

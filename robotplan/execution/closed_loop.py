@@ -49,6 +49,7 @@ from robotplan.execution.loop_settings import (
 from robotplan.execution.scene_world import Observation, SceneWorld, actuation
 from robotplan.execution.sim import PHYSICS, Physics
 from robotplan.execution.steering import follow_object, steer_actor, steer_pusher
+from robotplan.geometry.transforms import wrap_angle
 from robotplan.program.solution import Solution
 from robotplan.program.tail import solution_tail
 from robotplan.scene import Scene
@@ -87,17 +88,13 @@ class Replan:
 Replanner = Callable[[Scene, "Solution | None", bool], object]
 
 
-def _wrap(angle: float) -> float:
-    return (angle + math.pi) % (2 * math.pi) - math.pi
-
-
 def departure(planned: dict[str, np.ndarray], seen: dict[str, np.ndarray], far: float,
               far_yaw: float) -> str | None:
     """Why the observed poses ``seen`` (name → x, y, yaw) leave the ``planned`` ones: the
     first object off by more than ``far`` m or ``far_yaw`` rad, or None."""
     for name, q in planned.items():
         gap = float(np.hypot(*(seen[name][:2] - q[:2])))
-        turn = abs(_wrap(float(seen[name][2] - q[2])))
+        turn = abs(wrap_angle(float(seen[name][2] - q[2])))
         if gap > far or turn > far_yaw:
             return f"{name} {1000 * gap:.1f} mm / {math.degrees(turn):.1f}° off the plan"
     return None

@@ -10,12 +10,9 @@ import numpy as np
 
 from robotplan.execution.loop_settings import LoopSettings
 from robotplan.execution.scene_world import SceneWorld
+from robotplan.geometry.transforms import wrap_angle
 
 __all__ = ["follow_object", "steer_actor", "steer_pusher"]
-
-
-def _wrap(angle: float) -> float:
-    return (angle + math.pi) % (2 * math.pi) - math.pi
 
 
 def follow_object(target: np.ndarray, planned_pose: np.ndarray, seen_pose: np.ndarray
@@ -43,7 +40,7 @@ def steer_pusher(target: np.ndarray, start: np.ndarray, planned_pose: np.ndarray
     if length < 1e-6:
         return np.asarray(target, dtype=float)
     left = np.array([-step[1], step[0]]) / length
-    yaw_off = _wrap(float(seen_pose[2] - planned_pose[2]))
+    yaw_off = wrap_angle(float(seen_pose[2] - planned_pose[2]))
     side = float((seen_pose[:2] - planned_pose[:2]) @ left) + gain * yaw_off
     return np.asarray(target, dtype=float) + float(np.clip(side, -limit, limit)) * left
 

@@ -237,19 +237,9 @@ def _blas_cores(**env: str) -> str:
     imports robotplan first."""
     clean = {k: v for k, v in os.environ.items()
              if k not in ("OPENBLAS_CORETYPE", "ROBOTPLAN_CPU_FEATURES")}
-    code = ("import robotplan, ctypes, numpy, scipy.linalg\n"
-            "from robotplan.base.threads import blas_libraries\n"
-            "names = set()\n"
-            "for path in blas_libraries():\n"
-            "    lib = ctypes.CDLL(str(path))\n"
-            "    for n in ('scipy_openblas_get_corename64_', 'scipy_openblas_get_corename',\n"
-            "              'openblas_get_corename'):\n"
-            "        f = getattr(lib, n, None)\n"
-            "        if f is not None:\n"
-            "            f.restype = ctypes.c_char_p\n"
-            "            names.add(f().decode())\n"
-            "            break\n"
-            "print(','.join(sorted(names)))")
+    code = ("import robotplan, numpy, scipy.linalg\n"
+            "from robotplan.base.threads import blas_cores\n"
+            "print(','.join(sorted(set(blas_cores().values()))))")
     res = subprocess.run([sys.executable, "-c", code], env={**clean, **env},
                          capture_output=True, text=True, check=True)
     return res.stdout.strip()
