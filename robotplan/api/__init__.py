@@ -42,11 +42,11 @@ from robotplan.scene import Scene
 from robotplan.scene.schema import HangGoal
 from robotplan.search.fallback import side_by_side, tail_and_fresh
 from robotplan.search.planner import FEASIBLE, PLAUSIBLE_RMS_MM, merge_results
+from robotplan.search.scene_classes import default_dynamics
 from robotplan.search.scene_search import (
     UnsupportedScene,
     candidate_table,
     check_supported,
-    default_dynamics,
     metres,
     search_scene,
 )
@@ -105,7 +105,7 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     """Search the scene's skeletons and solve their programs; no simulator runs.
 
     ``model``: the learned dynamics' folder (default: the shipped model of the scene's class,
-    :func:`~robotplan.search.scene_search.default_dynamics`). ``skeleton``: one
+    :func:`~robotplan.search.scene_classes.default_dynamics`). ``skeleton``: one
     skeleton (in the CLI's notation, or a ``Skeleton``) instead of the search.
     ``warm_start``: an earlier plan of this scene (at other poses): its skeleton is tried
     first, from its trajectories; a fresh search follows when that does not solve (unless

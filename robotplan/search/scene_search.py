@@ -8,12 +8,8 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Mapping
 from dataclasses import replace
-from functools import cache
 from pathlib import Path
 
-import yaml
-
-from robotplan.base.resources import DYNAMICS_FOLDERS, skeletons_dir
 from robotplan.functionals.clearance import OBSTACLE_MARGIN
 from robotplan.models.loading import dynamics_kind
 from robotplan.program.arm_program import reach_check
@@ -33,71 +29,20 @@ from robotplan.scene import Scene
 from robotplan.search.planner import FEASIBLE, SearchResult, merge_results, search_push
 from robotplan.search.pose_search import search_pose_budgets, search_region_fits
 from robotplan.search.route import routed_candidates
+from robotplan.search.scene_classes import chain_target, scene_classes
 
-__all__ = ["DYNAMICS_CLASSES", "UnsupportedScene", "budget_spent", "candidate_table",
-           "candidate_tiers", "check_supported", "default_dynamics", "load_default_dynamics",
-           "metres", "scene_classes", "search_scene", "settings_for"]
+__all__ = ["UnsupportedScene", "budget_spent", "candidate_table", "candidate_tiers",
+           "check_supported", "metres", "search_scene", "settings_for"]
 
 
 class UnsupportedScene(ValueError):
     """The scene is valid but needs a planner feature that is not built yet."""
 
 
-def _chain_target(scene: Scene) -> tuple[str, str] | None:
-    """``(obj, target)`` when the only free pusher may not touch the goal's object but may
-    touch the one other object: it pushes ``obj``, which pushes ``target`` (paper Fig. 9)."""
-    if scene.robots or len(scene.pushers) != 1 or len(scene.objects) != 2:
-        return None
-    goal_obj = getattr(scene.goal, "object", None)
-    allowed = scene.pushers[0].touches
-    others = [o.name for o in scene.objects if o.name != goal_obj]
-    if allowed is None or goal_obj in allowed or others[0] not in allowed:
-        return None
-    return others[0], goal_obj
-
-
-DYNAMICS_CLASSES = ("arms", "chains", "obstacles", "pose")
-"""The classes a scene may belong to (:func:`scene_classes`), each of which may have its own
-default learned dynamics (``skeletons/dynamics.yaml``), program settings
-(``skeletons/settings.yaml``: ``arms``, ``pose``) and closed-loop settings
-(``skeletons/loop.yaml``: ``chains``)."""
-
-
-def scene_classes(scene: Scene) -> tuple[str, ...]:
-    """The classes of ``DYNAMICS_CLASSES`` a scene belongs to, in that order (chains: the
-    pusher may touch only the object that pushes the goal's object)."""
-    return tuple(name for name, member in (
-        ("arms", bool(scene.robots)), ("chains", _chain_target(scene) is not None),
-        ("obstacles", bool(scene.obstacles)), ("pose", scene.goal.type == "pose")) if member)
-
-
-@cache
-def load_default_dynamics(path: Path | None = None) -> dict[str, str]:
-    """``skeletons/dynamics.yaml``: scene class (or ``default``) → dynamics kind."""
-    path = path or skeletons_dir() / "dynamics.yaml"
-    data = yaml.safe_load(path.read_text()) or {}
-    if not isinstance(data, dict) or "default" not in data:
-        raise ValueError(f"{path}: must map scene classes and 'default' to dynamics kinds")
-    for name, kind in data.items():
-        if name != "default" and name not in DYNAMICS_CLASSES:
-            raise ValueError(f"{path}: {name}: not a scene class; one of {DYNAMICS_CLASSES}")
-        if kind not in DYNAMICS_FOLDERS:
-            raise ValueError(f"{path}: {name}: {kind!r} is not a dynamics kind; one of "
-                             f"{tuple(DYNAMICS_FOLDERS)}")
-    return data
-
-
-def default_dynamics(scene: Scene) -> str:
-    """The dynamics kind (``flow``, ``rigid``, ``direct``) ``scene`` plans with when none is
-    named: that of its first class listed in ``skeletons/dynamics.yaml``, else ``default``."""
-    table = load_default_dynamics()
-    return next((table[c] for c in scene_classes(scene) if c in table), table["default"])
-
-
 def check_supported(scene: Scene) -> tuple[str, list[str]]:
     """The object the actors touch and the actors (pushers or arms) of a scene the
     planner handles."""
-    chain = _chain_target(scene)
+    chain = chain_target(scene)
     if chain is not None and scene.goal.type != "touch":
         return chain[0], [scene.pushers[0].name]
     if len(scene.objects) != 1:
@@ -130,7 +75,7 @@ def candidate_tiers(scene: Scene, obj: str, actors: list[str], skeleton: str | S
     seen from the goal), every choice of arm pruned by reach before any program is solved,
     and a frame with nothing in reach skipped. Lazy: a frame is pruned when it is reached."""
     space = space_for(scene)
-    chain = _chain_target(scene)
+    chain = chain_target(scene)
     if skeleton:
         given = (skeleton if isinstance(skeleton, Skeleton)
                  else parse_skeleton(skeleton, actors[0], obj))
@@ -258,7 +203,9 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     fitted pushes' tier, even past ``time_budget`` (at most four programs). ``program``:
     a user's program settings (:func:`~robotplan.program.settings.with_overrides`).
     ``replan``: a fresh search during execution; a pose goal's then runs with the
-    ``replan`` overlay's budget first and its own where that does not solve."""
+    ``replan`` overlay's budget first and its own where that does not solve, and a region
+    goal's starts with the fitted pushes' tier at that budget (the object has mostly come
+    near the region by then), the plain tier following where that does not solve."""
     obj, actors = check_supported(scene)
     settings = with_overrides(settings_for(scene, solver, dynamics_kind(model_dir)), program)
     if guesses:  # a re-plan from an earlier plan: the `replan` overlay's budget
@@ -266,7 +213,7 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     result, spaces = SearchResult(None), {}  # spaces: a skeleton may recur in two tiers
     space = space_for(scene)
     if (scene.goal.type == "pose" and not guesses and not scene.robots
-            and _chain_target(scene) is None):
+            and chain_target(scene) is None):
         given = parse_skeleton(skeleton, actors[0], obj) if isinstance(skeleton, str) else skeleton
         # executing: the re-plans' budget first, faster (docs/experiments.md#close-fits)
         budgets = (program_settings("replan", base=settings), settings) if replan else (settings,)
@@ -274,6 +221,14 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
                                              max_pushes, workers, progress, exhaustive, quiet,
                                              time_budget, given)
         if result.candidates:  # the plain tier's pushes do not turn: it plans no pose goal
+            return result, spaces
+    fits = (scene.goal.type == "region" and skeleton is None and not guesses
+            and not scene.robots and not scene.obstacles and chain_target(scene) is None)
+    if fits and replan:  # executing: the fitted pushes first (docs/experiments.md#replan-fits)
+        fitted, result = search_region_fits(scene, obj, actors[0], model_dir, program_settings(
+            "replan", base=settings), space, max_pushes, workers, progress, exhaustive, quiet)
+        spaces.update({id(s): fitted for s in result.candidates})
+        if result.solved:
             return result, spaces
     for candidates, space in candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet):
         left = None if time_budget is None else max(0.0, time_budget - result.seconds)
@@ -291,8 +246,7 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
                                        max_pushes, workers, progress, exhaustive, quiet, left)
         spaces.update({id(s): routed for s in extra.candidates})
         result = merge_results(result, extra)
-    if (not result.solved and scene.goal.type == "region" and skeleton is None and not guesses
-            and not scene.robots and not scene.obstacles and _chain_target(scene) is None):
+    if not result.solved and fits:
         fitted, extra = search_region_fits(scene, obj, actors[0], model_dir, settings, space,
                                             max_pushes, workers, progress, exhaustive, quiet)
         spaces.update({id(s): fitted for s in extra.candidates})

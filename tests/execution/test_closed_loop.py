@@ -74,6 +74,8 @@ def test_chains_re_plan_from_their_own_phase_end_departures(tmp_path):
     posed = loop_settings_for(replace(single, goal=PoseGoal("box", (0.3, 0.1, 0.5))))
     assert all(getattr(posed, k) == v for k, v in load_loop_overlays()["pose"].items())
     assert posed.fresh_after_miss and not LoopSettings().fresh_after_miss
+    arms = loop_settings_for(load_scene(TASKS / "two_arm_handover.yaml"))
+    assert chained.max_replans == arms.max_replans < posed.max_replans == LoopSettings().max_replans
     assert_each_refused(load_loop_overlays.__wrapped__, tmp_path / "loop.yaml", (
         ("chains: {no_such: 1}", "loop.yaml: chains.no_such: not a closed-loop"),
         ("pets: {}", "pets: not a scene class"),

@@ -6,7 +6,7 @@ import robotplan.search.scene_search as search_module
 from robotplan.api import solve
 from robotplan.scene import load_scene
 from robotplan.search.planner import SearchResult
-from tests.conftest import TASKS, assert_each_refused
+from tests.conftest import TASKS
 
 
 def test_arm_search_tries_init_points_seen_from_the_goal_when_face_pushes_fail(
@@ -87,24 +87,6 @@ def test_a_warm_start_along_a_route_keeps_its_steps_and_the_routes_settings(monk
     settings, space = calls[0]
     assert space.steps_per_phase == 14
     assert settings.push_friction == 0.02 and settings.lever_weight == 100.0
-
-
-def test_each_scene_class_plans_with_its_own_default_dynamics(tmp_path):
-    """skeletons/dynamics.yaml: a single free object takes ``default``; arms, chains,
-    obstacles take their own rows; a bad table names its file and field."""
-    table = search_module.load_default_dynamics()
-    expected = {"box_push": table["default"], "lshape_push": table["default"],
-                "three_objects": table["chains"], "two_arm_left_only": table["arms"],
-                "obstacle_push": table["obstacles"]}
-    for task, kind in expected.items():
-        assert search_module.default_dynamics(load_scene(TASKS / f"{task}.yaml")) == kind, task
-    assert search_module.scene_classes(load_scene(TASKS / "three_objects.yaml")) == ("chains",)
-    assert search_module.scene_classes(load_scene(TASKS / "box_push.yaml")) == ()
-    assert_each_refused(search_module.load_default_dynamics.__wrapped__,
-                        tmp_path / "dynamics.yaml", (
-        ("arms: flow", "'default'"),
-        ("default: flow\npets: flow", "pets: not a scene class"),
-        ("default: quadratic", "default: 'quadratic' is not a dynamics kind")))
 
 
 def test_a_warm_started_search_plans_with_the_replan_overlay(monkeypatch):
@@ -194,7 +176,8 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
 def test_a_fresh_search_while_executing_a_pose_goal_plans_with_the_replan_overlay(monkeypatch):
     """``replan=True`` (the closed loop's fresh search) gives a pose goal's fitted pushes the
     ``replan`` overlay's budget, and where that solves nothing its own; a region goal's
-    fresh search keeps its scene's settings."""
+    fresh search starts with its fitted pushes at that budget, then the plain tier and the
+    fitted pushes at its scene's settings where nothing solves."""
     from robotplan.program.settings import load_overlays
 
     calls = []
@@ -215,18 +198,20 @@ def test_a_fresh_search_while_executing_a_pose_goal_plans_with_the_replan_overla
             assert all(kind == scene.goal.type for kind, _, _ in calls)
             with_overlay = [all(getattr(s, k) == v for k, v in overlay.items())
                             for _, s, _ in calls]
-            assert with_overlay[0] == (replan and scene is pose), replan
+            assert with_overlay[0] == replan
             fitted = [w for w, (_, _, guessed) in zip(with_overlay, calls, strict=True)
                       if guessed]
-            if scene is pose:  # then the plain tier, as nothing was solved
-                assert fitted == ([True, False] if replan else [False])
+            assert fitted == ([True, False] if replan else [False])  # nothing was solved
+            assert len(calls) == len(fitted) + 1  # and one plain tier, at the scene's settings
+            assert not any(w for w, (_, _, guessed) in zip(with_overlay, calls, strict=True)
+                           if not guessed)
 
 
 def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(monkeypatch):
     """A free pusher's region goal whose plain tier solves nothing: a second search of the
     pushes fitted to a pose inside the region (each with its guess ending there, the pose
     goals' turning gain, the region's own goal tolerance). None when the plain tier
-    solves."""
+    solves; while executing (``replan``) the fitted pushes come first."""
     import numpy as np
     import torch
 
@@ -235,13 +220,13 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
     from robotplan.program.settings import settings_for as overlay
     from robotplan.program.solution import Solution
 
-    calls, budgets, solve_plain = [], [], [False]
+    calls, budgets, solve_plain, solve_fits = [], [], [False], [False]
 
     def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
                time_budget, space, guesses=None, ordered=False):
         calls.append((list(skeletons), space, guesses, settings))
         budgets.append((time_budget, ordered))
-        solved = solve_plain[0] and not guesses
+        solved = solve_fits[0] if guesses else solve_plain[0]
         tried = [Solution(sk, solved, "snopt info 31", 0.0 if solved else 0.5, 1.0, 1.0,
                           np.zeros((1, 3)), np.zeros((1, 2))) for sk in skeletons[:1]]
         return SearchResult(tried[0] if tried else None, tried, 1.0)
@@ -269,3 +254,9 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
     solve_plain[0] = True
     search_module.search_scene(scene, model, quiet=True, progress=False)
     assert len(calls) == 1 and calls[0][2] is None  # solved: no fitted tier
+
+    calls.clear()  # executing, the fitted pushes come first: solved, no plain tier
+    solve_fits[0] = True
+    result, _ = search_module.search_scene(scene, model, quiet=True, progress=False,
+                                           replan=True)
+    assert len(calls) == 1 and calls[0][2] is not None and result.solved
