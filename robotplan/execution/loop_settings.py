@@ -35,7 +35,7 @@ class LoopSettings:
     pose_coverage: float = 0.96
     touch_gap: float = 0.005  # m: a touch goal farther than this at the end: plan afresh
     # a free pusher's L-shape that departs again and again used up 8 re-plans and ended
-    # at 0.07-0.78 where 9-12 took it to 1.0; arms and chains keep 8 (their overlays)
+    # at 0.07-0.78 where 9-12 took it to 0.998-1.000; arms and chains keep 8 (overlays)
     # (measured: docs/experiments.md#replan-fits)
     max_replans: int = 16
     # off by default: searching afresh at once when a departure's re-anchored tail does not
