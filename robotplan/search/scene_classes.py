@@ -33,7 +33,7 @@ DYNAMICS_CLASSES = ("arms", "chains", "obstacles", "pose")
 """The classes a scene may belong to (:func:`scene_classes`), each of which may have its own
 default learned dynamics (``skeletons/dynamics.yaml``), program settings
 (``skeletons/settings.yaml``: ``arms``, ``pose``) and closed-loop settings
-(``skeletons/loop.yaml``: ``chains``)."""
+(``skeletons/loop.yaml``: ``arms``, ``chains``, ``pose``)."""
 
 
 def scene_classes(scene: Scene) -> tuple[str, ...]:
