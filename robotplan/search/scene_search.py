@@ -208,15 +208,16 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     near the region by then), the plain tier following where that does not solve."""
     obj, actors = check_supported(scene)
     settings = with_overrides(settings_for(scene, solver, dynamics_kind(model_dir)), program)
-    if guesses:  # a re-plan from an earlier plan: the `replan` overlay's budget
-        settings = program_settings("replan", base=settings)
+    replan_budget = program_settings("replan", base=settings)  # the re-plans' solver budget
+    if guesses:  # a re-plan from an earlier plan
+        settings = replan_budget
     result, spaces = SearchResult(None), {}  # spaces: a skeleton may recur in two tiers
     space = space_for(scene)
     if (scene.goal.type == "pose" and not guesses and not scene.robots
             and chain_target(scene) is None):
         given = parse_skeleton(skeleton, actors[0], obj) if isinstance(skeleton, str) else skeleton
         # executing: the re-plans' budget first, faster (docs/experiments.md#close-fits)
-        budgets = (program_settings("replan", base=settings), settings) if replan else (settings,)
+        budgets = (replan_budget, settings) if replan else (settings,)
         result, spaces = search_pose_budgets(scene, obj, actors[0], model_dir, budgets, space,
                                              max_pushes, workers, progress, exhaustive, quiet,
                                              time_budget, given)
@@ -225,8 +226,9 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     fits = (scene.goal.type == "region" and skeleton is None and not guesses
             and not scene.robots and not scene.obstacles and chain_target(scene) is None)
     if fits and replan:  # executing: the fitted pushes first (docs/experiments.md#replan-fits)
-        fitted, result = search_region_fits(scene, obj, actors[0], model_dir, program_settings(
-            "replan", base=settings), space, max_pushes, workers, progress, exhaustive, quiet)
+        fitted, result = search_region_fits(scene, obj, actors[0], model_dir, replan_budget,
+                                            space, max_pushes, workers, progress, exhaustive,
+                                            quiet)
         spaces.update({id(s): fitted for s in result.candidates})
         if result.solved:
             return result, spaces
