@@ -101,7 +101,7 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
          progress: bool = True, exhaustive: bool = False, quiet: bool = False,
          time_budget: float | None = None, warm_start: Plan | None = None,
          fallback: bool = True, program: Mapping[str, object] | None = None,
-         replan: bool = False) -> Plan:
+         replan: bool = False, last_resort: float | None = None) -> Plan:
     """Search the scene's skeletons and solve their programs; no simulator runs.
 
     ``model``: the learned dynamics' folder (default: the shipped model of the scene's class,
@@ -114,7 +114,9 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     scene's class (:class:`~robotplan.program.settings.ProgramSettings` fields, e.g.
     ``{"with_contact": False}``); its re-plans keep them.
     ``replan``: a re-plan during execution (the closed loop's): a pose goal's fresh search
-    runs the ``replan`` overlay's smaller budget first.
+    runs the ``replan`` overlay's smaller budget first. ``last_resort``: the violation within
+    which the caller adopts an unsolved plan that meets the constraints; a region goal's
+    fresh search that finds one in its first, fitted pushes stops there.
     """
     if isinstance(scene.goal, HangGoal):  # kinematic: a pose of the mug, no skeleton
         return plan_hang(scene, model)
@@ -131,11 +133,11 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     else:
         result, spaces = search_scene(scene, model_dir, solver, workers, skeleton, max_pushes,
                                       progress, exhaustive, quiet, time_budget, guesses,
-                                      program, replan=replan)
+                                      program, replan=replan, last_resort=last_resort)
         if not result.solved and guesses is not None and fallback:  # the old skeleton is lost
             again, more = search_scene(scene, model_dir, solver, workers, None, max_pushes,
                                        progress, exhaustive, quiet, time_budget,
-                                       program=program, replan=True)
+                                       program=program, replan=True, last_resort=last_resort)
             result, spaces = merge_results(result, again), {**spaces, **more}
     if not quiet:
         kind = dynamics_kind(model_dir)
@@ -182,14 +184,17 @@ def execute(planned: Plan, scene: Scene | None = None, *, mode: str = "closed_lo
 def _replanner(planned: Plan):
     """:func:`plan` from an observed scene, as ``planned`` was made, warm started from the
     current plan's ``tail`` (None: a fresh search), a fresh search following when the tail
-    does not solve only if ``fresh``."""
+    does not solve only if ``fresh``; ``last_resort``: the violation within which the loop
+    adopts an unsolved plan."""
     options = dict(planned.options)
     model = options.pop("model", None)
 
-    def replan(observed: Scene, tail: Solution | None, fresh: bool) -> Plan:
+    def replan(observed: Scene, tail: Solution | None, fresh: bool,
+               last_resort: float | None = None) -> Plan:
         warm = Plan(observed, planned.obj, tail, True) if tail is not None else None
         return plan(observed, model, **options, progress=False, quiet=True,
-                    time_budget=REPLAN_BUDGET, warm_start=warm, fallback=fresh, replan=True)
+                    time_budget=REPLAN_BUDGET, warm_start=warm, fallback=fresh, replan=True,
+                    last_resort=last_resort)
 
     return replan
 

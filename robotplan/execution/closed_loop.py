@@ -83,9 +83,10 @@ class Replan:
 
 
 # a re-planner: (observed scene, tail of the current plan to start from or None, whether a
-# fresh search may follow when the tail does not solve) → an object with ``best``
-# (Solution | None) and ``solved`` (robotplan.api.Plan)
-Replanner = Callable[[Scene, "Solution | None", bool], object]
+# fresh search may follow when the tail does not solve, the violation within which the loop
+# adopts an unsolved plan or None) → an object with ``best`` (Solution | None) and
+# ``solved`` (robotplan.api.Plan)
+Replanner = Callable[[Scene, "Solution | None", bool, "float | None"], object]
 
 
 def departure(planned: dict[str, np.ndarray], seen: dict[str, np.ndarray], far: float,
@@ -235,11 +236,12 @@ def _ask(loop: _Loop, scene: Scene, seen: Observation, tail: Solution | None, re
     if len(loop.replans) >= settings.max_replans:
         return False
     t0 = time.perf_counter()
-    result = replan(_observed_scene(scene, seen), tail, fresh)
+    bound = settings.last_resort_violation if last_resort else None
+    result = replan(_observed_scene(scene, seen), tail, fresh, bound)
     best = getattr(result, "best", None)
     solved = bool(getattr(result, "solved", False)) and best is not None
-    adopted = solved or (last_resort and best is not None
-                         and meets_constraints(best, settings.last_resort_violation))
+    adopted = solved or (bound is not None and best is not None
+                         and meets_constraints(best, bound))
     record = Replan(loop.now(), len(loop.executed), reason, solved,
                     float(best.violation) if best is not None else None,
                     time.perf_counter() - t0, best.skeleton.describe() if best else "",

@@ -26,7 +26,13 @@ from robotplan.program.skeleton import (
 )
 from robotplan.program.solution import Solution
 from robotplan.scene import Scene
-from robotplan.search.planner import FEASIBLE, SearchResult, merge_results, search_push
+from robotplan.search.planner import (
+    FEASIBLE,
+    SearchResult,
+    meets_constraints,
+    merge_results,
+    search_push,
+)
 from robotplan.search.pose_search import search_pose_budgets, search_region_fits
 from robotplan.search.route import routed_candidates
 from robotplan.search.scene_classes import chain_target, scene_classes
@@ -194,7 +200,8 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
                  skeleton: str | Skeleton | None = None, max_pushes: int = 2,
                  progress: bool = True, exhaustive: bool = False, quiet: bool = False,
                  time_budget: float | None = None, guesses: dict[Skeleton, dict] | None = None,
-                 program: Mapping[str, object] | None = None, replan: bool = False
+                 program: Mapping[str, object] | None = None, replan: bool = False,
+                 last_resort: float | None = None
                  ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
     """Search the scene's candidates tier by tier, then routes around obstacles when nothing
     plans; the result and each candidate's skeleton space (by ``id`` of its solution).
@@ -205,7 +212,10 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     ``replan``: a fresh search during execution; a pose goal's then runs with the
     ``replan`` overlay's budget first and its own where that does not solve, and a region
     goal's starts with the fitted pushes' tier at that budget (the object has mostly come
-    near the region by then), the plain tier following where that does not solve."""
+    near the region by then), the plain tier following where that does not solve.
+    ``last_resort``: the violation within which the caller adopts an unsolved plan that
+    meets the constraints (the closed loop's last resort); such a plan from those first
+    fitted pushes ends the search there too (docs/experiments.md#replan-last-resort)."""
     obj, actors = check_supported(scene)
     settings = with_overrides(settings_for(scene, solver, dynamics_kind(model_dir)), program)
     replan_budget = program_settings("replan", base=settings)  # the re-plans' solver budget
@@ -230,7 +240,8 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
                                             space, max_pushes, workers, progress, exhaustive,
                                             quiet)
         spaces.update({id(s): fitted for s in result.candidates})
-        if result.solved:
+        if result.solved or (last_resort is not None and result.best is not None
+                             and meets_constraints(result.best, last_resort)):
             return result, spaces
     for candidates, space in candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet):
         left = None if time_budget is None else max(0.0, time_budget - result.seconds)

@@ -136,7 +136,7 @@ def _box_moved(planned):
     return planned.scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
 
 
-def _implausible_when_fresh(observed, tail, fresh):
+def _implausible_when_fresh(observed, tail, fresh, last_resort=None):
     """A re-planner that plans nothing from a tail alone; asked for a fresh search it returns
     a real plan from the observed scene that meets every constraint, flagged not solved (as
     one the learned dynamics call implausible)."""
@@ -205,7 +205,7 @@ def test_an_object_lost_with_no_re_plans_left_ends_the_run_only_when_asked(box_p
         assert ex.stopped is None and len(ex.object_poses) - 1 == planned_steps
 
 
-def _nothing_plans(observed, tail, fresh):
+def _nothing_plans(observed, tail, fresh, last_resort=None):
     return robotplan.Plan(observed, "box", None, False)
 
 
@@ -214,7 +214,7 @@ def _recording_nothing_plans():
     tail, and whether a fresh search may follow."""
     calls: list[tuple[bool, bool]] = []
 
-    def nothing_plans(observed, tail, fresh):
+    def nothing_plans(observed, tail, fresh, last_resort=None):
         calls.append((tail is not None, fresh))
         return _nothing_plans(observed, tail, fresh)
 
@@ -287,17 +287,18 @@ def test_a_gross_departure_at_a_phase_end_asks_for_a_fresh_search(box_plan,
                                                                   fresh_beyond_drift):
     """The box 6 cm off (beyond ``drift``): the mid-phase re-plan asks for the tail alone;
     at the reach's end, still 6 cm off, a fresh search follows the tail at once only with
-    ``fresh_beyond_drift``."""
+    ``fresh_beyond_drift``, and with it the bound of a last-resort plan."""
     calls = []
 
-    def nothing_plans(observed, tail, fresh):
-        calls.append((len(calls), tail is not None, fresh))
+    def nothing_plans(observed, tail, fresh, last_resort):
+        calls.append((len(calls), tail is not None, fresh, last_resort))
         return robotplan.Plan(observed, "box", None, False)
 
     moved = _box_moved(box_plan)
     settings = LoopSettings(fresh_beyond_drift=fresh_beyond_drift, max_replans=2)
     execute_closed_loop(moved, "box", box_plan.best, nothing_plans, settings)
-    assert calls == [(0, True, False), (1, True, fresh_beyond_drift)]
+    bound = settings.last_resort_violation if fresh_beyond_drift else None
+    assert calls == [(0, True, False, None), (1, True, fresh_beyond_drift, bound)]
 
 
 def test_at_the_plan_end_a_re_plan_that_meets_the_constraints_is_taken(box_plan):

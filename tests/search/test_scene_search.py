@@ -211,7 +211,8 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
     """A free pusher's region goal whose plain tier solves nothing: a second search of the
     pushes fitted to a pose inside the region (each with its guess ending there, the pose
     goals' turning gain, the region's own goal tolerance). None when the plain tier
-    solves; while executing (``replan``) the fitted pushes come first."""
+    solves; while executing (``replan``) the fitted pushes come first, and end the search
+    where they solve or give a plan within the caller's last-resort bound."""
     import numpy as np
     import torch
 
@@ -220,14 +221,15 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
     from robotplan.program.settings import settings_for as overlay
     from robotplan.program.solution import Solution
 
-    calls, budgets, solve_plain, solve_fits = [], [], [False], [False]
+    calls, budgets, solve_plain, solve_fits, unsolved_fits = [], [], [False], [False], [0.5]
 
     def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
                time_budget, space, guesses=None, ordered=False):
         calls.append((list(skeletons), space, guesses, settings))
         budgets.append((time_budget, ordered))
         solved = solve_fits[0] if guesses else solve_plain[0]
-        tried = [Solution(sk, solved, "snopt info 31", 0.0 if solved else 0.5, 1.0, 1.0,
+        unsolved = unsolved_fits[0] if guesses else 0.5
+        tried = [Solution(sk, solved, "snopt info 31", 0.0 if solved else unsolved, 1.0, 1.0,
                           np.zeros((1, 3)), np.zeros((1, 2))) for sk in skeletons[:1]]
         return SearchResult(tried[0] if tried else None, tried, 1.0)
 
@@ -260,3 +262,12 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
     result, _ = search_module.search_scene(scene, model, quiet=True, progress=False,
                                            replan=True)
     assert len(calls) == 1 and calls[0][2] is not None and result.solved
+
+    # unsolved fitted pushes within the caller's last-resort bound end the search too
+    solve_fits[0], solve_plain[0], unsolved_fits[0] = False, False, 0.02
+    for last_resort, searches in ((0.03, 1), (0.01, 3), (None, 3)):
+        calls.clear()
+        result, _ = search_module.search_scene(scene, model, quiet=True, progress=False,
+                                               replan=True, last_resort=last_resort)
+        assert len(calls) == searches and not result.solved
+        assert result.best.violation == 0.02  # the plain tier's plans violate more
