@@ -27,7 +27,7 @@ from robotplan.program.settings import ProgramSettings
 from robotplan.program.settings import settings_for as program_settings
 from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
 from robotplan.scene import Scene
-from robotplan.search.planner import SearchResult, merge_results, search_push
+from robotplan.search.planner import SearchResult, meets_constraints, merge_results, search_push
 from robotplan.search.pose_pushes import (
     FIT_TOLERANCE,
     INIT_DIRECTIONS_DEG,
@@ -40,7 +40,7 @@ from robotplan.search.pose_pushes import (
 )
 
 __all__ = ["pose_candidates", "pose_guess", "region_target", "search_pose", "search_pose_budgets",
-           "search_region_fits"]
+           "search_region_fits", "search_region_fits_budgets", "settled"]
 
 MAX_STEPS_PER_PHASE = 30
 YAW_STEP_DEG = 5.0  # the turns tried for a region goal's target
@@ -248,3 +248,30 @@ def search_region_fits(scene: Scene, obj: str, actor: str, model_dir: Path,
         return space, SearchResult(None)
     return search_pose(scene, obj, actor, model_dir, fitted, space, max_pushes, workers,
                        progress, exhaustive, quiet, None, target=target)
+
+
+def search_region_fits_budgets(scene: Scene, obj: str, actor: str, model_dir: Path,
+                               budgets: tuple[ProgramSettings, ...], space: SkeletonSpace,
+                               max_pushes: int, workers: int, progress: bool,
+                               exhaustive: bool, quiet: bool, last_resort: float | None = None
+                               ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
+    """:func:`search_region_fits` with each of ``budgets`` (program settings) in turn until
+    one solves or, given ``last_resort``, gives a plan that meets the constraints within
+    that violation; the merged result and each candidate's space (by ``id`` of its
+    solution)."""
+    result, spaces = SearchResult(None), {}
+    for budget in budgets:
+        fitted, more = search_region_fits(scene, obj, actor, model_dir, budget, space,
+                                          max_pushes, workers, progress, exhaustive, quiet)
+        spaces.update({id(s): fitted for s in more.candidates})
+        result = merge_results(result, more)
+        if settled(result, last_resort):
+            break
+    return result, spaces
+
+
+def settled(result: SearchResult, last_resort: float | None = None) -> bool:
+    """Whether ``result`` ends a search: solved or, given ``last_resort``, with a best plan
+    that meets the constraints within that violation (one the caller adopts)."""
+    return result.solved or (last_resort is not None and result.best is not None
+                             and meets_constraints(result.best, last_resort))

@@ -26,14 +26,13 @@ from robotplan.program.skeleton import (
 )
 from robotplan.program.solution import Solution
 from robotplan.scene import Scene
-from robotplan.search.planner import (
-    FEASIBLE,
-    SearchResult,
-    meets_constraints,
-    merge_results,
-    search_push,
+from robotplan.search.planner import FEASIBLE, SearchResult, merge_results, search_push
+from robotplan.search.pose_search import (
+    search_pose_budgets,
+    search_region_fits,
+    search_region_fits_budgets,
+    settled,
 )
-from robotplan.search.pose_search import search_pose_budgets, search_region_fits
 from robotplan.search.route import routed_candidates
 from robotplan.search.scene_classes import chain_target, scene_classes
 
@@ -211,11 +210,12 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
     a user's program settings (:func:`~robotplan.program.settings.with_overrides`).
     ``replan``: a fresh search during execution; a pose goal's then runs with the
     ``replan`` overlay's budget first and its own where that does not solve, and a region
-    goal's starts with the fitted pushes' tier at that budget (the object has mostly come
-    near the region by then), the plain tier following where that does not solve.
-    ``last_resort``: the violation within which the caller adopts an unsolved plan that
-    meets the constraints (the closed loop's last resort); such a plan from those first
-    fitted pushes ends the search there too (docs/experiments.md#replan-last-resort)."""
+    goal's starts with the fitted pushes' tier at that budget, then at its own (the object
+    has mostly come near the region by then), the plain tier following, with a
+    ``time_budget`` of its own, where neither solves. ``last_resort``: the violation within
+    which the caller adopts an unsolved plan that meets the constraints (the closed loop's
+    last resort); such a plan from those fitted pushes ends the search there too
+    (docs/experiments.md#replan-last-resort)."""
     obj, actors = check_supported(scene)
     settings = with_overrides(settings_for(scene, solver, dynamics_kind(model_dir)), program)
     replan_budget = program_settings("replan", base=settings)  # the re-plans' solver budget
@@ -235,14 +235,15 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
             return result, spaces
     fits = (scene.goal.type == "region" and skeleton is None and not guesses
             and not scene.robots and not scene.obstacles and chain_target(scene) is None)
-    if fits and replan:  # executing: the fitted pushes first (docs/experiments.md#replan-fits)
-        fitted, result = search_region_fits(scene, obj, actors[0], model_dir, replan_budget,
-                                            space, max_pushes, workers, progress, exhaustive,
-                                            quiet)
-        spaces.update({id(s): fitted for s in result.candidates})
-        if result.solved or (last_resort is not None and result.best is not None
-                             and meets_constraints(result.best, last_resort)):
-            return result, spaces
+    first = SearchResult(None)  # executing, a region goal's fitted pushes
+    if fits and replan:  # (docs/experiments.md#replan-fits)
+        first, spaces = search_region_fits_budgets(scene, obj, actors[0], model_dir,
+                                                   (replan_budget, settings), space,
+                                                   max_pushes, workers, progress, exhaustive,
+                                                   quiet, last_resort)
+        if settled(first, last_resort):
+            return first, spaces
+        fits = False  # tried at both budgets
     for candidates, space in candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet):
         left = None if time_budget is None else max(0.0, time_budget - result.seconds)
         space = _space_of_guesses(space, candidates, guesses)
@@ -264,4 +265,4 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
                                             max_pushes, workers, progress, exhaustive, quiet)
         spaces.update({id(s): fitted for s in extra.candidates})
         result = merge_results(result, extra)
-    return result, spaces
+    return merge_results(first, result), spaces

@@ -176,8 +176,8 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
 def test_a_fresh_search_while_executing_a_pose_goal_plans_with_the_replan_overlay(monkeypatch):
     """``replan=True`` (the closed loop's fresh search) gives a pose goal's fitted pushes the
     ``replan`` overlay's budget, and where that solves nothing its own; a region goal's
-    fresh search starts with its fitted pushes at that budget, then the plain tier and the
-    fitted pushes at its scene's settings where nothing solves."""
+    fresh search starts with its fitted pushes at that budget, then at its scene's
+    settings, then the plain tier where nothing solves."""
     from robotplan.program.settings import load_overlays
 
     calls = []
@@ -203,6 +203,7 @@ def test_a_fresh_search_while_executing_a_pose_goal_plans_with_the_replan_overla
                       if guessed]
             assert fitted == ([True, False] if replan else [False])  # nothing was solved
             assert len(calls) == len(fitted) + 1  # and one plain tier, at the scene's settings
+            assert not (replan and calls[-1][2])  # executing, the plain tier last
             assert not any(w for w, (_, _, guessed) in zip(with_overlay, calls, strict=True)
                            if not guessed)
 
@@ -271,3 +272,9 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
                                                replan=True, last_resort=last_resort)
         assert len(calls) == searches and not result.solved
         assert result.best.violation == 0.02  # the plain tier's plans violate more
+        # the fitted pushes at both budgets before the plain tier
+        assert [g is not None for _, _, g, _ in calls] == [True, True, False][:searches]
+    budgets.clear()  # the fitted pushes took 2 s: the plain tier still gets the whole budget
+    search_module.search_scene(scene, model, quiet=True, progress=False, replan=True,
+                               time_budget=1.5)
+    assert [b for b, _ in budgets] == [None, None, 1.5]
