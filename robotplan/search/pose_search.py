@@ -14,6 +14,7 @@ least angle at which it meets the program's goal row with room to spare
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 
@@ -214,6 +215,22 @@ def search_pose(scene: Scene, obj: str, actor: str, model_dir: Path,
                               exhaustive, time_budget, posed, guesses=guesses, ordered=True)
 
 
+def _in_turn(search: Callable[[ProgramSettings, float], tuple[SkeletonSpace, SearchResult]],
+             budgets: tuple[ProgramSettings, ...], last_resort: float | None = None
+             ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
+    """``search(settings, seconds spent so far)`` with each of ``budgets`` (program settings)
+    in turn until the merged result is :func:`settled`; that result and each candidate's
+    space (by ``id`` of its solution)."""
+    result, spaces = SearchResult(None), {}
+    for budget in budgets:
+        searched, more = search(budget, result.seconds)
+        spaces.update({id(s): searched for s in more.candidates})
+        result = merge_results(result, more)
+        if settled(result, last_resort):
+            break
+    return result, spaces
+
+
 def search_pose_budgets(scene: Scene, obj: str, actor: str, model_dir: Path,
                         budgets: tuple[ProgramSettings, ...], space: SkeletonSpace,
                         max_pushes: int, workers: int, progress: bool, exhaustive: bool,
@@ -222,16 +239,12 @@ def search_pose_budgets(scene: Scene, obj: str, actor: str, model_dir: Path,
     """:func:`search_pose` with each of ``budgets`` (program settings) in turn until one
     solves, within ``time_budget`` s in all; the merged result and each candidate's space
     (by ``id`` of its solution)."""
-    result, spaces = SearchResult(None), {}
-    for budget in budgets:
-        left = None if time_budget is None else max(0.0, time_budget - result.seconds)
-        posed, more = search_pose(scene, obj, actor, model_dir, budget, space, max_pushes,
-                                  workers, progress, exhaustive, quiet, left, given)
-        spaces.update({id(s): posed for s in more.candidates})
-        result = merge_results(result, more)
-        if result.solved:
-            break
-    return result, spaces
+    def search(budget: ProgramSettings, spent: float) -> tuple[SkeletonSpace, SearchResult]:
+        left = None if time_budget is None else max(0.0, time_budget - spent)
+        return search_pose(scene, obj, actor, model_dir, budget, space, max_pushes, workers,
+                           progress, exhaustive, quiet, left, given)
+
+    return _in_turn(search, budgets)
 
 
 def search_region_fits(scene: Scene, obj: str, actor: str, model_dir: Path,
@@ -259,15 +272,9 @@ def search_region_fits_budgets(scene: Scene, obj: str, actor: str, model_dir: Pa
     one solves or, given ``last_resort``, gives a plan that meets the constraints within
     that violation; the merged result and each candidate's space (by ``id`` of its
     solution)."""
-    result, spaces = SearchResult(None), {}
-    for budget in budgets:
-        fitted, more = search_region_fits(scene, obj, actor, model_dir, budget, space,
-                                          max_pushes, workers, progress, exhaustive, quiet)
-        spaces.update({id(s): fitted for s in more.candidates})
-        result = merge_results(result, more)
-        if settled(result, last_resort):
-            break
-    return result, spaces
+    return _in_turn(lambda budget, _spent: search_region_fits(
+        scene, obj, actor, model_dir, budget, space, max_pushes, workers, progress,
+        exhaustive, quiet), budgets, last_resort)
 
 
 def settled(result: SearchResult, last_resort: float | None = None) -> bool:
