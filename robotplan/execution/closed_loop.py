@@ -53,7 +53,7 @@ from robotplan.geometry.transforms import wrap_angle
 from robotplan.program.solution import Solution
 from robotplan.program.tail import solution_tail
 from robotplan.scene import Scene
-from robotplan.search.planner import meets_constraints
+from robotplan.search.planner import adoptable
 
 __all__ = ["LOOP_CLASSES", "LoopSettings", "Replan", "departure", "execute_closed_loop",
            "follow_object", "load_loop_overlays", "loop_settings_for", "steer_pusher"]
@@ -240,8 +240,7 @@ def _ask(loop: _Loop, scene: Scene, seen: Observation, tail: Solution | None, re
     result = replan(_observed_scene(scene, seen), tail, fresh, bound)
     best = getattr(result, "best", None)
     solved = bool(getattr(result, "solved", False)) and best is not None
-    adopted = solved or (bound is not None and best is not None
-                         and meets_constraints(best, bound))
+    adopted = solved or adoptable(best, bound)
     record = Replan(loop.now(), len(loop.executed), reason, solved,
                     float(best.violation) if best is not None else None,
                     time.perf_counter() - t0, best.skeleton.describe() if best else "",

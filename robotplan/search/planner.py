@@ -30,7 +30,8 @@ from robotplan.program.solution import FEASIBLE, Solution
 from robotplan.program.solve import solve_skeleton
 from robotplan.scene import Scene
 
-__all__ = ["PATIENCE_S", "SearchResult", "is_solved", "meets_constraints", "merge_results",
+__all__ = ["PATIENCE_S", "SearchResult", "adoptable", "is_solved", "meets_constraints",
+           "merge_results",
            "past_budget", "run_in_pool", "search_push", "stops_search"]
 
 # residual RMS (mm) below which plans rank alike, and the default good-enough residual
@@ -56,6 +57,11 @@ class SearchResult:
     @property
     def solved(self) -> bool:
         return self.best is not None and is_solved(self.best)
+
+    def settled(self, last_resort: float | None = None) -> bool:
+        """Whether this result ends a search: solved, or with a best plan the caller adopts
+        unsolved (:func:`adoptable`)."""
+        return self.solved or adoptable(self.best, last_resort)
 
 
 _models: dict[tuple, object] = {}
@@ -116,6 +122,12 @@ def meets_constraints(s: Solution, violation: float = FEASIBLE) -> bool:
     """Every constraint met (scaled violation at most ``violation``) and the obstacle margin
     kept, whatever the learned dynamics say of the plan."""
     return s.violation <= violation and _clearance_short(s) == 0.0
+
+
+def adoptable(s: Solution | None, last_resort: float | None) -> bool:
+    """Whether ``s`` is a plan a caller adopts unsolved (the closed loop's last resort): one
+    that meets the constraints within ``last_resort`` (None: only solved plans are adopted)."""
+    return last_resort is not None and s is not None and meets_constraints(s, last_resort)
 
 
 def is_solved(s: Solution) -> bool:

@@ -28,7 +28,7 @@ from robotplan.program.settings import ProgramSettings
 from robotplan.program.settings import settings_for as program_settings
 from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
 from robotplan.scene import Scene
-from robotplan.search.planner import SearchResult, meets_constraints, merge_results, search_push
+from robotplan.search.planner import SearchResult, merge_results, search_push
 from robotplan.search.pose_pushes import (
     FIT_TOLERANCE,
     INIT_DIRECTIONS_DEG,
@@ -41,7 +41,7 @@ from robotplan.search.pose_pushes import (
 )
 
 __all__ = ["pose_candidates", "pose_guess", "region_target", "search_pose", "search_pose_budgets",
-           "search_region_fits", "search_region_fits_budgets", "settled"]
+           "search_region_fits", "search_region_fits_budgets"]
 
 MAX_STEPS_PER_PHASE = 30
 YAW_STEP_DEG = 5.0  # the turns tried for a region goal's target
@@ -219,14 +219,14 @@ def _in_turn(search: Callable[[ProgramSettings, float], tuple[SkeletonSpace, Sea
              budgets: tuple[ProgramSettings, ...], last_resort: float | None = None
              ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
     """``search(settings, seconds spent so far)`` with each of ``budgets`` (program settings)
-    in turn until the merged result is :func:`settled`; that result and each candidate's
-    space (by ``id`` of its solution)."""
+    in turn until the merged result is settled (:meth:`SearchResult.settled`); that result
+    and each candidate's space (by ``id`` of its solution)."""
     result, spaces = SearchResult(None), {}
     for budget in budgets:
         searched, more = search(budget, result.seconds)
         spaces.update({id(s): searched for s in more.candidates})
         result = merge_results(result, more)
-        if settled(result, last_resort):
+        if result.settled(last_resort):
             break
     return result, spaces
 
@@ -275,10 +275,3 @@ def search_region_fits_budgets(scene: Scene, obj: str, actor: str, model_dir: Pa
     return _in_turn(lambda budget, _spent: search_region_fits(
         scene, obj, actor, model_dir, budget, space, max_pushes, workers, progress,
         exhaustive, quiet), budgets, last_resort)
-
-
-def settled(result: SearchResult, last_resort: float | None = None) -> bool:
-    """Whether ``result`` ends a search: solved or, given ``last_resort``, with a best plan
-    that meets the constraints within that violation (one the caller adopts)."""
-    return result.solved or (last_resort is not None and result.best is not None
-                             and meets_constraints(result.best, last_resort))

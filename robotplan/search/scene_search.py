@@ -31,7 +31,6 @@ from robotplan.search.pose_search import (
     search_pose_budgets,
     search_region_fits,
     search_region_fits_budgets,
-    settled,
 )
 from robotplan.search.route import routed_candidates
 from robotplan.search.scene_classes import chain_target, scene_classes
@@ -241,9 +240,8 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
                                                    (replan_budget, settings), space,
                                                    max_pushes, workers, progress, exhaustive,
                                                    quiet, last_resort)
-        if settled(first, last_resort):
+        if first.settled(last_resort):
             return first, spaces
-        fits = False  # tried at both budgets
     for candidates, space in candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet):
         left = None if time_budget is None else max(0.0, time_budget - result.seconds)
         space = _space_of_guesses(space, candidates, guesses)
@@ -260,7 +258,7 @@ def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: 
                                        max_pushes, workers, progress, exhaustive, quiet, left)
         spaces.update({id(s): routed for s in extra.candidates})
         result = merge_results(result, extra)
-    if not result.solved and fits:
+    if not result.solved and fits and not replan:  # executing, they came first
         fitted, extra = search_region_fits(scene, obj, actors[0], model_dir, settings, space,
                                             max_pushes, workers, progress, exhaustive, quiet)
         spaces.update({id(s): fitted for s in extra.candidates})
