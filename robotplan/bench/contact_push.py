@@ -7,7 +7,9 @@ under test and the goal row, no H_coll, no H_PoC, no quasi-static rows, no kinem
 start, and a start in which nothing moves (the paper: "the only constraint of the
 optimization problem apart from the goal specification is H_F"). The plan is then run open
 loop in pybullet. A model whose grids pass the optimiser no gradient (ψ = sign φ) leaves the
-pusher where it is; one on SDFs pushes the box to the goal.
+pusher where it is; one on SDFs pushes the box to the goal. A point-cloud F_q (PointNet,
+PointNet++) passes it a gradient only through the grid points next to each boundary (its
+clouds' marching-squares vertices, differentiated by autograd in H_q).
 """
 
 from __future__ import annotations
@@ -75,10 +77,11 @@ def still_guess(scene: Scene, steps: int) -> dict[str, np.ndarray]:
 
 def plan_from_contact(model_dir: str | Path,
                       settings: ProgramSettings = CONTACT_PUSH_SETTINGS) -> dict:
-    """Plan :func:`contact_push_scene` with the model in ``model_dir`` (an F_q, F_flow or F on
-    grids) from :func:`still_guess`, run the plan open loop; returns how far the pusher
-    and the box moved in the plan and in pybullet (m), the coverage of the goal footprint,
-    the program's violation and dynamics residual, and seconds."""
+    """Plan :func:`contact_push_scene` with the model in ``model_dir`` (an F_q on grids or on
+    point clouds, an F_flow or an F on grids) from :func:`still_guess`, run the plan open
+    loop; returns how far the pusher and the box moved in the plan and in pybullet (m), the
+    coverage of the goal footprint, the program's violation and dynamics residual, and
+    seconds."""
     scene = contact_push_scene()
     space = space_for(scene)
     # one push phase (init 0: straight behind the box, as it starts)

@@ -17,6 +17,7 @@ from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
 from robotplan.bench.hang import METHODS
 from robotplan.bench.paper import FLOW_REPRESENTATIONS, REPRESENTATIONS, spec_flags
 from robotplan.bench.report import write_report
+from robotplan.bench.reproduce_hang import HANG_REPRESENTATIONS, hang_representations
 from robotplan.bench.reproduce_report import report_blocks
 from robotplan.bench.steps import Steps, inputs_digest
 
@@ -49,6 +50,14 @@ class ReproduceSizes:
     representation_steps: int  # F_q's training steps per representation (batch 32)
     contact_push: tuple[str, ...]  # the representations' F_q planned from contact (Fig. 5)
     flow_steps: int  # F_flow's training steps per representation (Tab. 4; batch 32)
+    # Tab. 3's representation rows: H_hang trained alike on each of these keys of
+    # HANG_REPRESENTATIONS
+    hang_representations: tuple[str, ...]
+    hang_train_scenes: int  # hanging data scenes (seed 0; the paper: 1,600)
+    hang_train_steps: int  # training steps per representation (batch 32)
+    hang_representation_scenes: int  # mug scenes each is planned with (seed 2)
+    hang_representation_methods: tuple[str, ...]
+    hang_evaluations: int  # functional evaluations per method and scene (the paper: 20,000)
     # re-plans of the ablation's closed loops (None: the scene class's): re-planning plans
     # through the object dominates a quick run's time (docs/experiments.md#reproduce-quick)
     ablation_replans: int | None = None
@@ -59,16 +68,23 @@ class ReproduceSizes:
 QUICK = ReproduceSizes("quick", test_scenes=40, ood_scenes=40, per_scene=10, pose_fit=20,
                        push_scenes=1, ood_push_scenes=4, ablation_scenes=1, hang_scenes=2,
                        hang_methods=("opt_sampling", "opt_only"), time_budget=30.0,
-                       representation_scenes=600, representation_steps=400,
-                       contact_push=("sdf", "occupancy"), flow_steps=100,
-                       ablation_replans=2)
+                       representation_scenes=600, representation_steps=250,
+                       contact_push=("sdf", "occupancy", "pointnet"), flow_steps=100,
+                       hang_representations=("sdf", "occupancy", "pointnet"),
+                       hang_train_scenes=24, hang_train_steps=100,
+                       hang_representation_scenes=1,
+                       hang_representation_methods=("opt_sampling", "sampling_k1"),
+                       hang_evaluations=1_000, ablation_replans=2)
 FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pose_fit=100,
                       push_scenes=50, ood_push_scenes=24, ablation_scenes=20,
                       hang_scenes=150,
                       hang_methods=METHODS, time_budget=100.0,
                       representation_scenes=15_000, representation_steps=20_000,
-                      contact_push=("sdf", "occupancy", "smooth100", "smooth1000"),
-                      flow_steps=20_000)
+                      contact_push=tuple(REPRESENTATIONS),
+                      flow_steps=20_000, hang_representations=tuple(HANG_REPRESENTATIONS),
+                      hang_train_scenes=1_600, hang_train_steps=20_000,
+                      hang_representation_scenes=150, hang_representation_methods=METHODS,
+                      hang_evaluations=20_000)
 
 
 def _trained(steps: Steps, kind: str, key: str, cfg: dict, data: Path) -> str:
@@ -219,6 +235,7 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
                                  workers=workers, progress=False,
                                  methods=sizes.hang_methods, ray=ray),
         f"robotplan bench hang --scenes {sizes.hang_scenes} --seed 2 --methods {methods}")
+    results["tab3_representations"] = hang_representations(steps, sizes, workers, ray)
     if results["fig5"]:
         plot_contact_pushes({k: v["result"] for k, v in results["fig5"].items()},
                             {k: REPRESENTATIONS[k][0] for k in results["fig5"]},

@@ -17,6 +17,7 @@ from robotplan.cli.common import (
     print_result,
     training_folders_problem,
 )
+from robotplan.cli.representation_options import representation_fields, representation_problem
 
 __all__ = ["cmd_bench_hang", "cmd_data_hang", "cmd_eval_hang", "cmd_mine_hang",
            "cmd_train_hang", "solve_hang_scene"]
@@ -84,6 +85,10 @@ def cmd_train_hang(args: argparse.Namespace) -> int:
         problem = model_folder_problem(args.init, "--init")
     if not problem and args.mined_repeat < 1:
         problem = "--mined-repeat must be ≥ 1"
+    if not problem:
+        problem = representation_problem(args)
+    if not problem and args.init and representation_fields(args):
+        problem = "--representation/--sharpness/--cloud-encoder: the --init model's spec sets them"
     if problem:
         print(f"error: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -93,7 +98,7 @@ def cmd_train_hang(args: argparse.Namespace) -> int:
                           minutes=args.minutes, val_every=args.val_every,
                           mined=list(args.mined), mined_repeat=args.mined_repeat,
                           init=args.init, device=device_name(args.device),
-                          anneal_by_time=args.anneal_by_time,
+                          anneal_by_time=args.anneal_by_time, spec=representation_fields(args),
                           command=" ".join(["robotplan", *sys.argv[1:]]))
     if args.resume:  # the run's settings come from its checkpoint; only the budget may change
         ckpt = Path(args.out) / "checkpoint.pt"

@@ -37,6 +37,7 @@ from robotplan.cli.model_commands import (
     cmd_data_push,
     cmd_eval_push,
 )
+from robotplan.cli.representation_options import add_representation_options
 from robotplan.cli.reproduce_commands import add_reproduce_parser
 from robotplan.cli.scene_commands import cmd_check, cmd_diagnose, cmd_render, cmd_solve, cmd_view
 from robotplan.cli.train_push_parser import add_train_push_parser
@@ -80,7 +81,8 @@ def _parser() -> argparse.ArgumentParser:
     bc = bsub.add_parser("contact-push", help="plan one straight push from contact with the "
                          "learned program alone and run it open loop (paper Fig. 5)")
     bc.add_argument("--model", default=str(learned_dir("push_rigid")), metavar="DIR",
-                    help="a learned dynamics folder on grids (F_q, F_flow or F)")
+                    help="a learned dynamics folder (F_q on grids or point clouds, F_flow "
+                         "or F)")
     bc.add_argument("--json", action="store_true")
     bc.set_defaults(run=cmd_bench_contact_push)
     bp = bsub.add_parser("push", help="plan + execute random push scenes (paper Fig. 3)")
@@ -210,6 +212,8 @@ def _parser() -> argparse.ArgumentParser:
                     help="each mined sample this many times per epoch")
     th.add_argument("--init", default=None, metavar="DIR",
                     help="start from this model's weights (fine-tuning)")
+    add_representation_options(th, 1000.0, "the boundary's marching-cubes vertices through "
+                               "a PointNet")
     th.add_argument("--steps", type=int, default=20_000)
     th.add_argument("--batch", type=int, default=32)
     th.add_argument("--lr", type=float, default=1e-4)

@@ -253,14 +253,8 @@ def cmd_bench_functional(args: argparse.Namespace) -> int:
 
 def cmd_bench_contact_push(args: argparse.Namespace) -> int:
     from robotplan.bench.contact_push import plan_from_contact
-    from robotplan.models.spec import read_spec
 
     if not_a_model(args.model):
-        return EXIT_BAD_INPUT
-    if read_spec(args.model).representation == "pointcloud":
-        print(f"error: {args.model}/spec.json: representation: a point-cloud model has no "
-              "gradient to the grids a program needs; give a model on grids",
-              file=sys.stderr)
         return EXIT_BAD_INPUT
     result = plan_from_contact(args.model)
     if not args.json:

@@ -5,19 +5,15 @@ from __future__ import annotations
 
 import argparse
 
+from robotplan.cli.representation_options import representation_fields, representation_problem
+
 __all__ = ["architecture", "architecture_problem"]
 
 
 def architecture(args: argparse.Namespace) -> dict:
     """The ``DynamicsSpec`` fields that ``train push`` sets: the encoder, what it reads of the
     objects, and any widths given."""
-    spec: dict = {"encoder": args.encoder}
-    if args.representation != "sdf":
-        spec["representation"] = args.representation
-    if args.sharpness is not None:
-        spec["occupancy_sharpness"] = args.sharpness
-    if args.cloud_encoder is not None:
-        spec["cloud_encoder"] = args.cloud_encoder
+    spec: dict = {"encoder": args.encoder, **representation_fields(args)}
     for name in ("channels", "kernels", "strides", "sdf_features", "hidden"):
         if getattr(args, name) is not None:
             spec[name] = getattr(args, name)
@@ -45,10 +41,4 @@ def architecture_problem(args: argparse.Namespace) -> str | None:
         return f"--sdf-features: {args.sdf_features} is not a positive integer"
     if args.representation == "pointcloud" and args.model != "rigid":
         return "--representation pointcloud: only with --model rigid (F_q)"
-    if args.cloud_encoder is not None and args.representation != "pointcloud":
-        return "--cloud-encoder: only with --representation pointcloud"
-    if args.sharpness is not None and args.representation != "smooth_occupancy":
-        return "--sharpness: only with --representation smooth_occupancy"
-    if args.sharpness is not None and not 0 < args.sharpness < float("inf"):
-        return f"--sharpness: {args.sharpness} is not a positive number (1/m)"
-    return None
+    return representation_problem(args)

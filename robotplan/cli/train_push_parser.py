@@ -6,6 +6,7 @@ import os
 
 from robotplan.cli.common import positive_ints
 from robotplan.cli.model_commands import cmd_train_push
+from robotplan.cli.representation_options import add_representation_options
 
 __all__ = ["add_train_push_parser"]
 
@@ -32,20 +33,8 @@ def add_train_push_parser(tsub) -> None:
                     help="features per SDF after the encoder's linear layer (default 200)")
     tp.add_argument("--hidden", type=positive_ints, default=None, metavar="H1,H2",
                     help="the MLP's hidden widths (default 300,300)")
-    tp.add_argument("--representation",
-                    choices=["sdf", "occupancy", "smooth_occupancy", "pointcloud"],
-                    default="sdf",
-                    help="what the encoder reads of each object: sdf (the paper's proposal); "
-                         "occupancy, ψ = sign(φ) (eq. 10); smooth_occupancy, ψ_s = tanh(b φ) "
-                         "(eq. 11); pointcloud, the boundary's marching-squares vertices "
-                         "through a PointNet (eq. 12; --model rigid only): the paper's "
-                         "baselines (app. A)")
-    tp.add_argument("--cloud-encoder", choices=["pointnet", "pointnet2"], default=None,
-                    help="the point-cloud encoder of --representation pointcloud: pointnet "
-                         "(default) or pointnet2, a PointNet++ with one set-abstraction level")
-    tp.add_argument("--sharpness", type=float, default=None, metavar="B",
-                    help="b of smooth_occupancy in 1/m (default 100; the paper tests 100 and "
-                         "1000)")
+    add_representation_options(tp, 100.0, "the boundary's marching-squares vertices through "
+                               "a PointNet (eq. 12; --model rigid only)")
     tp.add_argument("--steps", type=int, default=60_000, help="total optimiser steps")
     tp.add_argument("--batch", type=int, default=32)
     tp.add_argument("--lr", type=float, default=5e-4)

@@ -13,10 +13,16 @@ displacement between the footprint where the plan puts it and where F_q puts it 
 order in the angle). The row is the same kind of number as H_F's mean squared SDF residual,
 and plays the same part in a program (:mod:`robotplan.program.dynamics_rows`).
 
-Gradients without autograd through the grids: the three grids of a step are rendered with
-their tangents (:class:`~robotplan.functionals.grid_render.GridTangents`), the small head is
+Gradients: the three grids of a step are rendered with their tangents
+(:class:`~robotplan.functionals.grid_render.GridTangents`) and the gradient G of the
+network's outputs with respect to the grid values is contracted with them. For an F_q on
+grids (SDFs or occupancy), G comes without autograd through the grids: the small head is
 differentiated by autograd, the encoder in reverse mode by hand
-(:class:`~robotplan.models.encoder_passes.EncoderPasses`): one pass back per step.
+(:class:`~robotplan.models.encoder_passes.EncoderPasses`), one pass back per step. A
+point-cloud F_q (:mod:`robotplan.models.pointnet`) is differentiated by autograd through
+the whole model, the marching-squares vertices included: each vertex is the linear
+interpolation of φ on a grid edge where φ changes sign, so G reaches only the grid points
+of those edges (which edges they are is a discrete choice, with no gradient).
 """
 
 from __future__ import annotations
@@ -61,7 +67,8 @@ def _rotate(yaw: Tensor, v: Tensor) -> tuple[Tensor, Tensor]:
 
 class RigidDynamics:
     """H_q between an object (φ1, planar pose) and a pusher (φ2: a disc's position or an
-    object's pose) for T steps, with the interface of
+    object's pose) for T steps, for an F_q with the joint encoder, on grids or on point
+    clouds (see the module docstring), with the interface of
     :class:`~robotplan.functionals.dynamics.LearnedDynamics`:
 
     ``evaluate(X1 (T+1, 3), X2 (T+1, d))`` → ``H (T,)`` (m²), ``J1 (T, 2, 3)`` and
@@ -74,9 +81,6 @@ class RigidDynamics:
     def __init__(self, model: RigidMotion, obj: Body, pusher: Body) -> None:
         if model.spec.encoder != "joint":
             raise ValueError("H_q needs an F_q with the joint encoder (spec.encoder 'joint')")
-        if model.spec.representation == "pointcloud":
-            raise ValueError("H_q needs an F_q on grids: a point-cloud F_q (representation "
-                             "'pointcloud') has no reverse pass to the SDFs")
         self.model, self.obj, self.pusher = model.eval(), obj, pusher
         for p in model.parameters():
             p.requires_grad_(False)
@@ -84,31 +88,66 @@ class RigidDynamics:
         self.workspace = spec.workspace()
         self.dtype = next(model.parameters()).dtype
         self.centre, self.rho = footprint_moments(obj, self.dtype)
-        # the encoder's linear layer and the head's first layer folded into one map
-        self.folded = FoldedLayer(model.encoder.linear, model.head[0], model.spec.channels[-1])
-        self.rest = model.head[1:]  # ReLU, then the remaining layers
+        self.folded = None  # a point-cloud F_q: autograd through the whole model
+        if spec.representation != "pointcloud":
+            # the encoder's linear layer and the head's first layer folded into one map
+            self.folded = FoldedLayer(model.encoder.linear, model.head[0], spec.channels[-1])
+            self.rest = model.head[1:]  # ReLU, then the remaining layers
 
     def predict(self, X1: Tensor, X2: Tensor) -> Tensor:
         """F_q's Δq ``(T, 3)`` for every step of the trajectories (no gradients)."""
         return self._forward(X1.to(self.dtype), X2.to(self.dtype), False)[0]
 
     def _forward(self, X1: Tensor, X2: Tensor, tangents: bool):
+        """Δq ``(T, 3)``; the map ``g (T, 3) ↦ G (T, 3, H·W)``, the gradient of Σ g · (the
+        network's outputs) with respect to the grids (to be called only with
+        ``tangents``); and the grids' tangents."""
         T = X1.shape[0] - 1
         phi1, dphi1 = render_on_grid(self.obj, X1[:-1], self.workspace, tangents)
         phi2, dphi2 = render_on_grid(self.pusher, X2, self.workspace, tangents)
         images = torch.stack((phi1, phi2[:-1], phi2[1:]), 1).reshape(T, 3,
                                                                         *self.workspace.shape)
-        # the last convolution's live channels, flattened, through the folded map
+        if self.folded is None:
+            delta, grid_gradient = self._cloud_pass(images, tangents)
+        else:
+            delta, grid_gradient = self._grid_pass(images)
+        return delta, grid_gradient, dphi1, dphi2
+
+    def _grid_pass(self, images: Tensor):
+        """F_q on grids: the last convolution's live channels, flattened, through the
+        folded map; G by the head's autograd and the encoder's pass back by hand."""
         y, acts = self.model.encode_with_activations(images, linear=False)
         hidden, rows = self.folded(y, acts.live[-1])  # (T, H1) before the first ReLU
         with torch.no_grad():
             delta = self.rest(hidden) * self.model.scale
-        return delta, (hidden, rows), acts, dphi1, dphi2
+
+        def grid_gradient(g_out: Tensor) -> Tensor:
+            with torch.enable_grad():
+                h = hidden.detach().requires_grad_(True)
+                (g_hidden,) = torch.autograd.grad(self.rest(h), h, g_out)
+            return self.model.encoder_input_grad(acts, g_hidden @ rows.T,
+                                                 linear=False).flatten(2)
+
+        return delta, grid_gradient
+
+    def _cloud_pass(self, images: Tensor, tangents: bool):
+        """A point-cloud F_q: G by autograd through the whole model, the clouds' vertices
+        included (see the module docstring)."""
+        model = self.model
+        with torch.set_grad_enabled(tangents):
+            grids = images.detach().requires_grad_(tangents)
+            out = model.head(model.features(grids))
+        delta = out.detach() * model.scale
+
+        def grid_gradient(g_out: Tensor) -> Tensor:
+            return torch.autograd.grad(out, grids, g_out)[0].flatten(2)
+
+        return delta, grid_gradient
 
     def evaluate(self, X1: Tensor, X2: Tensor, jacobian: bool = True
                  ) -> tuple[Tensor, Tensor | None, Tensor | None]:
         X1, X2 = X1.to(self.dtype), X2.to(self.dtype)
-        delta, features, acts, dphi1, dphi2 = self._forward(X1, X2, jacobian)  # (T, 3)
+        delta, grid_gradient, dphi1, dphi2 = self._forward(X1, X2, jacobian)  # Δq (T, 3)
         pivot_offset, turned = _rotate(X1[:, 2], self.centre)  # R c and dR/dα c, (T+1, 2)
         pivots = X1[:, :2] + pivot_offset
         r_xy = pivots[1:] - pivots[:-1] - delta[:, :2]  # (T, 2)
@@ -121,13 +160,9 @@ class RigidDynamics:
         # explicit terms: the pivots and angles of states t (+) and t − 1 (−)
         now = torch.cat((g_xy, ((g_xy * turned[1:]).sum(1) + g_a)[:, None]), 1)
         prev = -torch.cat((g_xy, ((g_xy * turned[:-1]).sum(1) + g_a)[:, None]), 1)
-        # through F_q: ∂H/∂Δq = −(g_xy, g_a), back through the head, then the encoder
+        # through F_q: ∂H/∂Δq = −(g_xy, g_a), times the scale: ∂H/∂(the network's outputs)
         g_delta = -torch.cat((g_xy, g_a[:, None]), 1) * self.model.scale
-        hidden, rows = features
-        with torch.enable_grad():
-            h = hidden.detach().requires_grad_(True)
-            (g_hidden,) = torch.autograd.grad(self.rest(h), h, g_delta)
-        G = self.model.encoder_input_grad(acts, g_hidden @ rows.T, linear=False).flatten(2)
+        G = grid_gradient(g_delta)  # (T, 3, H·W)
         prev = prev + dphi1.contract(G[:, 0])
         J1 = torch.stack((prev, now), 1)
         J2 = torch.stack((dphi2[:-1].contract(G[:, 1]), dphi2[1:].contract(G[:, 2])), 1)

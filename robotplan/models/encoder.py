@@ -13,7 +13,7 @@ from torch import Tensor, nn
 from robotplan.models.spec import DynamicsSpec, conv_output_side
 
 __all__ = ["ConvWithoutOneDNN", "EncoderPass", "SDFEncoder", "channel_sums", "conv_input_grad",
-           "live_columns", "no_onednn", "relu_backward"]
+           "live_columns", "no_onednn", "relu_backward", "represent_grids"]
 
 
 class ConvWithoutOneDNN(torch.autograd.Function):
@@ -122,6 +122,21 @@ def channel_sums(y: Tensor) -> Tensor:
     return y.sum((0, 2, 3))
 
 
+def represent_grids(grids: Tensor, representation: str, sharpness: float,
+                    slope: bool = False) -> tuple[Tensor, Tensor | None]:
+    """What an encoder reads of SDF grids: the SDFs (``"sdf"``), or the occupancy measure
+    ψ = sign(φ) (``"occupancy"``, eq. 10) or ψ_s = tanh(b φ) (``"smooth_occupancy"``, eq. 11,
+    b = ``sharpness`` in 1/m); with ``slope`` also dψ/dφ (None for the SDFs: the identity).
+    ψ's slope is zero almost everywhere: a model on ψ passes the planner no gradient
+    through its grids, the paper's argument for SDFs."""
+    if representation == "sdf":
+        return grids, None
+    if representation == "occupancy":
+        return torch.sign(grids), torch.zeros_like(grids) if slope else None
+    psi = torch.tanh(sharpness * grids)
+    return psi, sharpness * (1.0 - psi * psi) if slope else None
+
+
 class SDFEncoder(nn.Module):
     """φ(X_h) ``(M, C, H, W)`` → features ``(M, F)``: C = 1, F = sdf_features for the
     paper's shared encoder; C = 3, F = 3 · sdf_features for the joint variant."""
@@ -145,18 +160,9 @@ class SDFEncoder(nn.Module):
         self.scale = spec.sdf_scale if spec.representation == "sdf" else 1.0
 
     def represent(self, grids: Tensor, slope: bool = False) -> tuple[Tensor, Tensor | None]:
-        """What the first convolution reads of SDF grids ``(M, C, H, W)``: the SDFs, or the
-        occupancy measure ψ = sign(φ) (eq. 10) or ψ_s = tanh(b φ) (eq. 11) of the spec's
-        ``representation``; with ``slope`` also dψ/dφ (None for the SDFs: the identity).
-        ψ's slope is zero almost everywhere: a model on ψ passes the planner no gradient
-        through its grids, the paper's argument for SDFs."""
-        if self.representation == "sdf":
-            return grids, None
-        if self.representation == "occupancy":
-            psi = torch.sign(grids)
-            return psi, torch.zeros_like(grids) if slope else None
-        psi = torch.tanh(self.sharpness * grids)
-        return psi, self.sharpness * (1.0 - psi * psi) if slope else None
+        """What the first convolution reads of SDF grids ``(M, C, H, W)``:
+        :func:`represent_grids` of the spec's ``representation``."""
+        return represent_grids(grids, self.representation, self.sharpness, slope)
 
     def forward(self, grids: Tensor) -> Tensor:
         first = self.conv[0]

@@ -1,5 +1,6 @@
-"""Fig. 5's push from contact: the scene, the still start, and a model on ψ = sign(φ),
-which passes the program no gradient through the pusher's grids."""
+"""Fig. 5's push from contact: the scene, the still start, a model on ψ = sign(φ), which
+passes the program no gradient through the pusher's grids, and a point-cloud F_q, which
+the program takes too."""
 
 import numpy as np
 import pytest
@@ -60,6 +61,23 @@ def test_a_model_on_sign_occupancy_leaves_the_pusher_where_it_starts(tmp_path):
     assert result["planned_pusher_travel_m"] < 1e-6
     assert result["box_travel_m"] < 1e-3 and result["coverage"] < 0.05
     assert not result["success"]
+
+
+@pytest.mark.parametrize("encoder", ["pointnet", "pointnet2"])
+def test_a_point_cloud_f_q_moves_the_pusher_in_the_plan(tmp_path, encoder):
+    """H_q differentiates a point-cloud F_q by autograd through its clouds' vertices: unlike
+    ψ's, the pusher's grids pass the program a gradient, and that row is all that moves the
+    pusher in the plan (an untrained F_q on a coarse grid: seconds)."""
+    torch.manual_seed(0)
+    model = RigidMotion(DynamicsSpec(
+        kind="rigid", encoder="joint", representation="pointcloud", cloud_encoder=encoder,
+        grid=(48, 48), cloud_points=32, cloud_widths=(8, 16), cloud_centroids=8,
+        cloud_neighbours=6, cloud_local_widths=(8,), **SPEC))
+    save_rigid(model, tmp_path / encoder)
+    result = plan_from_contact(tmp_path / encoder)
+    for key in ("violation", "dynamics_rms_mm", "box_travel_m", "coverage"):
+        assert np.isfinite(result[key]) and result[key] >= 0, key
+    assert result["planned_pusher_travel_m"] > 1e-3
 
 
 def test_the_figure_draws_a_panel_per_model(tmp_path):

@@ -11,12 +11,14 @@ import pytest
 
 from robotplan.bench.paper import FLOW_REPRESENTATIONS, TAB5
 from robotplan.bench.report import write_report
+from robotplan.bench.report_hang import tab3_blocks
 from robotplan.bench.reproduce import (
     QUICK,
     _flow_representations,
     _representations,
     reproduce,
 )
+from robotplan.bench.reproduce_hang import HANG_REPRESENTATIONS, hang_representations
 from robotplan.bench.reproduce_report import _analytic_rows, _tab4, _tab56
 from robotplan.bench.steps import Steps
 from robotplan.cli.main import main
@@ -119,7 +121,10 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     tiny = replace(QUICK, name="quick", test_scenes=3, ood_scenes=3, per_scene=3, pose_fit=2,
                    push_scenes=1, ood_push_scenes=1, ablation_scenes=1, hang_scenes=1,
                    hang_methods=("opt_only",), time_budget=5.0, representation_scenes=6,
-                   representation_steps=2, contact_push=("occupancy",), flow_steps=2)
+                   representation_steps=2, contact_push=("occupancy",), flow_steps=2,
+                   hang_representations=("sdf", "pointnet"), hang_train_scenes=2,
+                   hang_train_steps=2, hang_representation_scenes=1,
+                   hang_representation_methods=("sampling_k1",), hang_evaluations=64)
     md = reproduce(tmp_path, tiny, workers=1, progress=False)
     text = md.read_text()
     for item in ("Tab. 2", "Tab. 4", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 5", "Fig. 6",
@@ -129,9 +134,40 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     run = json.loads((tmp_path / "run.json").read_text())
     assert "| F_q on occupancy ψ_s (b = 100), 2 steps |" in text
     # data, training and evaluation of six representations: 1 + 6 + 12 steps; Figs. 5, 6: 1;
-    # Tab. 4's four F_flow: 4 + 4
-    assert len(run["steps"]) == 44 and run["sizes"]["test_scenes"] == 3
+    # Tab. 4's four F_flow: 4 + 4; Tab. 3's two H_hang: data, 2 trainings, 2 benches
+    assert len(run["steps"]) == 49 and run["sizes"]["test_scenes"] == 3
     reproduce(tmp_path, tiny, workers=1, progress=False)
     again = json.loads((tmp_path / "run.json").read_text())
     assert [s["folder"] for s in again["steps"]] == [s["folder"] for s in run["steps"]]
     assert (tmp_path / "report.html").stat().st_size > 1000
+
+
+def test_h_hang_on_each_representation_is_trained_alike_and_planned_with(tmp_path):
+    """Tab. 3's baselines (tiny: 2 scenes of data, 2 steps, one scene planned with 64
+    evaluations): each model folder says what it reads, each bench ran with it, and the
+    report sets a row per representation beside the paper's best row of it."""
+    sizes = replace(QUICK, hang_representations=tuple(HANG_REPRESENTATIONS),
+                    hang_train_scenes=2, hang_train_steps=2,
+                    hang_representation_scenes=1, hang_representation_methods=("sampling_k1",),
+                    hang_evaluations=64)
+    steps = Steps(tmp_path, "digest", progress=False)
+    results = hang_representations(steps, sizes, workers=1, ray=None)
+    assert list(results) == list(HANG_REPRESENTATIONS)
+    specs = {key: json.loads(next(tmp_path.glob(f"steps/train_hang_{key}-*/model/spec.json"))
+                             .read_text()) for key in results}
+    assert [(s["representation"], s["cloud_encoder"]) for s in specs.values()] == [
+        ("sdf", "pointnet"), ("occupancy", "pointnet"), ("smooth_occupancy", "pointnet"),
+        ("pointcloud", "pointnet"), ("pointcloud", "pointnet2")]
+    for key, step in results.items():
+        run = json.loads((tmp_path / step["folder"] / "bench" / "run.json").read_text())
+        assert run["evaluations"] == 64 and f"/train_hang_{key}-" in run["model"]
+        assert step["result"]["sampling_k1"]["found"] in (0.0, 1.0)
+    shipped = {"result": {"opt_sampling": {"found": 1.0, "sim_success": 1.0,
+                                           "collision_free": 1.0, "total": 1.0},
+                          "median_seconds": 9.0}}
+    blocks = tab3_blocks({"tab3": shipped, "tab3_representations": results}, sizes)
+    tables = [b for b in blocks if b[0] == "table"]
+    assert tables[0][2][0][0] == "opt_sampling" and tables[0][2][0][-1].endswith("87.3")
+    rows = tables[1][2]
+    assert [r[0] for r in rows] == [label for label, _, _ in HANG_REPRESENTATIONS.values()]
+    assert rows[1][-1].endswith("total 34.0") and all(r[1] == "sampling_k1" for r in rows)

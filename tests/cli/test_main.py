@@ -119,7 +119,8 @@ def test_bench_functional_refuses_a_non_model(tmp_path):
     assert res.returncode == 2 and "--model" in res.stderr and "Traceback" not in res.stderr
 
 
-def test_bench_contact_push_refuses_a_non_model_and_a_point_cloud_model(tmp_path, capsys):
+def test_bench_contact_push_refuses_a_non_model_and_plans_with_a_point_cloud_model(
+        tmp_path, capsys):
     import torch
 
     from robotplan.models.dynamics import DynamicsSpec
@@ -127,13 +128,18 @@ def test_bench_contact_push_refuses_a_non_model_and_a_point_cloud_model(tmp_path
 
     res = call(capsys, "bench", "contact-push", "--model", str(tmp_path))
     assert res.returncode == 2 and "--model" in res.stderr
+    # H_q differentiates a point-cloud F_q by autograd: the command plans with it (an
+    # untrained one on a coarse grid: seconds)
     torch.manual_seed(0)
     cloud = DynamicsSpec(kind="rigid", encoder="joint", representation="pointcloud",
+                         grid=(48, 48), cloud_points=32, cloud_widths=(8, 16),
                          sdf_features=8, point_features=8, hidden=(16, 16))
     save_rigid(RigidMotion(cloud), tmp_path / "cloud")
-    res = call(capsys, "bench", "contact-push", "--model", str(tmp_path / "cloud"))
-    assert res.returncode == 2 and "\n" not in res.stderr.strip()
-    assert "spec.json: representation" in res.stderr
+    res = call(capsys, "bench", "contact-push", "--json", "--model", str(tmp_path / "cloud"))
+    assert res.returncode == 0 and res.stderr == "", res.stderr
+    out = json.loads(res.stdout)
+    assert out["model"] == str(tmp_path / "cloud") and out["planned_pusher_travel_m"] > 0
+    assert len(out["q_obj"]) == len(out["q_pusher"]) > 1
 
 
 def test_solve_refuses_unsupported_scenes_and_used_folders(tmp_path, capsys):

@@ -111,3 +111,65 @@ def test_jacobian_through_the_smooth_occupancy_baseline(obj):
     values, j1, j2 = H.evaluate(X1, X2)
     assert (j2.abs() > 0).any() and (values > 0).all()
     assert_step_jacobians(H, X1, X2, j1, j2, h=1e-7, tol=1e-5, scale_with_jacobian=True)
+
+
+# a point-cloud F_q (paper app. A.2) on a coarse grid (1.67 cm), cheap to evaluate. Which
+# edges carry the cloud's vertices, farthest-point sampling and the nearest neighbours are
+# discrete choices, and an SDF's kink (a medial axis) at a grid point is one too: on this
+# grid no step of the differences below crosses any of them for either footprint (on a
+# 1.5 cm grid the L-shape's does, as do PointNet++'s picks with 12 or more centroids)
+CLOUD = {"representation": "pointcloud", "grid": (36, 36), "workspace_size": (0.6, 0.6),
+         "cloud_points": 32, "cloud_widths": (8, 16), "sdf_features": 8, "hidden": (16,),
+         "cloud_centroids": 8, "cloud_neighbours": 6, "cloud_local_widths": (8,)}
+# the pusher off the grid's mirror lines too: there farthest-point sampling meets exact ties
+PUSHER_OFFSET = torch.tensor([0.0017, 0.0009], dtype=F64)
+
+
+def step_jacobians_by_differences(H, X1: torch.Tensor, X2: torch.Tensor, h: float
+                                  ) -> tuple[torch.Tensor, torch.Tensor]:
+    """J1, J2 in :meth:`RigidDynamics.evaluate`'s layout by central differences of H's
+    values; asserts that a state moves no step but its own two."""
+    out = []
+    for which, X in enumerate((X1, X2)):
+        T = X.shape[0] - 1
+        J = torch.zeros(T, 2, X.shape[1], dtype=X.dtype)
+        for s in range(T + 1):
+            for k in range(X.shape[1]):
+                plus, minus = X.clone(), X.clone()
+                plus[s, k] += h
+                minus[s, k] -= h
+                args_p = (plus, X2) if which == 0 else (X1, plus)
+                args_m = (minus, X2) if which == 0 else (X1, minus)
+                fd = (H.evaluate(*args_p, jacobian=False)[0]
+                      - H.evaluate(*args_m, jacobian=False)[0]) / (2 * h)
+                if s >= 1:  # state s is step s − 1's "now"
+                    J[s - 1, 1, k] = fd[s - 1]
+                if s < T:  # and step s's "prev"
+                    J[s, 0, k] = fd[s]
+                others = [t for t in range(T) if t not in (s - 1, s)]
+                assert (fd[others] == 0).all(), (which, s, k)
+        out.append(J)
+    return out[0], out[1]
+
+
+@pytest.mark.parametrize("encoder", ["pointnet", "pointnet2"])
+def test_jacobian_through_a_point_cloud_f_q(obj, encoder):
+    """G by autograd through the marching-squares vertices: H_q's Jacobians match central
+    differences (h = 1e-6, float64) to 1e-5 of the part F_q contributes, J2's size: a
+    wrong G would miss by that whole part. The F_q's grid values pass it the pusher's
+    state in both states of every step."""
+    torch.manual_seed(7)
+    spec = DynamicsSpec(kind="rigid", encoder="joint", cloud_encoder=encoder, **CLOUD)
+    H = RigidDynamics(RigidMotion(spec).double(), obj, PUSHER)
+    X1, X2 = trajectory()
+    X2 = X2 + PUSHER_OFFSET
+    values, j1, j2 = H.evaluate(X1, X2)
+    assert (values > 0).all()
+    torch.testing.assert_close(H.evaluate(X1, X2, jacobian=False)[0], values, rtol=1e-12,
+                               atol=0.0)
+    assert j1.shape == (3, 2, 3) and j2.shape == (3, 2, 2)
+    assert (j2.abs().amax(2) > 0).all()
+    fd1, fd2 = step_jacobians_by_differences(H, X1, X2, h=1e-6)
+    atol = 1e-5 * float(j2.abs().max())
+    torch.testing.assert_close(j2, fd2, rtol=0.0, atol=atol)
+    torch.testing.assert_close(j1, fd1, rtol=0.0, atol=atol)

@@ -93,7 +93,7 @@ def test_pointnet2_features_move_with_the_object_only_through_the_centroids():
 
 
 @pytest.mark.parametrize("encoder", ["pointnet", "pointnet2"])
-def test_a_point_cloud_f_q_trains_and_is_refused_by_the_planner(encoder):
+def test_a_point_cloud_f_q_trains_and_gives_the_planner_its_row(encoder):
     torch.manual_seed(0)
     model = RigidMotion(DynamicsSpec(**SPEC, cloud_encoder=encoder)).double()
     points = Workspace().points(F64)
@@ -108,5 +108,27 @@ def test_a_point_cloud_f_q_trains_and_is_refused_by_the_planner(encoder):
                for p in model.parameters())
     obj = Body("obj", "object", Box((0.2, 0.12)), (0, 0, 0), 0.0, 0.06)
     pusher = Body("pusher", "pusher", Circle(0.03), (0, 0, 0), 0.0, 0.06)
-    with pytest.raises(ValueError, match="point-cloud"):
-        RigidDynamics(model, obj, pusher)
+    X1 = torch.tensor([[0.0, 0.0, 0.0], [0.01, 0.0, 0.02]], dtype=F64)
+    X2 = torch.tensor([[-0.128, 0.0017], [-0.118, 0.0017]], dtype=F64)
+    H, J1, J2 = RigidDynamics(model, obj, pusher).evaluate(X1, X2)
+    assert H.shape == (1,) and J1.shape == (1, 2, 3) and J2.shape == (1, 2, 2)
+    assert torch.isfinite(J1).all() and J2.abs().sum() > 0
+
+
+def test_marching_cubes_vertices_of_a_3d_grid():
+    """On a 3D grid (the hang model's X_h) the vertices lie on the sphere's surface, and the
+    fixed-size clouds pick evenly through them as in 2D."""
+    axis = (torch.arange(20, dtype=F64) + 0.5) * 0.01 - 0.1
+    points = torch.stack(torch.meshgrid(axis, axis, axis, indexing="ij"), -1)
+    centre = torch.tensor([0.013, -0.021, 0.007], dtype=F64)
+    phi = (points - centre).norm(dim=-1) - 0.05
+    every = boundary_points(phi, points)
+    gap = ((every - centre).norm(dim=1) - 0.05).abs()
+    assert gap.max() < 1e-3 and every.shape[1] == 3
+    # about 6 crossings per cell of the sphere's area (one per crossed edge, 3 axes)
+    assert 0.5 < len(every) / (4 * torch.pi * 5.0**2) / 3 < 2.0
+    grids = torch.stack((phi, phi + 1.0))
+    clouds = boundary_clouds(grids, points, 50)
+    assert clouds.shape == (2, 50, 3)
+    assert torch.equal(clouds[0], every[torch.arange(50) * len(every) // 50])
+    assert not clouds[1].any()

@@ -75,13 +75,26 @@ def test_bad_folders_exit_2(tmp_path, tiny_hang_data, trained, capsys):
     assert "--data: no such folder" in err and "not empty" in err and "spec.json" in err
 
 
-def test_pose_jacobian_against_central_differences(tiny_hang_data):
+# the paper's baselines (app. A.5), tiny: ψ_s of b = 1000, PointNet and PointNet++ clouds
+BASELINES = {"smooth_occupancy": {"representation": "smooth_occupancy"},
+             "pointnet": {"representation": "pointcloud", "cloud_points": 64,
+                          "cloud_widths": (8, 16)},
+             "pointnet2": {"representation": "pointcloud", "cloud_encoder": "pointnet2",
+                           "cloud_points": 64, "cloud_widths": (8, 16), "cloud_centroids": 8,
+                           "cloud_neighbours": 4, "cloud_local_widths": (8,)}}
+
+
+@pytest.mark.parametrize("representation", ["sdf", *BASELINES])
+def test_pose_jacobian_against_central_differences(tiny_hang_data, representation):
     """Through 64,000 grid cells and the ReLUs the map is piecewise smooth: a step may cross a
     kink (large steps) or drown in rounding (small ones), so each column must match at one of
-    three step sizes; a wrong Jacobian matches at none."""
+    three step sizes; a wrong Jacobian matches at none. For the baselines the gradient runs
+    through ψ_s = tanh(b φ) or through the boundary clouds' interpolated vertices."""
     d = load_hang_shards(tiny_hang_data)
     mug, hook = decode_mug(d["mug"][0]), decode_hook(d["hook"][0], *d["hook_radii"][0])
-    model = HangSuccess(HangSpec(**TINY_HANG_SPEC)).double()
+    torch.manual_seed(0)
+    model = HangSuccess(HangSpec(**TINY_HANG_SPEC,
+                                 **BASELINES.get(representation, {}))).double()
     functional = HangSuccessFunctional(model, mug, hook)
     X = torch.from_numpy(d["poses"][0][:3])
     _, (jac,) = functional.jacobians(X)
@@ -95,3 +108,47 @@ def test_pose_jacobian_against_central_differences(tiny_hang_data):
                 fd = (functional(X + step) - functional(X - step))[:, 0] / (2 * eps)
             errors.append(float(((jac[:, 0, k] - fd).abs() / (fd.abs() + 1e-6)).max()))
         assert min(errors) < 2e-4, (k, errors)
+
+
+def test_the_occupancy_baseline_passes_no_gradient(tiny_hang_data):
+    """ψ = sign(φ): H_hang is flat in the mug's pose (the paper's argument for SDFs)."""
+    d = load_hang_shards(tiny_hang_data)
+    mug, hook = decode_mug(d["mug"][0]), decode_hook(d["hook"][0], *d["hook_radii"][0])
+    torch.manual_seed(0)
+    model = HangSuccess(HangSpec(**TINY_HANG_SPEC, representation="occupancy")).double()
+    _, (jac,) = HangSuccessFunctional(model, mug, hook).jacobians(
+        torch.from_numpy(d["poses"][0][:3]))
+    assert jac.shape == (3, 1, 7) and not jac.any()
+
+
+@pytest.mark.parametrize("representation", ["occupancy", *BASELINES])
+def test_baselines_train_and_load(tiny_hang_data, tmp_path, representation):
+    fields = BASELINES.get(representation, {"representation": "occupancy"})
+    cfg = HangTrainConfig(data=str(tiny_hang_data), out=str(tmp_path / "m"), steps=6,
+                          batch=8, lr=3e-3, warmup=2, val_every=6,
+                          spec={**TINY_HANG_SPEC, **fields})
+    row = train_hang(cfg, progress=False)
+    assert np.isfinite(row["validation"]["loss"])
+    model = load_hang_model(tmp_path / "m")
+    assert model.spec.representation == fields["representation"]
+    assert model.spec.cloud_encoder == fields.get("cloud_encoder", "pointnet")
+    assert model(torch.zeros(2, 2, 40, 40, 40) + 0.01).shape == (2,)
+
+
+def test_train_hang_takes_the_representation_options(tiny_hang_data, tmp_path, capsys):
+    out = tmp_path / "psi"
+    assert main(["train", "hang", "--data", str(tiny_hang_data), "--out", str(out),
+                 "--representation", "smooth_occupancy", "--sharpness", "500", "--steps", "1",
+                 "--batch", "4", "--val-every", "1", "--threads", "1"]) == 0
+    spec = json.loads((out / "spec.json").read_text())
+    assert spec["representation"] == "smooth_occupancy" and spec["occupancy_sharpness"] == 500
+    for bad, why in ((["--sharpness", "500"], "--sharpness: only with"),
+                     (["--representation", "occupancy", "--cloud-encoder", "pointnet2"],
+                      "--cloud-encoder: only with"),
+                     (["--representation", "occupancy", "--init", str(out)],
+                      "the --init model's spec sets them")):
+        capsys.readouterr()
+        assert main(["train", "hang", "--data", str(tiny_hang_data), "--out",
+                     str(tmp_path / "bad"), *bad]) == 2
+        err = capsys.readouterr().err
+        assert why in err and len(err.strip().splitlines()) == 1

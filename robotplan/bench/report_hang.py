@@ -1,0 +1,55 @@
+"""Tab. 3's section of ``robotplan reproduce``'s report: the shipped H_hang by method beside
+the paper's SDF rows, then H_hang trained alike on each representation beside the paper's
+best row of it."""
+
+from __future__ import annotations
+
+from robotplan.bench.hang import METHODS
+from robotplan.bench.paper import PAPER_TAB3, PAPER_TAB3_BASELINES
+from robotplan.bench.report import Block
+from robotplan.bench.reproduce_hang import HANG_REPRESENTATIONS
+
+__all__ = ["tab3_blocks"]
+
+
+def _cells(summary: dict, method: str) -> list[str]:
+    r = summary[method]
+    return [f"{100 * r[k]:.1f}" for k in ("found", "sim_success", "collision_free", "total")]
+
+
+def tab3_blocks(results: dict, sizes) -> list[Block]:
+    """Tab. 3's section of the report: the shipped H_hang by method beside the paper's SDF
+    rows, then each representation's H_hang trained alike beside the paper's best row."""
+    shipped = results["tab3"]["result"]
+    rows = [[m, *_cells(shipped, m), " / ".join(f"{100 * v:.1f}" for v in PAPER_TAB3[m])]
+            for m in METHODS if m in shipped]
+    header = ["found", "sim success", "collision free", "total"]
+    b: list[Block] = [
+        ("h2", "Tab. 3: mug hanging (% of scenes: found / sim success / collision free / "
+               "total)"),
+        ("table", ["method", *header, "paper"], rows),
+        ("p", f"The shipped H_hang (`learned/hang`). Median seconds of optimisation + "
+              f"sampling per scene: {shipped.get('median_seconds')}.")]
+    reps = results.get("tab3_representations", {})
+    if not reps:
+        return b
+    rep_rows = []
+    for key, step in reps.items():
+        summary = step["result"]
+        for i, m in enumerate(m for m in METHODS if m in summary):
+            rep_rows.append([HANG_REPRESENTATIONS[key][0] if i == 0 else "", m,
+                             *_cells(summary, m),
+                             PAPER_TAB3_BASELINES[key] if i == 0 else ""])
+    n = sizes.hang_train_steps
+    b += [("table", ["H_hang on", "method", *header, "paper (best row)"], rep_rows),
+          ("p", f"Each H_hang of this table has the paper's network and loss (eq. 21), "
+                f"trained alike: {n} steps of batch 32 on {sizes.hang_train_scenes} scenes "
+                f"of seed 0, training seed 0; each planned with on "
+                f"{sizes.hang_representation_scenes} scenes of seed 2 within "
+                f"{sizes.hang_evaluations:,} functional evaluations per method (the paper: "
+                "20,000). ψ and ψ_s go through the same convolutions as φ; a cloud is the "
+                "marching-cubes vertices of the grid (eq. 12) through a PointNet or "
+                "PointNet++, one feature vector per object. H_coll is the shapes' SDF "
+                "collision row for every representation: the paper's point-cloud rows "
+                "\"+ SDF collision\"; its ψ rows evaluate H_coll on ψ.")]
+    return b

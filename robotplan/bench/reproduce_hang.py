@@ -1,0 +1,65 @@
+"""The steps of Tab. 3's representation rows in ``robotplan reproduce``: H_hang trained alike
+on each object representation of the paper's app. A.5 (the SDF, the occupancy measures ψ and
+ψ_s, PointNet and PointNet++ clouds), each planned with on the same scenes."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from robotplan.bench.steps import Steps
+
+__all__ = ["HANG_REPRESENTATIONS", "hang_representations"]
+
+# H_hang on each representation: key → (the paper's row, HangSpec fields, train hang options)
+HANG_REPRESENTATIONS = {
+    "sdf": ("SDF φ", {}, ""),
+    "occupancy": ("occupancy ψ = sign(φ)", {"representation": "occupancy"},
+                  " --representation occupancy"),
+    "smooth1000": ("occupancy ψ_s (b = 1000)", {"representation": "smooth_occupancy",
+                                                "occupancy_sharpness": 1000.0},
+                   " --representation smooth_occupancy --sharpness 1000"),
+    "pointnet": ("PointNet", {"representation": "pointcloud"},
+                 " --representation pointcloud"),
+    "pointnet2": ("PointNet++", {"representation": "pointcloud", "cloud_encoder": "pointnet2"},
+                  " --representation pointcloud --cloud-encoder pointnet2"),
+}
+
+def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> dict:
+    """Hanging data (seed 0), H_hang trained alike on each of ``sizes.hang_representations``
+    (keys of :data:`HANG_REPRESENTATIONS`: the paper's network and loss, the same data, seed
+    and steps), and ``bench hang`` with each on the same scenes (seed 2): key → the bench
+    step's result."""
+    from robotplan.bench.hang import run_bench_hang
+    from robotplan.program.hang_program import HANG_DEFAULTS
+    from robotplan.training.hang_data import generate_hang
+    from robotplan.training.hang_train import HangTrainConfig, train_hang
+
+    scenes, n = sizes.hang_train_scenes, sizes.hang_train_steps
+    data = steps.run("data_hang", {"scenes": scenes, "seed": 0}, lambda f: generate_hang(
+        f / "data", scenes, 0, workers=workers, progress=False, ray=ray),
+        f"robotplan data hang --scenes {scenes} --seed 0")
+    data_dir = steps.out / data["folder"] / "data"
+    settings = replace(HANG_DEFAULTS, evaluations=sizes.hang_evaluations)
+    methods = ",".join(sizes.hang_representation_methods)
+    bench_scenes = sizes.hang_representation_scenes
+    out: dict[str, dict] = {}
+    for key in sizes.hang_representations:
+        _label, fields, flags = HANG_REPRESENTATIONS[key]
+        cfg = {"steps": n, "warmup": min(200, n // 10), "val_every": n, "spec": fields}
+        trained = steps.run(
+            f"train_hang_{key}", {**cfg, "data": data["folder"]},
+            lambda f, c=cfg: train_hang(HangTrainConfig(data=str(data_dir),
+                                                        out=str(f / "model"), **c),
+                                        progress=False),
+            f"robotplan train hang --data DATA --steps {n}{flags}")
+        model = steps.out / trained["folder"] / "model"
+        out[key] = steps.run(
+            f"bench_hang_{key}", {"scenes": bench_scenes, "seed": 2, "methods": methods,
+                                  "evaluations": sizes.hang_evaluations,
+                                  "model": trained["folder"]},
+            lambda f, m=model: run_bench_hang(
+                bench_scenes, 2, f / "bench", m, workers=workers, progress=False,
+                methods=sizes.hang_representation_methods, settings=settings, ray=ray),
+            f"robotplan bench hang --scenes {bench_scenes} --seed 2 --model MODEL "
+            f"--methods {methods} --evaluations {sizes.hang_evaluations}")
+    return out
