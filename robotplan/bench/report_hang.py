@@ -33,13 +33,17 @@ def tab3_blocks(results: dict, sizes) -> list[Block]:
     reps = results.get("tab3_representations", {})
     if not reps:
         return b
-    rep_rows = []
+    rep_rows, held_out = [], []
     for key, step in reps.items():
-        summary = step["result"]
+        label = HANG_REPRESENTATIONS[key][0]
+        summary = step["bench"]["result"]
         for i, m in enumerate(m for m in METHODS if m in summary):
-            rep_rows.append([HANG_REPRESENTATIONS[key][0] if i == 0 else "", m,
-                             *_cells(summary, m),
+            rep_rows.append([label if i == 0 else "", m, *_cells(summary, m),
                              PAPER_TAB3_BASELINES[key] if i == 0 else ""])
+        v = step["train"]["result"]["validation"]
+        held_out.append([label, f"{v['loss']:.3f}", *(
+            " / ".join(f"{v[k][r]:.3f}" if v[k][r] is not None else "–"
+                       for r in ("accuracy", "recall", "specificity")) for k in ("k1", "k2"))])
     n = sizes.hang_train_steps
     b += [("table", ["H_hang on", "method", *header, "paper (best row)"], rep_rows),
           ("p", f"Each H_hang of this table has the paper's network and loss (eq. 21), "
@@ -51,5 +55,11 @@ def tab3_blocks(results: dict, sizes) -> list[Block]:
                 "marching-cubes vertices of the grid (eq. 12) through a PointNet or "
                 "PointNet++, one feature vector per object. H_coll is the shapes' SDF "
                 "collision row for every representation: the paper's point-cloud rows "
-                "\"+ SDF collision\"; its ψ rows evaluate H_coll on ψ.")]
+                "\"+ SDF collision\"; its ψ rows evaluate H_coll on ψ."),
+          ("table", ["H_hang on", "held-out loss (eq. 21)",
+                     "κ1: accuracy / recall / specificity", "κ2: accuracy / recall / "
+                     "specificity"], held_out),
+          ("p", f"The same models on {sizes.hang_test_scenes} held-out scenes of seed 1 "
+                "(`robotplan eval hang`): \"H < κ predicts success\" against the drop's label "
+                "(recall over the poses that hang, specificity over the rest).")]
     return b

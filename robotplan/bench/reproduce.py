@@ -54,6 +54,7 @@ class ReproduceSizes:
     # HANG_REPRESENTATIONS
     hang_representations: tuple[str, ...]
     hang_train_scenes: int  # hanging data scenes (seed 0; the paper: 1,600)
+    hang_test_scenes: int  # held-out hanging scenes each is scored on (seed 1)
     hang_train_steps: int  # training steps per representation (batch 32)
     hang_representation_scenes: int  # mug scenes each is planned with (seed 2)
     hang_representation_methods: tuple[str, ...]
@@ -71,7 +72,7 @@ QUICK = ReproduceSizes("quick", test_scenes=40, ood_scenes=40, per_scene=10, pos
                        representation_scenes=600, representation_steps=250,
                        contact_push=("sdf", "occupancy", "pointnet"), flow_steps=100,
                        hang_representations=("sdf", "occupancy", "pointnet"),
-                       hang_train_scenes=24, hang_train_steps=100,
+                       hang_train_scenes=24, hang_test_scenes=8, hang_train_steps=100,
                        hang_representation_scenes=1,
                        hang_representation_methods=("opt_sampling", "sampling_k1"),
                        hang_evaluations=1_000, ablation_replans=2)
@@ -82,7 +83,8 @@ FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pos
                       representation_scenes=15_000, representation_steps=20_000,
                       contact_push=tuple(REPRESENTATIONS),
                       flow_steps=20_000, hang_representations=tuple(HANG_REPRESENTATIONS),
-                      hang_train_scenes=1_600, hang_train_steps=20_000,
+                      hang_train_scenes=1_600, hang_test_scenes=400,
+                      hang_train_steps=20_000,
                       hang_representation_scenes=150, hang_representation_methods=METHODS,
                       hang_evaluations=20_000)
 

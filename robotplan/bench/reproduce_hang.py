@@ -5,6 +5,7 @@ on each object representation of the paper's app. A.5 (the SDF, the occupancy me
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 from robotplan.bench.steps import Steps
 
@@ -25,20 +26,26 @@ HANG_REPRESENTATIONS = {
 }
 
 def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> dict:
-    """Hanging data (seed 0), H_hang trained alike on each of ``sizes.hang_representations``
-    (keys of :data:`HANG_REPRESENTATIONS`: the paper's network and loss, the same data, seed
-    and steps), and ``bench hang`` with each on the same scenes (seed 2): key → the bench
-    step's result."""
+    """Hanging data (training scenes of seed 0, held-out scenes of seed 1), H_hang trained
+    alike on each of ``sizes.hang_representations`` (keys of :data:`HANG_REPRESENTATIONS`:
+    the paper's network and loss, the same data, seed and steps) and scored on the held-out
+    scenes, and ``bench hang`` with each on the same scenes (seed 2): key → ``{"train": the
+    training step's result (its last row scores the held-out scenes), "bench": the bench
+    step's result}``."""
     from robotplan.bench.hang import run_bench_hang
     from robotplan.program.hang_program import HANG_DEFAULTS
     from robotplan.training.hang_data import generate_hang
     from robotplan.training.hang_train import HangTrainConfig, train_hang
 
-    scenes, n = sizes.hang_train_scenes, sizes.hang_train_steps
-    data = steps.run("data_hang", {"scenes": scenes, "seed": 0}, lambda f: generate_hang(
-        f / "data", scenes, 0, workers=workers, progress=False, ray=ray),
-        f"robotplan data hang --scenes {scenes} --seed 0")
-    data_dir = steps.out / data["folder"] / "data"
+    def data(name: str, scenes: int, seed: int) -> tuple[str, Path]:
+        res = steps.run(name, {"scenes": scenes, "seed": seed}, lambda f: generate_hang(
+            f / "data", scenes, seed, workers=workers, progress=False, ray=ray),
+            f"robotplan data hang --scenes {scenes} --seed {seed}")
+        return res["folder"], steps.out / res["folder"] / "data"
+
+    train_folder, train_dir = data("data_hang", sizes.hang_train_scenes, 0)
+    test_folder, test_dir = data("data_hang_test", sizes.hang_test_scenes, 1)
+    n = sizes.hang_train_steps
     settings = replace(HANG_DEFAULTS, evaluations=sizes.hang_evaluations)
     methods = ",".join(sizes.hang_representation_methods)
     bench_scenes = sizes.hang_representation_scenes
@@ -47,13 +54,13 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
         _label, fields, flags = HANG_REPRESENTATIONS[key]
         cfg = {"steps": n, "warmup": min(200, n // 10), "val_every": n, "spec": fields}
         trained = steps.run(
-            f"train_hang_{key}", {**cfg, "data": data["folder"]},
-            lambda f, c=cfg: train_hang(HangTrainConfig(data=str(data_dir),
-                                                        out=str(f / "model"), **c),
-                                        progress=False),
-            f"robotplan train hang --data DATA --steps {n}{flags}")
+            f"train_hang_{key}", {**cfg, "data": train_folder, "test": test_folder},
+            lambda f, c=cfg: train_hang(HangTrainConfig(
+                data=str(train_dir), test=str(test_dir), out=str(f / "model"), **c),
+                progress=False),
+            f"robotplan train hang --data DATA --test TEST --steps {n}{flags}")
         model = steps.out / trained["folder"] / "model"
-        out[key] = steps.run(
+        bench = steps.run(
             f"bench_hang_{key}", {"scenes": bench_scenes, "seed": 2, "methods": methods,
                                   "evaluations": sizes.hang_evaluations,
                                   "model": trained["folder"]},
@@ -62,4 +69,5 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
                 methods=sizes.hang_representation_methods, settings=settings, ray=ray),
             f"robotplan bench hang --scenes {bench_scenes} --seed 2 --model MODEL "
             f"--methods {methods} --evaluations {sizes.hang_evaluations}")
+        out[key] = {"train": trained, "bench": bench}
     return out

@@ -123,6 +123,7 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
                    hang_methods=("opt_only",), time_budget=5.0, representation_scenes=6,
                    representation_steps=2, contact_push=("occupancy",), flow_steps=2,
                    hang_representations=("sdf", "pointnet"), hang_train_scenes=2,
+                   hang_test_scenes=1,
                    hang_train_steps=2, hang_representation_scenes=1,
                    hang_representation_methods=("sampling_k1",), hang_evaluations=64)
     md = reproduce(tmp_path, tiny, workers=1, progress=False)
@@ -134,8 +135,8 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     run = json.loads((tmp_path / "run.json").read_text())
     assert "| F_q on occupancy ψ_s (b = 100), 2 steps |" in text
     # data, training and evaluation of six representations: 1 + 6 + 12 steps; Figs. 5, 6: 1;
-    # Tab. 4's four F_flow: 4 + 4; Tab. 3's two H_hang: data, 2 trainings, 2 benches
-    assert len(run["steps"]) == 49 and run["sizes"]["test_scenes"] == 3
+    # Tab. 4's four F_flow: 4 + 4; Tab. 3's two H_hang: 2 data, 2 trainings, 2 benches
+    assert len(run["steps"]) == 50 and run["sizes"]["test_scenes"] == 3
     reproduce(tmp_path, tiny, workers=1, progress=False)
     again = json.loads((tmp_path / "run.json").read_text())
     assert [s["folder"] for s in again["steps"]] == [s["folder"] for s in run["steps"]]
@@ -143,11 +144,12 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
 
 
 def test_h_hang_on_each_representation_is_trained_alike_and_planned_with(tmp_path):
-    """Tab. 3's baselines (tiny: 2 scenes of data, 2 steps, one scene planned with 64
-    evaluations): each model folder says what it reads, each bench ran with it, and the
-    report sets a row per representation beside the paper's best row of it."""
+    """Tab. 3's baselines (tiny: 2 scenes of data, 1 held out, 2 steps, one scene planned
+    with 64 evaluations): each model folder says what it reads, each is scored on the
+    held-out scene and a bench ran with it, and the report sets a row per representation
+    beside the paper's best row of it."""
     sizes = replace(QUICK, hang_representations=tuple(HANG_REPRESENTATIONS),
-                    hang_train_scenes=2, hang_train_steps=2,
+                    hang_train_scenes=2, hang_test_scenes=1, hang_train_steps=2,
                     hang_representation_scenes=1, hang_representation_methods=("sampling_k1",),
                     hang_evaluations=64)
     steps = Steps(tmp_path, "digest", progress=False)
@@ -159,9 +161,12 @@ def test_h_hang_on_each_representation_is_trained_alike_and_planned_with(tmp_pat
         ("sdf", "pointnet"), ("occupancy", "pointnet"), ("smooth_occupancy", "pointnet"),
         ("pointcloud", "pointnet"), ("pointcloud", "pointnet2")]
     for key, step in results.items():
-        run = json.loads((tmp_path / step["folder"] / "bench" / "run.json").read_text())
+        bench = step["bench"]
+        run = json.loads((tmp_path / bench["folder"] / "bench" / "run.json").read_text())
         assert run["evaluations"] == 64 and f"/train_hang_{key}-" in run["model"]
-        assert step["result"]["sampling_k1"]["found"] in (0.0, 1.0)
+        assert bench["result"]["sampling_k1"]["found"] in (0.0, 1.0)
+        held_out = step["train"]["result"]["validation"]
+        assert held_out["samples"] == 20 and "k1" in held_out
     shipped = {"result": {"opt_sampling": {"found": 1.0, "sim_success": 1.0,
                                            "collision_free": 1.0, "total": 1.0},
                           "median_seconds": 9.0}}
@@ -171,3 +176,6 @@ def test_h_hang_on_each_representation_is_trained_alike_and_planned_with(tmp_pat
     rows = tables[1][2]
     assert [r[0] for r in rows] == [label for label, _, _ in HANG_REPRESENTATIONS.values()]
     assert rows[1][-1].endswith("total 34.0") and all(r[1] == "sampling_k1" for r in rows)
+    held = tables[2][2]
+    assert [r[0] for r in held] == [r[0] for r in rows]
+    assert all(len(r[2].split(" / ")) == 3 for r in held)
