@@ -44,12 +44,12 @@ def tab3_blocks(results: dict, sizes) -> list[Block]:
         held_out.append([label, f"{v['loss']:.3f}", *(
             " / ".join(f"{v[k][r]:.3f}" if v[k][r] is not None else "–"
                        for r in ("accuracy", "recall", "specificity")) for k in ("k1", "k2"))])
-    n = sizes.hang_train_steps
+    n, scenes = sizes.hang_train_steps, sizes.hang_representation_scenes
     b += [("table", ["H_hang on", "method", *header, "paper (best row)"], rep_rows),
           ("p", f"Each H_hang of this table has the paper's network and loss (eq. 21), "
                 f"trained alike: {n} steps of batch 32 on {sizes.hang_train_scenes} scenes "
-                f"of seed 0, training seed 0; each planned with on "
-                f"{sizes.hang_representation_scenes} scenes of seed 2 within "
+                f"of seed 0, training seed 0; each planned with on {scenes} "
+                f"scene{'s' if scenes != 1 else ''} of seed 2 within "
                 f"{sizes.hang_evaluations:,} functional evaluations per method (the paper: "
                 "20,000). ψ and ψ_s go through the same convolutions as φ; a cloud is the "
                 "marching-cubes vertices of the grid (eq. 12) through a PointNet or "

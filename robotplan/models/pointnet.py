@@ -12,14 +12,29 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import Protocol
 
 import torch
 from torch import Tensor, nn
 
 from robotplan.models.spec import DynamicsSpec
 
-__all__ = ["PointNet2Encoder", "PointNetEncoder", "boundary_clouds", "boundary_points",
+__all__ = ["CloudSpec", "PointNet2Encoder", "PointNetEncoder", "boundary_clouds", "boundary_points",
            "cloud_encoder", "farthest_points", "grid_edges", "per_point_mlp"]
+
+
+class CloudSpec(Protocol):
+    """The fields of a model's spec the point-cloud encoders read (``DynamicsSpec`` and
+    ``HangSpec`` have them)."""
+
+    sdf_scale: float
+    cloud_points: int
+    cloud_widths: tuple[int, ...]
+    cloud_encoder: str
+    cloud_centroids: int
+    cloud_neighbours: int
+    cloud_local_widths: tuple[int, ...]
+    cloud_local_scale: float
 
 
 def boundary_points(phi: Tensor, points: Tensor) -> Tensor:
@@ -106,10 +121,9 @@ class PointNetEncoder(nn.Module):
     of ``spec.cloud_points`` points (:func:`boundary_clouds`), scaled by ``spec.sdf_scale``,
     through the shared MLP ``spec.cloud_widths`` (ReLU), max-pooled, and a linear layer to
     ``features``. ``points (*S, D)`` are the grid points (default: the table grid X_h of a
-    :class:`DynamicsSpec`, D = 2), ``features`` defaults to ``spec.sdf_features``; ``spec``
-    is any spec with the ``cloud_*`` fields and ``sdf_scale`` (the hang model's too)."""
+    :class:`DynamicsSpec`, D = 2), ``features`` defaults to ``spec.sdf_features``."""
 
-    def __init__(self, spec: DynamicsSpec, points: Tensor | None = None,
+    def __init__(self, spec: CloudSpec | DynamicsSpec, points: Tensor | None = None,
                  features: int | None = None) -> None:
         super().__init__()
         self.spec = spec
@@ -151,7 +165,7 @@ class PointNet2Encoder(PointNetEncoder):
     max-pooled; the centroids (scaled by ``spec.sdf_scale``) with those local features are
     the points of :class:`PointNetEncoder`'s shared MLP and max-pool."""
 
-    def __init__(self, spec: DynamicsSpec, points: Tensor | None = None,
+    def __init__(self, spec: CloudSpec | DynamicsSpec, points: Tensor | None = None,
                  features: int | None = None) -> None:
         super().__init__(spec, points, features)
         self.local, _ = per_point_mlp(self.dims, spec.cloud_local_widths)
@@ -173,7 +187,7 @@ class PointNet2Encoder(PointNetEncoder):
         return points.reshape(m, c, self.spec.cloud_centroids, -1)
 
 
-def cloud_encoder(spec: DynamicsSpec, points: Tensor | None = None,
+def cloud_encoder(spec: CloudSpec | DynamicsSpec, points: Tensor | None = None,
                   features: int | None = None) -> PointNetEncoder:
     """The point-cloud encoder ``spec.cloud_encoder`` names (arguments as
     :class:`PointNetEncoder`'s)."""
