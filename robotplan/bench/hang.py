@@ -56,7 +56,7 @@ def bench_scene(index: int, seed: int, model_dir: str | Path,
 
     one_thread()
     hook, mug = _scene(index, seed)
-    problem = HangProblem(load_hang_model(model_dir), mug, hook)
+    problem = HangProblem(load_hang_model(model_dir), mug, hook, settings.collision)
     rng = np.random.default_rng([seed, index, 1])
     row = {"scene": index}
     found = {}
@@ -126,7 +126,7 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
     out.mkdir(parents=True, exist_ok=True)
     run = {"seed": seed, "model": str(model_dir), "evaluations": settings.evaluations,
            "start_pool": settings.start_pool, "robust_samples": settings.robust_samples,
-           "methods": list(methods)}
+           "methods": list(methods), "collision": settings.collision}
     run_path = out / "run.json"
     if run_path.is_file() and json.loads(run_path.read_text()) != run:
         raise ValueError(f"{out}: holds a run with other settings ({run_path}); "
@@ -149,6 +149,7 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
             bar.update()
     summary = summarize_hang(sorted(rows, key=lambda r: r["scene"]))
     summary.update(seed=seed, model=str(model_dir), evaluations=settings.evaluations,
+                   collision=settings.collision,
                    wall_seconds=round(time.time() - t0, 1), paper=PAPER_TAB3,
                    units=report.as_dict())
     write_atomically(out / "summary.json", lambda p: p.write_text(json.dumps(summary,

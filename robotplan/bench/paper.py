@@ -80,8 +80,4 @@ PAPER_TAB3_BASELINES = {
 }
 
 # what the paper evaluates that robotplan has no code for yet: (item, what it needs)
-NOT_RUN = [
-    ("Tab. 3, point-cloud rows without a collision row; ψ rows with H_coll on ψ",
-     "a hang program whose collision row can be left out or read the occupancy measure "
-     "(ours always holds H_coll of the shapes' SDFs)"),
-]
+NOT_RUN: list[tuple[str, str]] = []

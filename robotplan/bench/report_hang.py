@@ -7,7 +7,7 @@ from __future__ import annotations
 from robotplan.bench.hang import METHODS
 from robotplan.bench.paper import PAPER_TAB3, PAPER_TAB3_BASELINES
 from robotplan.bench.report import Block
-from robotplan.bench.reproduce_hang import HANG_REPRESENTATIONS
+from robotplan.bench.reproduce_hang import COLLISION_ROWS, HANG_REPRESENTATIONS
 
 __all__ = ["tab3_blocks"]
 
@@ -36,10 +36,15 @@ def tab3_blocks(results: dict, sizes) -> list[Block]:
     rep_rows, held_out = [], []
     for key, step in reps.items():
         label = HANG_REPRESENTATIONS[key][0]
-        summary = step["bench"]["result"]
-        for i, m in enumerate(m for m in METHODS if m in summary):
-            rep_rows.append([label if i == 0 else "", m, *_cells(summary, m),
-                             PAPER_TAB3_BASELINES[key] if i == 0 else ""])
+        for name, suffix in (("bench", ""), *((f"bench_{c}", text)
+                                              for c, text in COLLISION_ROWS.items())):
+            if name not in step:
+                continue
+            summary = step[name]["result"]
+            for i, m in enumerate(m for m in METHODS if m in summary):
+                first = i == 0
+                rep_rows.append([label + suffix if first else "", m, *_cells(summary, m),
+                                 PAPER_TAB3_BASELINES[key] if first and not suffix else ""])
         v = step["train"]["result"]["validation"]
         held_out.append([label, f"{v['loss']:.3f}", *(
             " / ".join(f"{v[k][r]:.3f}" if v[k][r] is not None else "–"
@@ -53,9 +58,13 @@ def tab3_blocks(results: dict, sizes) -> list[Block]:
                 f"{sizes.hang_evaluations:,} functional evaluations per method (the paper: "
                 "20,000). ψ and ψ_s go through the same convolutions as φ; a cloud is the "
                 "marching-cubes vertices of the grid (eq. 12) through a PointNet or "
-                "PointNet++, one feature vector per object. H_coll is the shapes' SDF "
-                "collision row for every representation: the paper's point-cloud rows "
-                "\"+ SDF collision\"; its ψ rows evaluate H_coll on ψ."),
+                "PointNet++, one feature vector per object. H_coll is eq. (7) on ψ for "
+                "the ψ models, as the paper's (`bench hang --collision model`), and on the "
+                "shapes' SDFs for the others (the paper's point-cloud rows \"+ SDF "
+                "collision\")."
+                + (" A row \"no collision row\" plans and accepts poses on H_hang alone "
+                   "(`--collision none`), as the paper's point-cloud rows \"no collision\"."
+                   if any("bench_none" in r for r in reps.values()) else "")),
           ("table", ["H_hang on", "held-out loss (eq. 21)",
                      "κ1: accuracy / recall / specificity", "κ2: accuracy / recall / "
                      "specificity"], held_out),

@@ -59,6 +59,7 @@ class ReproduceSizes:
     hang_representation_scenes: int  # mug scenes each is planned with (seed 2)
     hang_representation_methods: tuple[str, ...]
     hang_evaluations: int  # functional evaluations per method and scene (the paper: 20,000)
+    hang_every_collision_row: bool  # each representation's other collision rows too
     # re-plans of the ablation's closed loops (None: the scene class's): re-planning plans
     # through the object dominates a quick run's time (docs/experiments.md#reproduce-quick)
     ablation_replans: int | None = None
@@ -75,7 +76,8 @@ QUICK = ReproduceSizes("quick", test_scenes=40, ood_scenes=40, per_scene=10, pos
                        hang_train_scenes=24, hang_test_scenes=8, hang_train_steps=100,
                        hang_representation_scenes=1,
                        hang_representation_methods=("opt_sampling", "sampling_k1"),
-                       hang_evaluations=1_000, ablation_replans=2)
+                       hang_evaluations=1_000, hang_every_collision_row=False,
+                       ablation_replans=2)
 FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pose_fit=100,
                       push_scenes=50, ood_push_scenes=24, ablation_scenes=20,
                       hang_scenes=150,
@@ -86,7 +88,7 @@ FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pos
                       hang_train_scenes=1_600, hang_test_scenes=400,
                       hang_train_steps=20_000,
                       hang_representation_scenes=150, hang_representation_methods=METHODS,
-                      hang_evaluations=20_000)
+                      hang_evaluations=20_000, hang_every_collision_row=True)
 
 
 def _trained(steps: Steps, kind: str, key: str, cfg: dict, data: Path) -> str:

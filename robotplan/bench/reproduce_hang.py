@@ -9,29 +9,35 @@ from pathlib import Path
 
 from robotplan.bench.steps import Steps
 
-__all__ = ["HANG_REPRESENTATIONS", "hang_representations"]
+__all__ = ["COLLISION_ROWS", "HANG_REPRESENTATIONS", "hang_representations"]
 
-# H_hang on each representation: key → (the paper's row, HangSpec fields, train hang options)
+# H_hang on each representation: key → (the paper's row, HangSpec fields, train hang
+# options, the collision rows the paper plans with (HangSettings.collision), its main first)
 HANG_REPRESENTATIONS = {
-    "sdf": ("SDF φ", {}, ""),
+    "sdf": ("SDF φ", {}, "", ("sdf",)),
     "occupancy": ("occupancy ψ = sign(φ)", {"representation": "occupancy"},
-                  " --representation occupancy"),
+                  " --representation occupancy", ("model",)),
     "smooth1000": ("occupancy ψ_s (b = 1000)", {"representation": "smooth_occupancy",
                                                 "occupancy_sharpness": 1000.0},
-                   " --representation smooth_occupancy --sharpness 1000"),
+                   " --representation smooth_occupancy --sharpness 1000", ("model",)),
     "pointnet": ("PointNet", {"representation": "pointcloud"},
-                 " --representation pointcloud"),
+                 " --representation pointcloud", ("sdf", "none")),
     "pointnet2": ("PointNet++", {"representation": "pointcloud", "cloud_encoder": "pointnet2"},
-                  " --representation pointcloud --cloud-encoder pointnet2"),
+                  " --representation pointcloud --cloud-encoder pointnet2", ("sdf", "none")),
 }
+
+# the suffix of a bench step's name and of its report row, per collision row beyond the main
+COLLISION_ROWS = {"none": ", no collision row"}
+
 
 def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> dict:
     """Hanging data (training scenes of seed 0, held-out scenes of seed 1), H_hang trained
     alike on each of ``sizes.hang_representations`` (keys of :data:`HANG_REPRESENTATIONS`:
     the paper's network and loss, the same data, seed and steps) and scored on the held-out
-    scenes, and ``bench hang`` with each on the same scenes (seed 2): key → ``{"train": the
-    training step's result (its last row scores the held-out scenes), "bench": the bench
-    step's result}``."""
+    scenes, and ``bench hang`` with each on the same scenes (seed 2) with the paper's main
+    collision row for it, and with ``sizes.hang_every_collision_row`` also with its others:
+    key → ``{"train": the training step's result (its last row scores the held-out scenes),
+    "bench": the main bench step's result, "bench_<collision>": the others'}``."""
     from robotplan.bench.hang import run_bench_hang
     from robotplan.program.hang_program import HANG_DEFAULTS
     from robotplan.training.hang_data import generate_hang
@@ -51,7 +57,7 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
     bench_scenes = sizes.hang_representation_scenes
     out: dict[str, dict] = {}
     for key in sizes.hang_representations:
-        _label, fields, flags = HANG_REPRESENTATIONS[key]
+        _label, fields, flags, _ = HANG_REPRESENTATIONS[key]
         cfg = {"steps": n, "warmup": min(200, n // 10), "val_every": n, "spec": fields}
         trained = steps.run(
             f"train_hang_{key}", {**cfg, "data": train_folder, "test": test_folder},
@@ -60,14 +66,20 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
                 progress=False),
             f"robotplan train hang --data DATA --test TEST --steps {n}{flags}")
         model = steps.out / trained["folder"] / "model"
-        bench = steps.run(
-            f"bench_hang_{key}", {"scenes": bench_scenes, "seed": 2, "methods": methods,
-                                  "evaluations": sizes.hang_evaluations,
-                                  "model": trained["folder"]},
-            lambda f, m=model: run_bench_hang(
-                bench_scenes, 2, f / "bench", m, workers=workers, progress=False,
-                methods=sizes.hang_representation_methods, settings=settings, ray=ray),
-            f"robotplan bench hang --scenes {bench_scenes} --seed 2 --model MODEL "
-            f"--methods {methods} --evaluations {sizes.hang_evaluations}")
-        out[key] = {"train": trained, "bench": bench}
+        out[key] = {"train": trained}
+        collisions = HANG_REPRESENTATIONS[key][3]
+        for i, collision in enumerate(collisions if sizes.hang_every_collision_row
+                                      else collisions[:1]):
+            name = "bench" if i == 0 else f"bench_{collision}"
+            chosen = replace(settings, collision=collision)
+            out[key][name] = steps.run(
+                f"{name}_hang_{key}", {"scenes": bench_scenes, "seed": 2, "methods": methods,
+                                       "evaluations": sizes.hang_evaluations,
+                                       "model": trained["folder"], "collision": collision},
+                lambda f, m=model, c=chosen: run_bench_hang(
+                    bench_scenes, 2, f / "bench", m, workers=workers, progress=False,
+                    methods=sizes.hang_representation_methods, settings=c, ray=ray),
+                f"robotplan bench hang --scenes {bench_scenes} --seed 2 --model MODEL "
+                f"--methods {methods} --evaluations {sizes.hang_evaluations} "
+                f"--collision {collision}")
     return out

@@ -160,7 +160,8 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
         print(f"error: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
     settings = replace(HANG_DEFAULTS, evaluations=args.evaluations,
-                       start_pool=pool, robust_samples=robust)
+                       start_pool=pool, robust_samples=robust,
+                       collision=args.collision)
     try:
         summary = run_bench_hang(args.scenes, args.seed, Path(args.out), model,
                                  workers=args.workers, methods=methods, settings=settings,
@@ -182,6 +183,9 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
     if args.evaluations != HANG_DEFAULTS.evaluations:
         print(f"budget: {args.evaluations} functional evaluations per method and scene "
               f"(the paper: {HANG_DEFAULTS.evaluations})")
+    if args.collision != "sdf":
+        print(f"collision row: {args.collision} (sdf: on the shapes' SDFs; model: on what "
+              "the model reads of them; none: H_hang alone)")
     print(f"median seconds (optimisation + sampling): {summary['median_seconds']}")
     return 0
 

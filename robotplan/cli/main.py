@@ -127,6 +127,9 @@ def _parser() -> argparse.ArgumentParser:
                     help="a found pose ends a scene's restarts only where H_hang's median "
                     "over N poses about it (1 cm, 5°) is ≤ 0.1 (default 0: off; "
                     "HangSettings.robust_samples)")
+    bh.add_argument("--collision", choices=["sdf", "model", "none"], default="sdf",
+                    help="H_coll on the shapes' SDFs, on what the model reads (ψ: the "
+                    "paper's occupancy rows) or none (its point-cloud rows)")
     bh.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     add_ray_option(bh)
     bh.add_argument("--json", action="store_true")

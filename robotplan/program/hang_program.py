@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 import torch
@@ -17,6 +18,7 @@ from pydrake.solvers import MathematicalProgram, SnoptSolver, SolverOptions
 
 from robotplan.functionals.collision3d import FixedCollision3D
 from robotplan.functionals.hang import HangSuccessFunctional
+from robotplan.models.encoder import represent_grids
 from robotplan.models.hang import HangSuccess
 from robotplan.program.bridge import bridge, stepwise
 from robotplan.scene.hang_ranges import GridSpec
@@ -47,6 +49,10 @@ class HangSettings:
     robust_shift: float = 0.01
     robust_turn: float = 0.0873  # 5°
     robust_kappa: float = 0.1
+    # H_coll's row: on the shapes' SDFs; on what the model reads of them (ψ or ψ_s for an
+    # occupancy model, the paper's ψ rows; the SDFs otherwise); or none, found poses judged
+    # by H_hang alone (the paper's point-cloud rows "no collision", app. A.5)
+    collision: Literal["sdf", "model", "none"] = "sdf"
 
 
 HANG_DEFAULTS = HangSettings()
@@ -67,9 +73,12 @@ class HangSolution:
 
 
 class HangProblem:
-    """The functionals of one scene, and a count of their evaluations."""
+    """The functionals of one scene, and a count of their evaluations. ``collision`` as
+    :attr:`HangSettings.collision`: ``"model"`` evaluates H_coll on what the model reads of
+    the SDFs (eq. 7 with ψ in place of φ)."""
 
-    def __init__(self, model: HangSuccess, mug: Mug, hook: Hook) -> None:
+    def __init__(self, model: HangSuccess, mug: Mug, hook: Hook,
+                 collision: str = "sdf") -> None:
         self.model, self.mug, self.hook = model, mug, hook
         spec = model.spec
         grid = GridSpec(size=spec.size, cells=spec.cells, below_arm=spec.below_arm)
@@ -77,7 +86,12 @@ class HangProblem:
         self.lo, self.hi = centre - spec.size / 2, centre + spec.size / 2
         self.h_hang = HangSuccessFunctional(model, mug, hook)
         reach = float(np.hypot(mug.radius + mug.handle_reach + mug.handle_radius, mug.height))
-        self.h_coll = FixedCollision3D(mug, hook, (self.lo - reach, self.hi + reach))
+        read = None
+        if collision == "model" and spec.representation in ("occupancy", "smooth_occupancy"):
+            def read(phi, rep=spec.representation, b=spec.occupancy_sharpness):
+                return represent_grids(phi, rep, b)[0]
+        self.h_coll = FixedCollision3D(mug, hook, (self.lo - reach, self.hi + reach),
+                                       read=read)
         self.evaluations = 0
 
     def hang_values(self, X: np.ndarray) -> np.ndarray:
@@ -103,8 +117,10 @@ class HangProblem:
         """H_hang ≤ κ and H_coll ≤ its bound, each within SNOPT's feasibility tolerance (the
         solver stops on the bound; a pose it calls feasible is one)."""
         tol = settings.feasibility_tol
-        return (h <= (settings.kappa if kappa is None else kappa) + tol) & (
-            c <= settings.collision_cm3 + tol)
+        hangs = h <= (settings.kappa if kappa is None else kappa) + tol
+        if settings.collision == "none":
+            return hangs
+        return hangs & (c <= settings.collision_cm3 + tol)
 
 
 def _counted(problem: HangProblem, fn):
@@ -121,7 +137,8 @@ def _square(v):
 
 def solve_hang_once(problem: HangProblem, X0: np.ndarray,
                     settings: HangSettings = HANG_DEFAULTS) -> HangSolution:
-    """One SNOPT solve from pose ``X0 (7,)``."""
+    """One SNOPT solve from pose ``X0 (7,)`` (H_coll is evaluated at the end pose also
+    without its row, so that a drop can be judged against it)."""
     t0 = time.perf_counter()
     start_evals = problem.evaluations
     prog = MathematicalProgram()
@@ -131,12 +148,13 @@ def solve_hang_once(problem: HangProblem, X0: np.ndarray,
     prog.AddConstraint(sum(v * v for v in X[3:]) == 1.0)
     block = X[None, :]
     hang_fn, hang_vars = stepwise(problem.h_hang, [block], 1.0)
-    coll_fn, coll_vars = stepwise(problem.h_coll, [block], CM3)
     hang_fn = _counted(problem, hang_fn)
     hang = bridge(hang_fn)
     prog.AddCost(lambda x: _square(hang(x)[0]), hang_vars)
     prog.AddConstraint(hang, [-settings.kappa], [settings.kappa], hang_vars)
-    prog.AddConstraint(bridge(coll_fn), [0.0], [settings.collision_cm3], coll_vars)
+    if settings.collision != "none":
+        coll_fn, coll_vars = stepwise(problem.h_coll, [block], CM3)
+        prog.AddConstraint(bridge(coll_fn), [0.0], [settings.collision_cm3], coll_vars)
     q = np.asarray(X0[3:], dtype=float)
     prog.SetInitialGuess(X, np.concatenate([X0[:3], q / np.linalg.norm(q)]))
     solver = SnoptSolver()

@@ -37,7 +37,8 @@ def start_pose(problem: HangProblem, rng: np.random.Generator,
     if len(pool) == 1:
         return pool[0]
     h, c = problem.evaluate(pool)
-    clear = c <= settings.collision_cm3
+    clear = (c <= settings.collision_cm3 if settings.collision != "none"
+             else np.ones(len(c), bool))
     return pool[int(np.argmin(np.where(clear, h, np.inf)) if clear.any() else np.argmin(h))]
 
 

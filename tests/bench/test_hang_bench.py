@@ -38,6 +38,8 @@ def test_one_real_scene_and_bad_arguments(tmp_path, tiny_hang_data, capsys):
     row = json.loads((tmp_path / "b" / "rows.jsonl").read_text())
     assert 1 <= row["sampling_k2"]["evaluations"] <= row["sampling_k3"]["evaluations"] <= 128
     assert main([*bench, "--evaluations", "64"]) == 2, "a folder of another budget"
+    assert main([*bench, "--evaluations", "128", "--collision", "none"]) == 2, "and of a row"
+    assert json.loads((tmp_path / "b" / "run.json").read_text())["collision"] == "sdf"
     assert main(["bench", "hang", "--model", str(model), "--out", str(tmp_path / "c"),
                  "--methods", "guess"]) == 2
     assert main(["bench", "hang", "--model", str(tmp_path), "--out", str(tmp_path / "c")]) == 2

@@ -129,8 +129,9 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     md = reproduce(tmp_path, tiny, workers=1, progress=False)
     text = md.read_text()
     for item in ("Tab. 2", "Tab. 4", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 5", "Fig. 6",
-                 "Fig. 8", "Fig. 11", "Tab. 3", "Not run yet", "without H_PoC", "| analytic |"):
+                 "Fig. 8", "Fig. 11", "Tab. 3", "without H_PoC", "| analytic |"):
         assert item in text, item
+    assert "Not run yet" not in text, "every item of the paper has its code"
     assert "| F_flow | " in text and "| 3.40 ± 1.60 | 1.40 ± 1.80 |" in text
     run = json.loads((tmp_path / "run.json").read_text())
     assert "| F_q on occupancy ψ_s (b = 100), 2 steps |" in text
@@ -151,7 +152,7 @@ def test_h_hang_on_each_representation_is_trained_alike_and_planned_with(tmp_pat
     sizes = replace(QUICK, hang_representations=tuple(HANG_REPRESENTATIONS),
                     hang_train_scenes=2, hang_test_scenes=1, hang_train_steps=2,
                     hang_representation_scenes=1, hang_representation_methods=("sampling_k1",),
-                    hang_evaluations=64)
+                    hang_evaluations=64, hang_every_collision_row=True)
     steps = Steps(tmp_path, "digest", progress=False)
     results = hang_representations(steps, sizes, workers=1, ray=None)
     assert list(results) == list(HANG_REPRESENTATIONS)
@@ -161,10 +162,17 @@ def test_h_hang_on_each_representation_is_trained_alike_and_planned_with(tmp_pat
         ("sdf", "pointnet"), ("occupancy", "pointnet"), ("smooth_occupancy", "pointnet"),
         ("pointcloud", "pointnet"), ("pointcloud", "pointnet2")]
     for key, step in results.items():
-        bench = step["bench"]
-        run = json.loads((tmp_path / bench["folder"] / "bench" / "run.json").read_text())
-        assert run["evaluations"] == 64 and f"/train_hang_{key}-" in run["model"]
-        assert bench["result"]["sampling_k1"]["found"] in (0.0, 1.0)
+        # H_coll on ψ for the ψ models; the point clouds also without a collision row
+        collision = "model" if key in ("occupancy", "smooth1000") else "sdf"
+        assert ("bench_none" in step) == key.startswith("pointnet")
+        for name in ("bench", "bench_none"):
+            if name not in step:
+                continue
+            bench = step[name]
+            run = json.loads((tmp_path / bench["folder"] / "bench" / "run.json").read_text())
+            assert run["evaluations"] == 64 and f"/train_hang_{key}-" in run["model"]
+            assert run["collision"] == (collision if name == "bench" else "none")
+            assert bench["result"]["sampling_k1"]["found"] in (0.0, 1.0)
         held_out = step["train"]["result"]["validation"]
         assert held_out["samples"] == 20 and "k1" in held_out
     shipped = {"result": {"opt_sampling": {"found": 1.0, "sim_success": 1.0,
@@ -174,8 +182,11 @@ def test_h_hang_on_each_representation_is_trained_alike_and_planned_with(tmp_pat
     tables = [b for b in blocks if b[0] == "table"]
     assert tables[0][2][0][0] == "opt_sampling" and tables[0][2][0][-1].endswith("87.3")
     rows = tables[1][2]
-    assert [r[0] for r in rows] == [label for label, _, _ in HANG_REPRESENTATIONS.values()]
+    labels = [label for label, *_ in HANG_REPRESENTATIONS.values()]
+    assert [r[0] for r in rows] == [*labels[:4], "PointNet, no collision row", labels[4],
+                                    "PointNet++, no collision row"]
     assert rows[1][-1].endswith("total 34.0") and all(r[1] == "sampling_k1" for r in rows)
+    assert rows[4][-1] == "" and "no collision" in blocks[-3][1]
     held = tables[2][2]
-    assert [r[0] for r in held] == [r[0] for r in rows]
+    assert [r[0] for r in held] == labels
     assert all(len(r[2].split(" / ")) == 3 for r in held)

@@ -47,3 +47,23 @@ def test_pose_jacobian_against_central_differences():
         fd = (H(X + step) - H(X - step))[0, 0] / (2 * eps)
         assert abs(float(jac[0, 0, k] - fd)) <= 1e-6 * float(jac.abs().max()) + 1e-15
     assert abs(float(jac[0, 0, 0])) > 0, "moving apart changes the overlap"
+
+
+def test_on_an_occupancy_measure_the_overlap_stays_and_its_gradient_goes():
+    """H_coll with ψ = sign φ in place of φ (the paper's occupancy baseline, app. A.5): about
+    the lens volume on the 1 mm lattice, and no gradient in the pose; with ψ_s = tanh(b φ)
+    a gradient from the surfaces' 1/b shell only, below the SDF's."""
+    r1, r2, d = 0.03, 0.02, 0.04
+    bounds = (np.full(3, -0.04), np.full(3, 0.04))
+    sign = FixedCollision3D(Sphere(r1), Sphere(r2), bounds, resolution=0.001, read=torch.sign)
+    assert abs(float(sign(pose(d))) / lens_volume(r1, r2, d) - 1) < 0.05
+    _, (jac,) = sign.jacobians(pose(d))
+    assert not jac.any()
+    assert float(sign(pose(0.08))) == 0.0
+
+    sdf = FixedCollision3D(Sphere(r1), Sphere(r2), bounds, resolution=0.001)
+    smooth = FixedCollision3D(Sphere(r1), Sphere(r2), bounds, resolution=0.001,
+                              read=lambda phi: torch.tanh(1000.0 * phi))
+    _, (j_sdf,) = sdf.jacobians(pose(d))
+    _, (j_smooth,) = smooth.jacobians(pose(d))
+    assert 0 < abs(float(j_smooth[0, 0, 0])) < abs(float(j_sdf[0, 0, 0]))

@@ -48,6 +48,24 @@ def test_feasible_means_within_the_solvers_tolerance_of_each_bound(problem):
     assert problem.feasible(h, c, s).tolist() == [True, False, True, False]
 
 
+def test_without_a_collision_row_a_pose_in_the_hook_is_kept(problem):
+    """``collision="none"`` (the paper's point-cloud rows "no collision"): H_hang alone
+    decides whether a pose is found, wherever the mug ends."""
+    s = HangSettings(collision="none")
+    h = np.array([0.0, s.kappa + 1.0])
+    c = np.array([5.0, 0.0])
+    assert problem.feasible(h, c, s).tolist() == [True, False]
+    arm_z = HOOK.post_height + 0.08 * math.tan(HOOK.angles[0])
+    X0 = np.array([0.08, -(MUG.radius - MUG.wall / 2), arm_z - 0.06, 1.0, 0.0, 0.0, 0.0])
+    start_h, _ = problem.evaluate(X0[None])
+    sol = solve_hang_once(problem, X0, HangSettings(kappa=1e6, major_iterations=20,
+                                                    collision="none"))
+    assert sol.feasible and abs(sol.h_hang) <= abs(start_h[0]) + 1e-6
+    assert sol.feasible == bool(problem.feasible(np.array([sol.h_hang]), np.array([1e3]),
+                                                 HangSettings(kappa=1e6,
+                                                              collision="none"))[0])
+
+
 def test_a_pooled_start_is_the_pools_best_pose_within_the_collision_bound(problem):
     settings = HangSettings(start_pool=32)
     pool = uniform_poses(np.random.default_rng(5), (problem.lo + problem.hi) / 2,
@@ -107,3 +125,22 @@ def test_a_robust_search_goes_on_past_a_pose_whose_neighbourhood_it_rejects(prob
     plain = optimise_hang(problem, np.random.default_rng(4),
                           HangSettings(kappa=1e6, major_iterations=4), restarts=3)
     assert plain.robust_h is None and plain.evaluations + 8 == loose.evaluations
+
+
+def test_the_collision_row_on_what_the_model_reads():
+    """``collision="model"``: for a ψ model H_coll reads ψ (the paper's occupancy rows: the
+    overlap stays, its gradient in the pose goes); for an SDF model it is the SDF row."""
+    arm_z = HOOK.post_height + 0.08 * math.tan(HOOK.angles[0])
+    X0 = np.array([[0.08, -(MUG.radius - MUG.wall / 2), arm_z - 0.06, 1.0, 0.0, 0.0, 0.0]])
+    torch.manual_seed(0)
+    psi = HangProblem(HangSuccess(HangSpec(**TINY_HANG_SPEC, representation="occupancy")),
+                      MUG, HOOK, "model")
+    sdf_model = HangSuccess(HangSpec(**TINY_HANG_SPEC))
+    on_sdf = HangProblem(sdf_model, MUG, HOOK)
+    assert psi.collision_cm3(X0)[0] > 0.1 and on_sdf.collision_cm3(X0)[0] > 0.1
+    _, (jac,) = psi.h_coll.jacobians(torch.from_numpy(X0))
+    assert not jac.any()
+    _, (jac,) = on_sdf.h_coll.jacobians(torch.from_numpy(X0))
+    assert jac.abs().max() > 0
+    same = HangProblem(sdf_model, MUG, HOOK, "model")
+    assert same.collision_cm3(X0)[0] == on_sdf.collision_cm3(X0)[0]
