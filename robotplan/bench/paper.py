@@ -47,13 +47,13 @@ REPRESENTATIONS = {
 # the representations of Tab. 4's F_flow rows (keys of REPRESENTATIONS)
 FLOW_REPRESENTATIONS = ("sdf", "occupancy", "smooth100", "smooth1000")
 
-# the `train push` option of each DynamicsSpec field a representation sets
+# the `train push` / `train hang` option of each spec field a representation sets
 SPEC_FLAGS = {"representation": "--representation", "occupancy_sharpness": "--sharpness",
               "cloud_encoder": "--cloud-encoder"}
 
 
 def spec_flags(fields: dict) -> str:
-    """The ``train push`` options that set these DynamicsSpec ``fields``."""
+    """The ``train push`` / ``train hang`` options that set these spec ``fields``."""
     return "".join(f" {SPEC_FLAGS[k]} {v:g}" if isinstance(v, float)
                    else f" {SPEC_FLAGS[k]} {v}" for k, v in fields.items())
 

@@ -7,23 +7,21 @@ from __future__ import annotations
 from dataclasses import replace
 from pathlib import Path
 
+from robotplan.bench.paper import spec_flags
 from robotplan.bench.steps import Steps
 
 __all__ = ["COLLISION_ROWS", "HANG_REPRESENTATIONS", "hang_representations"]
 
-# H_hang on each representation: key → (the paper's row, HangSpec fields, train hang
-# options, the collision rows the paper plans with (HangSettings.collision), its main first)
+# H_hang on each representation: key → (the paper's row, HangSpec fields, the collision
+# rows the paper plans with (HangSettings.collision), its main first)
 HANG_REPRESENTATIONS = {
-    "sdf": ("SDF φ", {}, "", ("sdf",)),
-    "occupancy": ("occupancy ψ = sign(φ)", {"representation": "occupancy"},
-                  " --representation occupancy", ("model",)),
+    "sdf": ("SDF φ", {}, ("sdf",)),
+    "occupancy": ("occupancy ψ = sign(φ)", {"representation": "occupancy"}, ("model",)),
     "smooth1000": ("occupancy ψ_s (b = 1000)", {"representation": "smooth_occupancy",
-                                                "occupancy_sharpness": 1000.0},
-                   " --representation smooth_occupancy --sharpness 1000", ("model",)),
-    "pointnet": ("PointNet", {"representation": "pointcloud"},
-                 " --representation pointcloud", ("sdf", "none")),
+                                                "occupancy_sharpness": 1000.0}, ("model",)),
+    "pointnet": ("PointNet", {"representation": "pointcloud"}, ("sdf", "none")),
     "pointnet2": ("PointNet++", {"representation": "pointcloud", "cloud_encoder": "pointnet2"},
-                  " --representation pointcloud --cloud-encoder pointnet2", ("sdf", "none")),
+                  ("sdf", "none")),
 }
 
 # the suffix of a bench step's name and of its report row, per collision row beyond the main
@@ -57,17 +55,16 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
     bench_scenes = sizes.hang_representation_scenes
     out: dict[str, dict] = {}
     for key in sizes.hang_representations:
-        _label, fields, flags, _ = HANG_REPRESENTATIONS[key]
+        _label, fields, collisions = HANG_REPRESENTATIONS[key]
         cfg = {"steps": n, "warmup": min(200, n // 10), "val_every": n, "spec": fields}
         trained = steps.run(
             f"train_hang_{key}", {**cfg, "data": train_folder, "test": test_folder},
             lambda f, c=cfg: train_hang(HangTrainConfig(
                 data=str(train_dir), test=str(test_dir), out=str(f / "model"), **c),
                 progress=False),
-            f"robotplan train hang --data DATA --test TEST --steps {n}{flags}")
+            f"robotplan train hang --data DATA --test TEST --steps {n}{spec_flags(fields)}")
         model = steps.out / trained["folder"] / "model"
         out[key] = {"train": trained}
-        collisions = HANG_REPRESENTATIONS[key][3]
         for i, collision in enumerate(collisions if sizes.hang_every_collision_row
                                       else collisions[:1]):
             name = "bench" if i == 0 else f"bench_{collision}"

@@ -31,8 +31,7 @@ from robotplan.program.solve import solve_skeleton
 from robotplan.scene import Scene
 
 __all__ = ["PATIENCE_S", "SearchResult", "adoptable", "is_solved", "meets_constraints",
-           "merge_results",
-           "past_budget", "run_in_pool", "search_push", "stops_search"]
+           "merge_results", "past_budget", "run_in_pool", "search_push", "stops_search"]
 
 # residual RMS (mm) below which plans rank alike, and the default good-enough residual
 GOOD_RMS_MM = ProgramSettings.good_rms_mm
