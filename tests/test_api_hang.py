@@ -39,6 +39,37 @@ def test_plan_execute_and_playback_through_the_facade(tiny_model, tmp_path, monk
     assert (tmp_path / "playback.html").stat().st_size > 10_000
 
 
+def test_the_closed_loop_searches_on_while_the_mug_falls(tiny_model):
+    """Open loop drops the plan's pose once (the paper's protocol); closed loop, when the mug
+    falls from it, goes on with the same search and drops each further pose, reporting the
+    poses it passed over as re-plans, until one hangs or the restarts are spent."""
+    from robotplan.api.hang import execute_hang, plan_hang
+
+    scene = robotplan.load_scene(TASKS / "mug_hang.yaml")
+    settings = HangSettings(kappa=1e6, restarts=3, major_iterations=5)  # H_coll decides
+    planned = plan_hang(scene, tiny_model, settings=settings)
+    assert planned.solved, "a pose clear of the hook within three solves"
+    first = planned.solution.restarts
+    opened = execute_hang(planned, "open_loop")
+    assert opened.mode == "open_loop" and opened.replans == []
+    assert np.array_equal(opened.solution.pose, planned.solution.pose)
+    closed = execute_hang(planned, "closed_loop")
+    assert planned.solution.restarts == first, "the plan is left as it was"
+    assert closed.mode == "closed_loop" and closed.solution.feasible
+    if opened.hung:
+        assert closed.replans == [] and closed.hung
+    else:
+        assert closed.hung or closed.solution.restarts == settings.restarts
+        assert 1 <= len(closed.replans) <= settings.restarts - 1 + int(closed.hung)
+        assert all(r["reason"].startswith("the mug") and r["violation"] < 1e-3
+                   for r in closed.replans)
+        assert [r["step"] for r in closed.replans] == sorted({r["step"] for r in closed.replans})
+        again = execute_hang(planned, "closed_loop")
+        assert np.array_equal(again.solution.pose, closed.solution.pose), "executions repeat"
+    with pytest.raises(ValueError, match="mode"):
+        execute_hang(planned, "sideways")
+
+
 def test_world_poses_follow_the_hook():
     X_WH = table_pose(0.2, -0.1, math.pi / 2)
     X_HM = np.array([0.1, 0.0, 0.25, 1.0, 0.0, 0.0, 0.0])
@@ -64,7 +95,9 @@ def test_solve_writes_the_result_or_refuses_a_missing_model(tiny_model, tmp_path
     doc = solve_hang(scene, tmp_path / "out", tiny_model, restarts=1,
                      settings=HangSettings(major_iterations=5))
     assert json.loads(doc_path.read_text()) == doc
-    assert set(doc["execution"]) >= {"hung", "collision_at_start", "final_pose", "in_place"}
+    assert set(doc["execution"]) >= {"hung", "collision_at_start", "final_pose", "in_place",
+                                     "mode", "replans"}
+    assert doc["execution"]["mode"] == "closed_loop"
     assert len(doc["pose"]) == 7
     assert (tmp_path / "out" / doc["picture"]).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 

@@ -163,9 +163,10 @@ def execute(planned: Plan, scene: Scene | None = None, *, mode: str = "closed_lo
     ``plan_substeps``). ``perturb``: friction, mass and observation noise of a perturbed
     world. ``loop``: the closed loop's settings (default: those of the plan's scene class,
     ``skeletons/loop.yaml``). ``quiet=False`` prints a line per re-plan. A hang plan is
-    dropped from its pose."""
+    dropped from its pose; in closed loop, while the mug falls, its search goes on and drops
+    the next pose it finds (:func:`robotplan.api.hang.execute_hang`)."""
     if isinstance(planned, HangPlan):
-        return execute_hang(planned)
+        return execute_hang(planned, mode)
     if planned.best is None:
         raise ValueError("nothing to execute: the plan has no solution")
     if mode not in MODES:
@@ -248,7 +249,7 @@ def solve(scene: Scene, out: Path, model: str | Path | None = None, *, quiet: bo
     in the result). ``options``: those of :func:`plan`."""
     out = Path(out)
     if isinstance(scene.goal, HangGoal):
-        return solve_hang(scene, out, model)
+        return solve_hang(scene, out, model, mode=mode)
     planned = plan(scene, model, quiet=quiet, **options)
     doc: dict = {"scene": scene.name, **planned.summary()}
     if planned.best is not None:

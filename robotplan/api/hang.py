@@ -1,12 +1,18 @@
 """The facade for hang scenes: ``plan`` finds a mug pose on the hook (H_hang and H_coll, with
 restarts), ``execute`` drops the mug from it in pybullet, ``write_playback`` shows both.
 
+Closed loop (the default of ``execute``): when the mug falls from the found pose, the search
+goes on from where it stopped (same random starts, the same budget of restarts and
+evaluations), dropping each further pose it finds, until one hangs. Open loop drops the
+first found pose only, the paper's protocol (Tab. 3).
+
 Poses: the hook stands at its table pose X_WH; the search works in the hook frame H (as the
 data and H_hang do); results are reported in the world frame W, ``(x, y, z, qw, qx, qy, qz)``.
 """
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import time
@@ -17,7 +23,7 @@ import numpy as np
 
 from robotplan.base.files import write_atomically
 from robotplan.base.resources import learned_dir
-from robotplan.execution.hang_world import HangWorld
+from robotplan.execution.hang_world import DropResult, HangWorld
 from robotplan.models.hang import load_hang_model
 from robotplan.program.hang_program import HANG_DEFAULTS, HangProblem, HangSettings, HangSolution
 from robotplan.scene.hang_check import hang_parts
@@ -76,6 +82,11 @@ class HangPlan:
     model: str
     X_WH: np.ndarray
     X_WM_start: np.ndarray
+    settings: HangSettings = HANG_DEFAULTS
+    # where a re-plan goes on: the scene's functionals, the random starts' generator and the
+    # search's number of restarts
+    search: tuple[HangProblem, np.random.Generator, int | None] | None = field(
+        default=None, repr=False)
 
     @property
     def solved(self) -> bool:
@@ -96,6 +107,12 @@ class HangExecution:
     fall_m: float = 0.0  # how far the mug's centre came down before it rested
     drop: list = field(default_factory=list)  # [(t, X_WM)] every 1/30 s
     seconds: float = 0.0
+    mode: str = "closed_loop"
+    # closed loop: one entry per found pose the mug fell from, after which the search went on
+    # while its budget lasted: step (the drop's number), reason, violation (of the program's
+    # rows at that pose, within tolerance), h_hang, h_coll_cm3, seconds of the drop
+    replans: list[dict] = field(default_factory=list)
+    solution: HangSolution | None = None  # the pose dropped last (the plan's, or a re-plan's)
 
 
 def plan_hang(scene: Scene, model: str | Path | None = None, *, seed: int = 0,
@@ -106,29 +123,79 @@ def plan_hang(scene: Scene, model: str | Path | None = None, *, seed: int = 0,
     settings = settings or HANG_DEFAULTS
     mug, hook, mug_pose, hook_pose = hang_parts(scene)
     folder = str(model or learned_dir("hang"))
-    problem = HangProblem(load_hang_model(folder), mug, hook)
-    sol = optimise_hang(problem, np.random.default_rng(seed), settings, restarts)
-    return HangPlan(scene, sol, folder, table_pose(*hook_pose), table_pose(*mug_pose))
+    problem = HangProblem(load_hang_model(folder), mug, hook, settings.collision)
+    rng = np.random.default_rng(seed)
+    sol = optimise_hang(problem, rng, settings, restarts)
+    return HangPlan(scene, sol, folder, table_pose(*hook_pose), table_pose(*mug_pose),
+                    settings, (problem, rng, restarts))
 
 
-def execute_hang(planned: HangPlan) -> HangExecution:
-    """Drop the mug from the found pose (in the hook's world, then reported in W)."""
+def _fell(result: DropResult) -> str | None:
+    """Why a drop did not solve the scene (None: it hangs, clear of the hook at the start)."""
+    if result.collision_at_start:
+        return "the mug started inside the hook"
+    if not result.hangs:
+        return "the mug fell" + (" to the ground" if result.on_ground else " off the hook")
+    return None
+
+
+def _violation(sol: HangSolution, settings: HangSettings) -> float:
+    """How far the pose lies outside the program's rows H_hang ≤ κ and H_coll ≤ its bound."""
+    over = max(sol.h_hang - settings.kappa, 0.0)
+    if settings.collision != "none":
+        over = max(over, sol.h_coll_cm3 - settings.collision_cm3)
+    return round(over, 6)
+
+
+def execute_hang(planned: HangPlan, mode: str = "closed_loop") -> HangExecution:
+    """Drop the mug from the found pose (in the hook's world, then reported in W); in closed
+    loop, while it falls, go on with the search and drop the next pose found (module
+    docstring). ``replans`` lists the poses dropped before the one reported, each with why
+    the mug did not hang there."""
+    if mode not in ("closed_loop", "open_loop"):
+        raise ValueError(f"mode {mode!r}: expected closed_loop or open_loop")
     mug, hook, _, _ = hang_parts(planned.scene)
     t0 = time.perf_counter()
-    record: list = []
+    trials: list[tuple[HangSolution, DropResult, list, float]] = []
     with HangWorld(hook, mug) as world:
-        result = world.drop(planned.solution.pose, record=record)
+
+        def dropped(sol: HangSolution) -> DropResult:
+            t, record = time.perf_counter(), []
+            result = world.drop(sol.pose, record=record)
+            trials.append((sol, result, record, time.perf_counter() - t))
+            return result
+
+        sol = planned.solution
+        first = dropped(sol)
+        if (mode == "closed_loop" and sol.feasible and _fell(first) is not None
+                and planned.search is not None):
+            problem, rng, restarts = planned.search  # a copy: executions repeat
+            sol = optimise_hang(problem, copy.deepcopy(rng), planned.settings, restarts,
+                                accept=lambda found: _fell(dropped(found)) is None,
+                                resume=sol)
+    reported = next(k for k, (s, *_) in enumerate(trials) if np.array_equal(s.pose, sol.pose))
+    result, record = trials[reported][1:3]
+    replans = [{"step": k + 1, "reason": _fell(r), "violation": _violation(s, planned.settings),
+                "h_hang": round(s.h_hang, 5), "h_coll_cm3": round(s.h_coll_cm3, 6),
+                "seconds": round(dt, 3)}
+               for k, (s, r, _, dt) in enumerate(trials) if k != reported]
     drop = [(t, compose(planned.X_WH, np.asarray(X))) for t, X in record]
     return HangExecution(result.hangs, result.collision_at_start, result.on_ground,
                          compose(planned.X_WH, np.asarray(result.X_WM_end)),
                          result.in_place(world.physics), result.fall_m, drop,
-                         time.perf_counter() - t0)
+                         time.perf_counter() - t0, mode, replans, sol)
+
+
+def _dropped_pose(planned: HangPlan, executed: HangExecution) -> HangSolution:
+    """The pose the execution reports (the plan's, or a closed loop's later one)."""
+    return executed.solution if executed.solution is not None else planned.solution
 
 
 def write_hang_playback_page(planned: HangPlan, executed: HangExecution, path: Path) -> None:
     mug, hook, _, _ = hang_parts(planned.scene)
-    write_hang_playback(mug, hook, planned.X_WH, planned.X_WM_start, planned.X_WM,
-                        executed.drop, Path(path))
+    X_WM = compose(planned.X_WH, _dropped_pose(planned, executed).pose)
+    write_hang_playback(mug, hook, planned.X_WH, planned.X_WM_start, X_WM, executed.drop,
+                        Path(path))
 
 
 def write_hang_still(planned: HangPlan, executed: HangExecution, path: Path) -> None:
@@ -137,7 +204,8 @@ def write_hang_still(planned: HangPlan, executed: HangExecution, path: Path) -> 
     X_HW = inverse_pose(planned.X_WH)
     outcome = ("hangs" if executed.hung else "falls") + (" in place" if executed.in_place
                                                          else "")
-    write_hang_picture(mug, hook, planned.solution.pose, compose(X_HW, executed.X_WM_end),
+    write_hang_picture(mug, hook, _dropped_pose(planned, executed).pose,
+                       compose(X_HW, executed.X_WM_end),
                        Path(path), title=f"{planned.scene.name}: found pose (light), after "
                        f"the drop in pybullet (solid): the mug {outcome}")
 
@@ -155,20 +223,23 @@ def _r(v: np.ndarray) -> list[float]:
 
 
 def solve_hang(scene: Scene, out: Path, model: str | Path | None = None, *, seed: int = 0,
-               restarts: int | None = None, settings: HangSettings | None = None) -> dict:
-    """Plan, drop, write ``out/result.json``, ``out/playback.html`` and ``out/hang.png``;
-    returns the result."""
+               restarts: int | None = None, settings: HangSettings | None = None,
+               mode: str = "closed_loop") -> dict:
+    """Plan, drop (``mode``: closed loop goes on searching while the mug falls), write
+    ``out/result.json``, ``out/playback.html`` and ``out/hang.png``; returns the result.
+    Its pose, H_hang, restarts and evaluations are those of the pose dropped last."""
     t0 = time.perf_counter()
     planned = plan_hang(scene, model, seed=seed, restarts=restarts, settings=settings)
-    executed = execute_hang(planned)
-    sol = planned.solution
-    doc = {"scene": scene.name, "status": "solved" if planned.solved else "no_solution",
+    executed = execute_hang(planned, mode)
+    sol = _dropped_pose(planned, executed)
+    doc = {"scene": scene.name, "status": "solved" if sol.feasible else "no_solution",
            "goal": "hang", "model": planned.model,
            "plan_seconds": round(sol.seconds, 2), "restarts": sol.restarts,
            "evaluations": sol.evaluations, "h_hang": round(sol.h_hang, 5),
-           "h_coll_cm3": round(sol.h_coll_cm3, 6), "pose": _r(planned.X_WM),
+           "h_coll_cm3": round(sol.h_coll_cm3, 6), "pose": _r(compose(planned.X_WH, sol.pose)),
            "pose_in_hook_frame": _r(sol.pose),
-           "execution": {"simulator": "pybullet", "hung": executed.hung,
+           "execution": {"simulator": "pybullet", "mode": executed.mode,
+                         "replans": executed.replans, "hung": executed.hung,
                          "collision_at_start": executed.collision_at_start,
                          "on_ground": executed.on_ground, "in_place": executed.in_place,
                          "fall_m": round(executed.fall_m, 4),

@@ -136,7 +136,9 @@ def add_execution_options(parser) -> None:
     nominal world or a perturbed one."""
     parser.add_argument("--open-loop", action="store_true",
                         help="execute the plan as it is, without re-planning (the paper's "
-                        "protocol); default: closed loop, re-planning from the observed scene")
+                        "protocol); default: closed loop, re-planning from the observed scene "
+                        "(a hang scene: the search goes on while the mug falls from the "
+                        "poses it finds)")
     parser.add_argument("--perturb", type=int, nargs="?", const=0, default=None,
                         metavar="SEED", help="execute in a perturbed world: friction and "
                         "mass ±20 %%, observation noise 1 mm / 0.5°, drawn from SEED "

@@ -141,7 +141,7 @@ def cmd_eval_hang(args: argparse.Namespace) -> int:
 
 
 def cmd_bench_hang(args: argparse.Namespace) -> int:
-    from robotplan.bench.hang import METHODS, run_bench_hang
+    from robotplan.bench.hang import CLOSED_LOOP, METHODS, run_bench_hang
     from robotplan.program.hang_program import HANG_DEFAULTS
 
     model = args.model or str(learned_dir("hang"))
@@ -149,9 +149,10 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
     pool = HANG_DEFAULTS.start_pool if args.start_pool is None else args.start_pool
     robust = (HANG_DEFAULTS.robust_samples if args.robust_samples is None
               else args.robust_samples)
-    unknown = [m for m in methods if m not in METHODS]
+    unknown = [m for m in methods if m not in (*METHODS, CLOSED_LOOP)]
     problem = model_folder_problem(model) or (
-        f"--methods: unknown {unknown}; choose from {','.join(METHODS)}" if unknown else
+        f"--methods: unknown {unknown}; choose from {','.join((*METHODS, CLOSED_LOOP))}"
+        if unknown else
         "--scenes must be ≥ 1" if args.scenes < 1 else
         "--evaluations must be ≥ 1" if args.evaluations < 1 else
         "--start-pool must be ≥ 1" if pool < 1 else
@@ -176,10 +177,10 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
           f"{'paper total':>13}{'in place':>10}")
     for m in methods:
         if m in summary:
-            r, paper = summary[m], summary["paper"][m]
+            r, paper = summary[m], summary["paper"].get(m)
             print(f"{m:<14}{r['found']:>8.3f}{r['sim_success']:>8.3f}"
-                  f"{r['collision_free']:>10.3f}{r['total']:>8.3f}{paper[3]:>13.3f}"
-                  f"{r['in_place']:>10.3f}")
+                  f"{r['collision_free']:>10.3f}{r['total']:>8.3f}"
+                  f"{f'{paper[3]:.3f}' if paper else '—':>13}{r['in_place']:>10.3f}")
     if args.evaluations != HANG_DEFAULTS.evaluations:
         print(f"budget: {args.evaluations} functional evaluations per method and scene "
               f"(the paper: {HANG_DEFAULTS.evaluations})")
@@ -187,11 +188,16 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
         print(f"collision row: {args.collision} (sdf: on the shapes' SDFs; model: on what "
               "the model reads of them; none: H_hang alone)")
     print(f"median seconds (optimisation + sampling): {summary['median_seconds']}")
+    if CLOSED_LOOP in summary:
+        loop = summary[CLOSED_LOOP]
+        print(f"closed loop (each found pose dropped, the search going on while the mug "
+              f"falls): median {loop['median_seconds']} s, {loop['median_drops']:g} drops")
     return 0
 
 
-def solve_hang_scene(scene, out: Path, model: str | None) -> int:
-    """``robotplan solve`` of a hang scene: find the pose, drop it, write the result."""
+def solve_hang_scene(scene, out: Path, model: str | None, open_loop: bool = False) -> int:
+    """``robotplan solve`` of a hang scene: find the pose, drop it (closed loop: search on
+    while the mug falls), write the result."""
     from robotplan.api.hang import solve_hang
 
     folder = Path(model) if model else learned_dir("hang")
@@ -199,11 +205,12 @@ def solve_hang_scene(scene, out: Path, model: str | None) -> int:
         print(f"error: {folder}: no trained H_hang here (spec.json); train one with "
               "robotplan train hang, or pass --model DIR", file=sys.stderr)
         return EXIT_BAD_INPUT
-    doc = solve_hang(scene, out, folder)
+    doc = solve_hang(scene, out, folder, mode="open_loop" if open_loop else "closed_loop")
     ex = doc["execution"]
+    fell = f" after {len(ex['replans'])} poses it fell from" if ex["replans"] else ""
     print(f"{doc['status']}: H_hang {doc['h_hang']:.3g}, H_coll {doc['h_coll_cm3']:.3g} cm³ "
           f"after {doc['restarts']} optimisations ({doc['evaluations']} evaluations, "
-          f"{doc['plan_seconds']} s); dropped in pybullet the mug "
-          f"{'hangs' if ex['hung'] else 'falls'}; wrote {out / 'result.json'} and "
+          f"{doc['plan_seconds']} s); dropped in pybullet ({ex['mode'].replace('_', ' ')}) "
+          f"the mug {'hangs' if ex['hung'] else 'falls'}{fell}; wrote {out / 'result.json'} and "
           f"{out / 'playback.html'}")
     return 0 if doc["status"] == "solved" else 1

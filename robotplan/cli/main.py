@@ -117,7 +117,7 @@ def _parser() -> argparse.ArgumentParser:
     bh.add_argument("--model", default=None, metavar="DIR", help="default: learned/hang")
     bh.add_argument("--methods", default=None,
                     help="comma-separated subset of opt_sampling, opt_only, sampling_k1, "
-                    "sampling_k2, sampling_k3 (default: all)")
+                    "sampling_k2, sampling_k3 (default: all), and closed_loop")
     bh.add_argument("--evaluations", type=int, default=20_000,
                     help="functional evaluations per method and scene (the paper: 20,000)")
     bh.add_argument("--start-pool", type=int, default=None, metavar="N",

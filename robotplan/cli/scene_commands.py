@@ -74,7 +74,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
               "its result", file=sys.stderr)
         return EXIT_BAD_INPUT
     if isinstance(scene.goal, HangGoal):
-        return solve_hang_scene(scene, out, args.model)
+        return solve_hang_scene(scene, out, args.model, args.open_loop)
     args.model = model_folder(args)
     if not_a_model(args.model):
         return EXIT_BAD_INPUT

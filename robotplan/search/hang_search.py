@@ -6,6 +6,8 @@ All share one budget of functional evaluations (the paper's 20,000)."""
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -62,20 +64,29 @@ def _better(sol: HangSolution, best: HangSolution | None) -> bool:
 
 
 def optimise_hang(problem: HangProblem, rng: np.random.Generator,
-                  settings: HangSettings = HANG_DEFAULTS, restarts: int | None = None
-                  ) -> HangSolution:
+                  settings: HangSettings = HANG_DEFAULTS, restarts: int | None = None,
+                  accept: Callable[[HangSolution], bool] | None = None,
+                  resume: HangSolution | None = None) -> HangSolution:
     """SNOPT from random poses until a feasible pose, ``restarts`` solves (default
     ``settings.restarts``; 1 = optimisation only) or the evaluation budget is spent. Returns
     the first feasible solution, else the one with the least H_hang. With
     ``settings.robust_samples`` a feasible pose ends the search only where H_hang is low
     about it too (:func:`robust_median` ≤ ``robust_kappa``); else the search goes on and
-    returns the first such pose, or the feasible one with the least median."""
+    returns the first such pose, or the feasible one with the least median.
+
+    ``accept``: a check of each feasible pose beyond the functionals (a drop in the
+    simulator, the closed loop's); a pose it refuses does not end the search; when none
+    passes, the search returns the feasible pose of least H_hang (of least median where
+    checked).
+    ``resume``: an earlier result of this search whose pose was refused: the search goes on
+    from its solves and evaluations (same ``rng``), within the same budget."""
     t0 = time.perf_counter()
-    problem.evaluations = 0
-    best: HangSolution | None = None
+    problem.evaluations = resume.evaluations if resume is not None else 0
+    best: HangSolution | None = replace(resume) if resume is not None else None
     n = settings.restarts if restarts is None else restarts
-    solves = 0
-    while solves < n:
+    solves = resume.restarts if resume is not None else 0
+    spent = resume.seconds if resume is not None else 0.0
+    while solves < n and problem.evaluations < settings.evaluations:
         sol = solve_hang_once(problem, start_pose(problem, rng, settings), settings)
         solves += 1
         done = sol.feasible
@@ -84,11 +95,15 @@ def optimise_hang(problem: HangProblem, rng: np.random.Generator,
             done = sol.robust_h <= settings.robust_kappa
         if _better(sol, best):
             best = sol
-        if done or problem.evaluations >= settings.evaluations:
+        if done and accept is not None:
+            done = accept(sol)
+            if done:
+                best = sol
+        if done:
             break
-    assert best is not None
+    assert best is not None, "no solve ran: restarts or evaluations of 0"
     best.restarts, best.evaluations = solves, problem.evaluations
-    best.seconds = time.perf_counter() - t0
+    best.seconds = spent + time.perf_counter() - t0
     best.method = "optimisation" if n > 1 else "optimisation only"
     return best
 

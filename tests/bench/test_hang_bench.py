@@ -22,6 +22,15 @@ def test_fractions_are_of_the_found_and_of_the_successes():
                  "total": 0.25, "in_place": round(1 / 3, 4)}
 
 
+def test_the_closed_loop_row_carries_its_seconds_and_drops():
+    rows = [{"scene": i, "closed_loop": {**run(True, i < 2, True), "seconds": 10.0 * (i + 1),
+                                         "drops": i + 1}} for i in range(3)]
+    s = summarize_hang(rows)
+    assert s["closed_loop"]["total"] == round(2 / 3, 4)
+    assert s["closed_loop"]["median_seconds"] == 20.0 and s["closed_loop"]["median_drops"] == 2
+    assert "opt_sampling" not in s and s["median_seconds"] is None
+
+
 def test_one_real_scene_and_bad_arguments(tmp_path, tiny_hang_data, capsys):
     model = tmp_path / "model"
     assert main(["train", "hang", "--data", str(tiny_hang_data), "--out", str(model),

@@ -108,6 +108,34 @@ def test_restarts_stop_at_the_budget(problem):
     assert not sol.feasible and sol.restarts < 20 and sol.evaluations >= 30
 
 
+def test_a_refused_pose_does_not_end_the_search_and_a_resumed_one_goes_on(problem):
+    """``accept`` (the closed loop's drop) sees every feasible pose; the first it takes ends
+    the search; ``resume`` goes on from a refused result with the same generator, as if the
+    search had never stopped."""
+    settings = HangSettings(kappa=1e6, major_iterations=4)
+    seen: list[np.ndarray] = []
+
+    def second(sol) -> bool:
+        seen.append(sol.pose.copy())
+        return len(seen) == 2
+
+    taken = optimise_hang(problem, np.random.default_rng(6), settings, restarts=4,
+                          accept=second)
+    assert taken.feasible and taken.restarts == 2 and len(seen) == 2
+    assert np.array_equal(taken.pose, seen[1])
+    rng = np.random.default_rng(6)
+    first = optimise_hang(problem, rng, settings, restarts=4)
+    assert first.restarts == 1 and np.array_equal(first.pose, seen[0])
+    resumed = optimise_hang(problem, rng, settings, restarts=4, accept=lambda sol: True,
+                            resume=first)
+    assert np.array_equal(resumed.pose, taken.pose)
+    assert (resumed.restarts, resumed.evaluations) == (taken.restarts, taken.evaluations)
+    assert first.restarts == 1, "the refused result itself is left as it was"
+    none = optimise_hang(problem, np.random.default_rng(6), settings, restarts=3,
+                         accept=lambda sol: False)
+    assert none.feasible and none.restarts == 3
+
+
 @pytest.mark.slow  # robust_samples is off by default; its nine programs take ~10 s
 def test_a_robust_search_goes_on_past_a_pose_whose_neighbourhood_it_rejects(problem):
     """With ``robust_samples`` a feasible pose ends the restarts only when H_hang's median
