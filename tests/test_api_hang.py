@@ -29,7 +29,8 @@ def test_plan_execute_and_playback_through_the_facade(tiny_model, tmp_path, monk
     import robotplan.api.hang as hang_api
 
     scene = robotplan.load_scene(TASKS / "mug_hang.yaml")
-    monkeypatch.setattr(hang_api, "HANG_DEFAULTS", HangSettings(restarts=1, major_iterations=5))
+    monkeypatch.setattr(hang_api, "HANG_DEFAULTS", HangSettings(restarts=1, major_iterations=5,
+                                                                  approach_iterations=3))
     planned = robotplan.plan(scene, tiny_model)
     assert isinstance(planned, HangPlan) and planned.solution.evaluations > 0
     executed = robotplan.execute(planned)
@@ -46,7 +47,8 @@ def test_the_closed_loop_searches_on_while_the_mug_falls(tiny_model):
     from robotplan.api.hang import execute_hang, plan_hang
 
     scene = robotplan.load_scene(TASKS / "mug_hang.yaml")
-    settings = HangSettings(kappa=1e6, restarts=3, major_iterations=5)  # H_coll decides
+    settings = HangSettings(kappa=1e6, restarts=3, major_iterations=5,
+                            approach_iterations=3)  # H_coll decides
     planned = plan_hang(scene, tiny_model, settings=settings)
     assert planned.solved, "a pose clear of the hook within three solves"
     first = planned.solution.restarts
@@ -93,7 +95,7 @@ def test_solve_writes_the_result_or_refuses_a_missing_model(tiny_model, tmp_path
     from robotplan.api.hang import solve_hang
 
     doc = solve_hang(scene, tmp_path / "out", tiny_model, restarts=1,
-                     settings=HangSettings(major_iterations=5))
+                     settings=HangSettings(major_iterations=5, approach_iterations=3))
     assert json.loads(doc_path.read_text()) == doc
     assert set(doc["execution"]) >= {"hung", "collision_at_start", "final_pose", "in_place",
                                      "mode", "replans"}

@@ -149,6 +149,7 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
     out.mkdir(parents=True, exist_ok=True)
     run = {"seed": seed, "model": str(model_dir), "evaluations": settings.evaluations,
            "start_pool": settings.start_pool, "robust_samples": settings.robust_samples,
+           "approach_iterations": settings.approach_iterations,
            "methods": list(methods), "collision": settings.collision}
     run_path = out / "run.json"
     if run_path.is_file() and json.loads(run_path.read_text()) != run:

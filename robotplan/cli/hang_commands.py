@@ -147,6 +147,8 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
     model = args.model or str(learned_dir("hang"))
     methods = tuple(args.methods.split(",")) if args.methods else METHODS
     pool = HANG_DEFAULTS.start_pool if args.start_pool is None else args.start_pool
+    approach = (HANG_DEFAULTS.approach_iterations if args.approach_iterations is None
+                else args.approach_iterations)
     robust = (HANG_DEFAULTS.robust_samples if args.robust_samples is None
               else args.robust_samples)
     unknown = [m for m in methods if m not in (*METHODS, CLOSED_LOOP)]
@@ -156,12 +158,13 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
         "--scenes must be ≥ 1" if args.scenes < 1 else
         "--evaluations must be ≥ 1" if args.evaluations < 1 else
         "--start-pool must be ≥ 1" if pool < 1 else
+        "--approach-iterations must be ≥ 0" if approach < 0 else
         "--robust-samples must be ≥ 0" if robust < 0 else None)
     if problem:
         print(f"error: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
     settings = replace(HANG_DEFAULTS, evaluations=args.evaluations,
-                       start_pool=pool, robust_samples=robust,
+                       start_pool=pool, robust_samples=robust, approach_iterations=approach,
                        collision=args.collision)
     try:
         summary = run_bench_hang(args.scenes, args.seed, Path(args.out), model,

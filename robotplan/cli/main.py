@@ -127,6 +127,9 @@ def _parser() -> argparse.ArgumentParser:
                     help="a found pose ends a scene's restarts only where H_hang's median "
                     "over N poses about it (1 cm, 5°) is ≤ 0.1 (default 0: off; "
                     "HangSettings.robust_samples)")
+    bh.add_argument("--approach-iterations", type=int, default=None, metavar="N",
+                    help="SNOPT iterations without the H_hang row before each whole program "
+                    "(0: none, the paper's; default: HangSettings.approach_iterations)")
     bh.add_argument("--collision", choices=["sdf", "model", "none"], default="sdf",
                     help="H_coll on the shapes' SDFs, on what the model reads (ψ: the "
                     "paper's occupancy rows) or none (its point-cloud rows)")

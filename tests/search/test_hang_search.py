@@ -24,14 +24,16 @@ def problem():
     return HangProblem(HangSuccess(HangSpec(**TINY_HANG_SPEC)).eval(), MUG, HOOK)
 
 
-def test_the_program_moves_a_mug_out_of_the_hook(problem):
+@pytest.mark.parametrize("approach", [0, 10])
+def test_the_program_moves_a_mug_out_of_the_hook(problem, approach):
     """H_hang ≤ κ always holds (κ above anything the network says): what is left is the
-    collision row, and the mug must leave the arm it starts through."""
+    collision row, and the mug must leave the arm it starts through, with or without the
+    approach stage before the whole program."""
     arm_z = HOOK.post_height + 0.08 * math.tan(HOOK.angles[0])
     X0 = np.array([0.08, -(MUG.radius - MUG.wall / 2), arm_z - 0.06, 1.0, 0.0, 0.0, 0.0])
     start_h, start_c = problem.evaluate(X0[None])
     assert start_c[0] > 0.1, "the start is deep in collision"
-    settings = HangSettings(kappa=1e6, major_iterations=20)
+    settings = HangSettings(kappa=1e6, major_iterations=20, approach_iterations=approach)
     sol = solve_hang_once(problem, X0, settings)
     assert sol.feasible and sol.h_coll_cm3 <= settings.collision_cm3 + settings.feasibility_tol
     assert abs(np.linalg.norm(sol.pose[3:]) - 1) < 1e-9
@@ -104,7 +106,8 @@ def test_sampling_thresholds_share_one_stream_of_poses(problem):
 def test_restarts_stop_at_the_budget(problem):
     rng = np.random.default_rng(1)
     sol = optimise_hang(problem, rng, HangSettings(kappa=1e-12, evaluations=30,
-                                                   major_iterations=5), restarts=20)
+                                                   major_iterations=5, approach_iterations=3),
+                        restarts=20)
     assert not sol.feasible and sol.restarts < 20 and sol.evaluations >= 30
 
 
@@ -112,7 +115,7 @@ def test_a_refused_pose_does_not_end_the_search_and_a_resumed_one_goes_on(proble
     """``accept`` (the closed loop's drop) sees every feasible pose; the first it takes ends
     the search; ``resume`` goes on from a refused result with the same generator, as if the
     search had never stopped."""
-    settings = HangSettings(kappa=1e6, major_iterations=4)
+    settings = HangSettings(kappa=1e6, major_iterations=4, approach_iterations=2)
     seen: list[np.ndarray] = []
 
     def second(sol) -> bool:
@@ -141,7 +144,7 @@ def test_a_robust_search_goes_on_past_a_pose_whose_neighbourhood_it_rejects(prob
     """With ``robust_samples`` a feasible pose ends the restarts only when H_hang's median
     about it is ≤ robust_kappa; when none is, every restart runs and the feasible pose of
     least median wins."""
-    base = HangSettings(kappa=1e6, major_iterations=4, robust_samples=8)
+    base = HangSettings(kappa=1e6, major_iterations=4, robust_samples=8, approach_iterations=0)
     strict = optimise_hang(problem, np.random.default_rng(4),
                            HangSettings(**{**base.__dict__, "robust_kappa": -1e6}), restarts=3)
     assert strict.feasible and strict.restarts == 3 and strict.robust_h is not None
@@ -151,7 +154,8 @@ def test_a_robust_search_goes_on_past_a_pose_whose_neighbourhood_it_rejects(prob
     # the same first solve: the strict search kept the least median of its three
     assert strict.robust_h <= loose.robust_h
     plain = optimise_hang(problem, np.random.default_rng(4),
-                          HangSettings(kappa=1e6, major_iterations=4), restarts=3)
+                          HangSettings(kappa=1e6, major_iterations=4, approach_iterations=0),
+                          restarts=3)
     assert plain.robust_h is None and plain.evaluations + 8 == loose.evaluations
 
 
