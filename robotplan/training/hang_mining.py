@@ -47,6 +47,7 @@ class MiningSpec:
     starts: int = 2  # SNOPT solves per scene, each from where the planner would start
     major_iterations: int = HANG_DEFAULTS.major_iterations
     start_pool: int = HANG_DEFAULTS.start_pool  # see HangSettings
+    approach_iterations: int = HANG_DEFAULTS.approach_iterations
 
 
 def mine_scene(problem: HangProblem, rng: np.random.Generator, spec: MiningSpec,
@@ -54,7 +55,8 @@ def mine_scene(problem: HangProblem, rng: np.random.Generator, spec: MiningSpec,
     """``spec.starts`` end poses of the program on one scene, each dropped: ``poses (n, 7)``,
     ``hangs`` (in place), ``caught``, ``collision``, ``h_model`` (H_hang there)."""
     settings = HangSettings(major_iterations=spec.major_iterations,
-                            start_pool=spec.start_pool)
+                            start_pool=spec.start_pool,
+                            approach_iterations=spec.approach_iterations)
     rows = []
     for _ in range(spec.starts):
         sol = solve_hang_once(problem, start_pose(problem, rng, settings), settings)
