@@ -131,20 +131,13 @@ def plan_hang(scene: Scene, model: str | Path | None = None, *, seed: int = 0,
 
 
 def _fell(result: DropResult) -> str | None:
-    """Why a drop did not solve the scene (None: it hangs, clear of the hook at the start)."""
+    """Why a drop did not solve the scene (None: it hangs; a pose that starts inside the hook
+    does not)."""
     if result.collision_at_start:
         return "the mug started inside the hook"
     if not result.hangs:
         return "the mug fell" + (" to the ground" if result.on_ground else " off the hook")
     return None
-
-
-def _violation(sol: HangSolution, settings: HangSettings) -> float:
-    """How far the pose lies outside the program's rows H_hang ≤ κ and H_coll ≤ its bound."""
-    over = max(sol.h_hang - settings.kappa, 0.0)
-    if settings.collision != "none":
-        over = max(over, sol.h_coll_cm3 - settings.collision_cm3)
-    return round(over, 6)
 
 
 def execute_hang(planned: HangPlan, mode: str = "closed_loop") -> HangExecution:
@@ -167,15 +160,16 @@ def execute_hang(planned: HangPlan, mode: str = "closed_loop") -> HangExecution:
 
         sol = planned.solution
         first = dropped(sol)
-        if (mode == "closed_loop" and sol.feasible and _fell(first) is not None
+        if (mode == "closed_loop" and sol.feasible and not first.hangs
                 and planned.search is not None):
             problem, rng, restarts = planned.search  # a copy: executions repeat
             sol = optimise_hang(problem, copy.deepcopy(rng), planned.settings, restarts,
-                                accept=lambda found: _fell(dropped(found)) is None,
+                                accept=lambda found: dropped(found).hangs,
                                 resume=sol)
     reported = next(k for k, (s, *_) in enumerate(trials) if np.array_equal(s.pose, sol.pose))
     result, record = trials[reported][1:3]
-    replans = [{"step": k + 1, "reason": _fell(r), "violation": _violation(s, planned.settings),
+    replans = [{"step": k + 1, "reason": _fell(r),
+                "violation": round(HangProblem.violation(s, planned.settings), 6),
                 "h_hang": round(s.h_hang, 5), "h_coll_cm3": round(s.h_coll_cm3, 6),
                 "seconds": round(dt, 3)}
                for k, (s, r, _, dt) in enumerate(trials) if k != reported]

@@ -129,6 +129,15 @@ class HangProblem:
             return hangs
         return hangs & (c <= settings.collision_cm3 + tol)
 
+    @staticmethod
+    def violation(sol: HangSolution, settings: HangSettings) -> float:
+        """How far ``sol``'s pose lies outside the rows H_hang ≤ κ and H_coll ≤ its bound
+        (the rows of :meth:`feasible`, without the tolerance)."""
+        over = max(sol.h_hang - settings.kappa, 0.0)
+        if settings.collision != "none":
+            over = max(over, sol.h_coll_cm3 - settings.collision_cm3)
+        return over
+
 
 def _counted(problem: HangProblem, fn):
     def wrapped(x: np.ndarray, jac: bool):
