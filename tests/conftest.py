@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+# isort: off
+import robotplan  # noqa: F401  first: it pins the CPU arithmetic before numpy loads OpenBLAS
+# isort: on
 import random
 from pathlib import Path
 

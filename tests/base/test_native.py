@@ -257,3 +257,15 @@ def test_importing_robotplan_pins_the_libraries_to_one_kernel_family():
     assert _capability() == "AVX2 AVX2"
     assert _capability(ATEN_CPU_CAPABILITY="default") == "DEFAULT AVX2"  # the user's own
     assert _capability(ROBOTPLAN_CPU_FEATURES="native").endswith(" -")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/maps")
+def test_the_test_session_itself_runs_on_the_pinned_kernels():
+    """The suite's own arithmetic is the planner's default on every CPU: the conftest
+    imports robotplan before numpy and torch load their kernels."""
+    import torch
+
+    from robotplan.base.threads import blas_cores
+
+    assert set(blas_cores().values()) == {"Haswell"}
+    assert torch.backends.cpu.get_cpu_capability() == "AVX2"
