@@ -49,7 +49,7 @@ def test_the_closed_loop_searches_on_while_the_mug_falls(tiny_model):
     scene = robotplan.load_scene(TASKS / "mug_hang.yaml")
     settings = HangSettings(kappa=1e6, restarts=3, major_iterations=5,
                             approach_iterations=3)  # H_coll decides
-    planned = plan_hang(scene, tiny_model, settings=settings)
+    planned = plan_hang(scene, tiny_model, settings=settings, check=None)
     assert planned.solved, "a pose clear of the hook within three solves"
     first = planned.solution.restarts
     opened = execute_hang(planned, "open_loop")
@@ -95,8 +95,15 @@ def test_solve_writes_the_result_or_refuses_a_missing_model(tiny_model, tmp_path
     from robotplan.api.hang import solve_hang
 
     doc = solve_hang(scene, tmp_path / "out", tiny_model, restarts=1,
-                     settings=HangSettings(major_iterations=5, approach_iterations=3))
+                     settings=HangSettings(major_iterations=5, approach_iterations=3),
+                     check=tiny_model)
     assert json.loads(doc_path.read_text()) == doc
+    assert doc["check"] is None and doc["check_h"] is None, "the closed loop drops instead"
+    opened = solve_hang(scene, tmp_path / "open", tiny_model, restarts=1, mode="open_loop",
+                        settings=HangSettings(major_iterations=5, approach_iterations=3),
+                        check=tiny_model)
+    assert opened["check"] == str(tiny_model)
+    assert (opened["check_h"] is None) == (opened["status"] == "no_solution")
     assert set(doc["execution"]) >= {"hung", "collision_at_start", "final_pose", "in_place",
                                      "mode", "replans"}
     assert doc["execution"]["mode"] == "closed_loop"

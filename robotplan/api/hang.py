@@ -115,15 +115,21 @@ class HangExecution:
     solution: HangSolution | None = None  # the pose dropped last (the plan's, or a re-plan's)
 
 
+CHECK = learned_dir("hang_check")  # the check network beside learned/hang
+
+
 def plan_hang(scene: Scene, model: str | Path | None = None, *, seed: int = 0,
-              settings: HangSettings | None = None, restarts: int | None = None
-              ) -> HangPlan:
+              settings: HangSettings | None = None, restarts: int | None = None,
+              check: str | Path | None = CHECK) -> HangPlan:
     """Optimisation from random poses (``restarts``, default the settings' 20) within the
-    evaluation budget; ``seed`` draws the starts; ``settings`` default ``HANG_DEFAULTS``."""
+    evaluation budget; ``seed`` draws the starts; ``settings`` default ``HANG_DEFAULTS``;
+    ``check``: the folder of a second H_hang a found pose must satisfy too
+    (``HangSettings.check_kappa``; None: none, the paper's one network)."""
     settings = settings or HANG_DEFAULTS
     mug, hook, mug_pose, hook_pose = hang_parts(scene)
     folder = str(model or learned_dir("hang"))
-    problem = HangProblem(load_hang_model(folder), mug, hook, settings.collision)
+    problem = HangProblem(load_hang_model(folder), mug, hook, settings.collision,
+                          None if check is None else load_hang_model(check))
     rng = np.random.default_rng(seed)
     sol = optimise_hang(problem, rng, settings, restarts)
     return HangPlan(scene, sol, folder, table_pose(*hook_pose), table_pose(*mug_pose),
@@ -218,16 +224,23 @@ def _r(v: np.ndarray) -> list[float]:
 
 def solve_hang(scene: Scene, out: Path, model: str | Path | None = None, *, seed: int = 0,
                restarts: int | None = None, settings: HangSettings | None = None,
-               mode: str = "closed_loop") -> dict:
+               mode: str = "closed_loop", check: str | Path | None = CHECK) -> dict:
     """Plan, drop (``mode``: closed loop goes on searching while the mug falls), write
     ``out/result.json``, ``out/playback.html`` and ``out/hang.png``; returns the result.
-    Its pose, H_hang, restarts and evaluations are those of the pose dropped last."""
+    Its pose, H_hang, restarts and evaluations are those of the pose dropped last;
+    ``check`` as :func:`plan_hang`'s, in open loop only: the closed loop's drops are its
+    check, and the network's refusals would spend the restarts it drops from
+    (docs/experiments.md#hang-check)."""
     t0 = time.perf_counter()
-    planned = plan_hang(scene, model, seed=seed, restarts=restarts, settings=settings)
+    check = check if mode == "open_loop" else None
+    planned = plan_hang(scene, model, seed=seed, restarts=restarts, settings=settings,
+                        check=check)
     executed = execute_hang(planned, mode)
     sol = _dropped_pose(planned, executed)
     doc = {"scene": scene.name, "status": "solved" if sol.feasible else "no_solution",
            "goal": "hang", "model": planned.model,
+           "check": None if check is None else str(check),
+           "check_h": None if sol.check_h is None else round(sol.check_h, 5),
            "plan_seconds": round(sol.seconds, 2), "restarts": sol.restarts,
            "evaluations": sol.evaluations, "h_hang": round(sol.h_hang, 5),
            "h_coll_cm3": round(sol.h_coll_cm3, 6), "pose": _r(compose(planned.X_WH, sol.pose)),

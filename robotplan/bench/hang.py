@@ -56,13 +56,16 @@ def _scene(index: int, seed: int):
 
 def bench_scene(index: int, seed: int, model_dir: str | Path,
                 settings: HangSettings = HANG_DEFAULTS,
-                methods: tuple[str, ...] = METHODS) -> dict:
-    """Every method on scene ``index``; the found poses checked by a drop."""
+                methods: tuple[str, ...] = METHODS, check_dir: str | Path | None = None) -> dict:
+    """Every method on scene ``index``; the found poses checked by a drop. ``check_dir``: the
+    check network the optimisation's found poses must satisfy too (HangSettings.check_kappa;
+    not the closed loop's, whose drops are its check)."""
     from robotplan.base.threads import one_thread
 
     one_thread()
     hook, mug = _scene(index, seed)
-    problem = HangProblem(load_hang_model(model_dir), mug, hook, settings.collision)
+    check = load_hang_model(check_dir) if check_dir is not None else None
+    problem = HangProblem(load_hang_model(model_dir), mug, hook, settings.collision, check)
     rng = np.random.default_rng([seed, index, 1])
     row = {"scene": index}
     found = {}
@@ -82,8 +85,10 @@ def bench_scene(index: int, seed: int, model_dir: str | Path,
             drops += 1
             return world.drop(sol.pose).hangs
 
-        if CLOSED_LOOP in methods:
-            found[CLOSED_LOOP] = optimise_hang(problem, np.random.default_rng([seed, index, 1]),
+        if CLOSED_LOOP in methods:  # the drops are its check (solve_hang's rule)
+            unchecked = HangProblem(problem.model, mug, hook, settings.collision)
+            found[CLOSED_LOOP] = optimise_hang(unchecked,
+                                               np.random.default_rng([seed, index, 1]),
                                                settings, accept=hangs)
         for method in methods:
             sol = found[method]
@@ -97,6 +102,7 @@ def bench_scene(index: int, seed: int, model_dir: str | Path,
                            "evaluations": sol.evaluations, "restarts": sol.restarts,
                            "robust_h": (None if sol.robust_h is None
                                         else round(sol.robust_h, 4)),
+                           "check_h": None if sol.check_h is None else round(sol.check_h, 4),
                            "seconds": round(sol.seconds, 2),
                            "pose": [round(float(v), 5) for v in sol.pose]}
         if CLOSED_LOOP in methods:
@@ -139,10 +145,12 @@ def _run(args: tuple) -> dict:
 def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
                    workers: int = 2, progress: bool = True,
                    methods: tuple[str, ...] = METHODS,
-                   settings: HangSettings = HANG_DEFAULTS, ray: str | None = None) -> dict:
+                   settings: HangSettings = HANG_DEFAULTS, ray: str | None = None,
+                   check_dir: str | Path | None = None) -> dict:
     """Run (or continue) the benchmark in ``out``, its scenes in ``workers`` local processes
-    or as Ray tasks (``ray``: :func:`robotplan.base.units.run_units`); returns the summary,
-    with where and how long the scenes ran under ``units``."""
+    or as Ray tasks (``ray``: :func:`robotplan.base.units.run_units`), with the check network
+    in ``check_dir`` (None: none, the paper's); returns the summary, with where and how long
+    the scenes ran under ``units``."""
     from tqdm import tqdm
 
     check_ray(ray)
@@ -150,7 +158,9 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
     run = {"seed": seed, "model": str(model_dir), "evaluations": settings.evaluations,
            "start_pool": settings.start_pool, "robust_samples": settings.robust_samples,
            "approach_iterations": settings.approach_iterations,
-           "methods": list(methods), "collision": settings.collision}
+           "methods": list(methods), "collision": settings.collision,
+           "check": None if check_dir is None else str(check_dir),
+           "check_kappa": settings.check_kappa}
     run_path = out / "run.json"
     if run_path.is_file() and json.loads(run_path.read_text()) != run:
         raise ValueError(f"{out}: holds a run with other settings ({run_path}); "
@@ -160,7 +170,8 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
     rows = [json.loads(line) for line in rows_path.read_text().splitlines()] \
         if rows_path.is_file() else []
     done = {r["scene"] for r in rows}
-    todo = [(i, seed, str(model_dir), settings, methods) for i in range(scenes)
+    todo = [(i, seed, str(model_dir), settings, methods,
+             None if check_dir is None else str(check_dir)) for i in range(scenes)
             if i not in done]
     t0 = time.time()
     with tqdm(total=scenes, initial=len(done), unit="scene", desc="bench hang",
@@ -172,7 +183,8 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
             log.flush()
             bar.update()
     summary = summarize_hang(sorted(rows, key=lambda r: r["scene"]))
-    summary.update(seed=seed, model=str(model_dir), evaluations=settings.evaluations,
+    summary.update(seed=seed, model=str(model_dir), check=run["check"],
+                   evaluations=settings.evaluations,
                    collision=settings.collision,
                    wall_seconds=round(time.time() - t0, 1), paper=PAPER_TAB3,
                    units=report.as_dict())

@@ -78,5 +78,5 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
                     methods=sizes.hang_representation_methods, settings=c, ray=ray),
                 f"robotplan bench hang --scenes {bench_scenes} --seed 2 --model MODEL "
                 f"--methods {methods} --evaluations {sizes.hang_evaluations} "
-                f"--collision {collision}")
+                f"--collision {collision} --check none")
     return out

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -10,6 +12,7 @@ from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
 
 __all__ = [
     "EXIT_BAD_INPUT",
+    "add_data_options",
     "add_dynamics_options",
     "add_ray_option",
     "device_name",
@@ -192,3 +195,13 @@ def perturbation(seed: int | None):
     from robotplan.execution.perturb import Perturbation
 
     return Perturbation(seed)
+
+
+def add_data_options(parser: argparse.ArgumentParser, shard_size: int) -> None:
+    """What every ``data`` command takes: a sharded, resumable, seeded folder."""
+    parser.add_argument("--scenes", type=int, required=True)
+    parser.add_argument("--seed", type=int, required=True)
+    parser.add_argument("--out", required=True, metavar="DIR")
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--shard-size", type=int, default=shard_size)
+    add_ray_option(parser)

@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 
@@ -19,8 +20,8 @@ from robotplan.cli.common import (
 )
 from robotplan.cli.representation_options import representation_fields, representation_problem
 
-__all__ = ["cmd_bench_hang", "cmd_data_hang", "cmd_eval_hang", "cmd_mine_hang",
-           "cmd_train_hang", "solve_hang_scene"]
+__all__ = ["cmd_bench_hang", "cmd_data_hang", "cmd_eval_hang", "cmd_in_hook_hang",
+           "cmd_mine_hang", "cmd_train_hang", "solve_hang_scene"]
 
 
 def cmd_data_hang(args: argparse.Namespace) -> int:
@@ -54,14 +55,32 @@ def cmd_mine_hang(args: argparse.Namespace) -> int:
                    "--starts must be ≥ 1" if args.starts < 1 else
                    "--scenes must be ≥ 1" if args.scenes is not None and args.scenes < 1
                    else None))
+    return _make_folder(problem, lambda: mine_hang(
+        Path(args.data), Path(model), Path(args.out), args.seed, args.scenes,
+        MiningSpec(starts=args.starts), workers=args.workers, first=args.first, ray=args.ray))
+
+
+def cmd_in_hook_hang(args: argparse.Namespace) -> int:
+    from robotplan.training.hang_in_hook import InHookSpec, make_in_hook
+
+    problem = (f"{args.data}: --data: no such folder" if not Path(args.data).is_dir() else
+               "--per-scene must be ≥ 1" if args.per_scene < 1 else
+               "--scenes must be ≥ 1" if args.scenes is not None and args.scenes < 1 else None)
+    return _make_folder(problem, lambda: make_in_hook(
+        Path(args.data), Path(args.out), args.seed, args.scenes,
+        InHookSpec(per_scene=args.per_scene), workers=args.workers,
+        shard_size=args.shard_size, ray=args.ray))
+
+
+def _make_folder(problem: str | None, make: Callable[[], dict]) -> int:
+    """A command that makes a folder from a hang data folder: one line and exit 2 for
+    ``problem`` or for what ``make`` refuses, else its summary and seconds as JSON."""
     if problem:
         print(f"error: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
     t0 = time.time()
     try:
-        summary = mine_hang(Path(args.data), Path(model), Path(args.out), args.seed,
-                            args.scenes, MiningSpec(starts=args.starts), workers=args.workers,
-                            first=args.first, ray=args.ray)
+        summary = make()
     except (ValueError, FileNotFoundError) as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -145,6 +164,7 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
     from robotplan.program.hang_program import HANG_DEFAULTS
 
     model = args.model or str(learned_dir("hang"))
+    check = (None if args.check == "none" else args.check or str(learned_dir("hang_check")))
     methods = tuple(args.methods.split(",")) if args.methods else METHODS
     pool = HANG_DEFAULTS.start_pool if args.start_pool is None else args.start_pool
     approach = (HANG_DEFAULTS.approach_iterations if args.approach_iterations is None
@@ -153,6 +173,7 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
               else args.robust_samples)
     unknown = [m for m in methods if m not in (*METHODS, CLOSED_LOOP)]
     problem = model_folder_problem(model) or (
+        check and model_folder_problem(check, "--check")) or (
         f"--methods: unknown {unknown}; choose from {','.join((*METHODS, CLOSED_LOOP))}"
         if unknown else
         "--scenes must be ≥ 1" if args.scenes < 1 else
@@ -169,7 +190,7 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
     try:
         summary = run_bench_hang(args.scenes, args.seed, Path(args.out), model,
                                  workers=args.workers, methods=methods, settings=settings,
-                                 ray=args.ray)
+                                 ray=args.ray, check_dir=check)
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -16,19 +16,15 @@ from robotplan.base.resources import learned_dir, tasks_dir
 from robotplan.base.units import RayMissing
 from robotplan.cli.common import (
     EXIT_BAD_INPUT,
+    add_data_options,
     add_dynamics_options,
     add_execution_options,
     add_loop_option,
     add_program_option,
     add_ray_option,
 )
-from robotplan.cli.hang_commands import (
-    cmd_bench_hang,
-    cmd_data_hang,
-    cmd_eval_hang,
-    cmd_mine_hang,
-    cmd_train_hang,
-)
+from robotplan.cli.hang_commands import cmd_bench_hang, cmd_eval_hang, cmd_train_hang
+from robotplan.cli.hang_data_parsers import add_hang_data_parsers
 from robotplan.cli.model_commands import (
     cmd_bench,
     cmd_bench_contact_push,
@@ -130,6 +126,10 @@ def _parser() -> argparse.ArgumentParser:
     bh.add_argument("--approach-iterations", type=int, default=None, metavar="N",
                     help="SNOPT iterations without the H_hang row before each whole program "
                     "(0: none, the paper's; default: HangSettings.approach_iterations)")
+    bh.add_argument("--check", default=None, metavar="DIR|none",
+                    help="a second H_hang whose value a found pose of the optimisation rows "
+                    "must keep ≤ 0.2 too, else the restarts go on (default: "
+                    "learned/hang_check; none: the paper's one network; not the closed loop)")
     bh.add_argument("--collision", choices=["sdf", "model", "none"], default="sdf",
                     help="H_coll on the shapes' SDFs, on what the model reads (ψ: the "
                     "paper's occupancy rows) or none (its point-cloud rows)")
@@ -175,33 +175,14 @@ def _parser() -> argparse.ArgumentParser:
     dsub = d.add_subparsers(dest="what", required=True)
     dp = dsub.add_parser("push", help="push data from pybullet (boxes and L-shapes, or "
                          "unseen footprints)")
-    _add_data_options(dp, shard_size=50)
+    add_data_options(dp, shard_size=50)
     dp.add_argument("--shapes", choices=["train", "ood"], default="train",
                     help="train: boxes and L-shapes (the training distribution); ood: "
                     "footprints never trained on (triangle, pentagon, hexagon, circle, T, "
                     "cross, U, trapezoid; scene i draws family i mod 8), for held-out tests "
                     "as the paper's Tab. 6")
     dp.set_defaults(run=cmd_data_push)
-    dh = dsub.add_parser("hang", help="mug-hanging data from pybullet: mug poses dropped on "
-                         "hooks, labelled hangs or not (paper app. H)")
-    _add_data_options(dh, shard_size=20)
-    dh.add_argument("--per-scene", type=int, default=20,
-                    help="labelled configurations kept per scene")
-    dh.set_defaults(run=cmd_data_hang)
-    dm = dsub.add_parser("hang-mine", help="hard examples for H_hang: the planner's program "
-                         "run with a model on the scenes of a hang data folder, its end poses "
-                         "dropped in pybullet and labelled")
-    dm.add_argument("--data", required=True, metavar="DIR", help="a robotplan data hang folder")
-    dm.add_argument("--model", default=None, metavar="DIR", help="default: learned/hang")
-    dm.add_argument("--out", required=True, metavar="DIR")
-    dm.add_argument("--first", type=int, default=0, help="start at this scene of --data")
-    dm.add_argument("--scenes", type=int, default=None,
-                    help="mine N scenes (default: all from --first on)")
-    dm.add_argument("--starts", type=int, default=2, help="program solves per scene")
-    dm.add_argument("--seed", type=int, default=0, help="draws the start poses")
-    dm.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    add_ray_option(dm)
-    dm.set_defaults(run=cmd_mine_hang)
+    add_hang_data_parsers(dsub)
 
     t = sub.add_parser("train", help="train learned functionals")
     tsub = t.add_subparsers(dest="what", required=True)
@@ -212,8 +193,8 @@ def _parser() -> argparse.ArgumentParser:
     th.add_argument("--test", default=None, metavar="DIR",
                     help="held-out data to validate on (default: 5 %% of the scenes)")
     th.add_argument("--mined", action="append", default=[], metavar="DIR",
-                    help="also train on the planner's poses mined into DIR (robotplan data "
-                         "hang-mine); repeat for several folders")
+                    help="also train on the labelled poses in DIR (robotplan data hang-mine "
+                         "or hang-in-hook); repeat for several folders")
     th.add_argument("--mined-repeat", type=int, default=1,
                     help="each mined sample this many times per epoch")
     th.add_argument("--init", default=None, metavar="DIR",
@@ -266,16 +247,6 @@ def _parser() -> argparse.ArgumentParser:
                     help="store the result in the model's metrics.json")
     eh.set_defaults(run=cmd_eval_hang)
     return p
-
-
-def _add_data_options(parser: argparse.ArgumentParser, shard_size: int) -> None:
-    """What every ``data`` command takes: a sharded, resumable, seeded folder."""
-    parser.add_argument("--scenes", type=int, required=True)
-    parser.add_argument("--seed", type=int, required=True)
-    parser.add_argument("--out", required=True, metavar="DIR")
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    parser.add_argument("--shard-size", type=int, default=shard_size)
-    add_ray_option(parser)
 
 
 def main(argv: list[str] | None = None) -> int:

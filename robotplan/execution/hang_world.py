@@ -210,6 +210,21 @@ class HangWorld:
         pos, quat = self.pb.getBasePositionAndOrientation(self.mug, physicsClientId=self.client)
         return (*pos, *_wxyz(quat))
 
+    def _depth(self) -> float:
+        """How deep (m, ≥ 0) the mug where it is now reaches into the hook."""
+        c = self.client
+        self.pb.performCollisionDetection(physicsClientId=c)
+        return -min((p[8] for p in self.pb.getClosestPoints(self.mug, self.hook, 0.0,
+                                                            physicsClientId=c)), default=0.0)
+
+    def collides(self, X_WM) -> bool:
+        """The mug placed at ``X_WM (7,)`` starts in collision with the hook (deeper than
+        ``physics.start_penetration``): a drop from there is a failure without simulating."""
+        X = np.asarray(X_WM, dtype=float)
+        self.pb.resetBasePositionAndOrientation(self.mug, X[:3].tolist(), _pb_quat(X[3:]),
+                                                physicsClientId=self.client)
+        return self._depth() > self.physics.start_penetration
+
     def drop(self, X_WM, record: list | None = None) -> DropResult:
         """Place the mug at ``X_WM (7,)`` at rest, let it fall and settle, kick it, and
         decide whether it hangs. A fall to the ground ends the run early. ``record``, if
@@ -222,10 +237,7 @@ class HangWorld:
         pb.resetBaseVelocity(self.mug, [0, 0, 0], [0, 0, 0], physicsClientId=c)
         if record is not None:
             record.append((0.0, self.pose()))
-        pb.performCollisionDetection(physicsClientId=c)
-        deepest = min((p[8] for p in pb.getClosestPoints(self.mug, self.hook, 0.0,
-                                                         physicsClientId=c)), default=0.0)
-        if deepest < -ph.start_penetration:
+        if self._depth() > ph.start_penetration:
             return DropResult(False, True, True, False, self.pose())
         fallen = self._run(self._steps(ph.settle_s))
         fall = self._centre_z(X) - self._centre_z(self.pose())

@@ -60,6 +60,12 @@ class HangSettings:
     # occupancy model, the paper's ψ rows; the SDFs otherwise); or none, found poses judged
     # by H_hang alone (the paper's point-cloud rows "no collision", app. A.5)
     collision: Literal["sdf", "model", "none"] = "sdf"
+    # a feasible pose is taken at once only where the check network (``HangProblem.check``,
+    # a second H_hang trained with poses inside the hook) gives ≤ check_kappa too: SNOPT
+    # finds the poses where one network errs, and a second one errs elsewhere; otherwise the
+    # restarts go on and the feasible pose with the least check value wins at the end
+    # (docs/experiments.md#hang-check)
+    check_kappa: float = 0.2
 
 
 HANG_DEFAULTS = HangSettings()
@@ -77,16 +83,20 @@ class HangSolution:
     restarts: int = 0
     # median H_hang over poses about this one (HangSettings.robust_samples), None: not checked
     robust_h: float | None = None
+    # the check network's H_hang here (HangSettings.check_kappa), None: not checked
+    check_h: float | None = None
 
 
 class HangProblem:
     """The functionals of one scene, and a count of their evaluations. ``collision`` as
     :attr:`HangSettings.collision`: ``"model"`` evaluates H_coll on what the model reads of
-    the SDFs (eq. 7 with ψ in place of φ)."""
+    the SDFs (eq. 7 with ψ in place of φ). ``check``: a second network that a found pose must
+    satisfy too (:attr:`HangSettings.check_kappa`), not a row of the program."""
 
     def __init__(self, model: HangSuccess, mug: Mug, hook: Hook,
-                 collision: str = "sdf") -> None:
+                 collision: str = "sdf", check: HangSuccess | None = None) -> None:
         self.model, self.mug, self.hook = model, mug, hook
+        self.check = None if check is None else HangSuccessFunctional(check, mug, hook)
         spec = model.spec
         grid = GridSpec(size=spec.size, cells=spec.cells, below_arm=spec.below_arm)
         centre = grid.centre(hook)
@@ -103,9 +113,17 @@ class HangProblem:
 
     def hang_values(self, X: np.ndarray) -> np.ndarray:
         """H_hang ``(n,)`` at poses ``(n, 7)`` (n evaluations)."""
+        return self._values(self.h_hang, X)
+
+    def check_value(self, X: np.ndarray) -> float:
+        """The check network's H_hang at pose ``(7,)`` (one evaluation)."""
+        assert self.check is not None, "no check network"
+        return float(self._values(self.check, X)[0])
+
+    def _values(self, functional: HangSuccessFunctional, X: np.ndarray) -> np.ndarray:
         Xt = torch.from_numpy(np.atleast_2d(X).astype(np.float64))
         with torch.no_grad():
-            h = self.h_hang(Xt)[:, 0].numpy()
+            h = functional(Xt)[:, 0].numpy()
         self.evaluations += len(Xt)
         return h
 

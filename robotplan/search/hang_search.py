@@ -54,12 +54,14 @@ def robust_median(problem: HangProblem, pose: np.ndarray, rng: np.random.Generat
 
 
 def _better(sol: HangSolution, best: HangSolution | None) -> bool:
-    """Feasible beats infeasible; among feasible poses the lower neighbourhood median (where
-    checked), else the lower H_hang."""
+    """Feasible beats infeasible; among feasible poses the lower check network's value (where
+    checked), then the lower neighbourhood median (where checked), else the lower H_hang."""
     if best is None or sol.feasible != best.feasible:
         return best is None or sol.feasible
-    if sol.robust_h is not None and best.robust_h is not None:
-        return sol.robust_h < best.robust_h
+    for key in ("check_h", "robust_h"):
+        a, b = getattr(sol, key), getattr(best, key)
+        if a is not None and b is not None and a != b:
+            return a < b
     return sol.h_hang < best.h_hang
 
 
@@ -71,8 +73,9 @@ def optimise_hang(problem: HangProblem, rng: np.random.Generator,
     ``settings.restarts``; 1 = optimisation only) or the evaluation budget is spent. Returns
     the first feasible solution, else the one with the least H_hang. With
     ``settings.robust_samples`` a feasible pose ends the search only where H_hang is low
-    about it too (:func:`robust_median` ≤ ``robust_kappa``); else the search goes on and
-    returns the first such pose, or the feasible one with the least median.
+    about it too (:func:`robust_median` ≤ ``robust_kappa``), and with a check network
+    (``problem.check``) only where that network's value is ≤ ``check_kappa`` too; else the
+    search goes on and returns the first such pose, or the feasible one that came closest.
 
     ``accept``: a check of each feasible pose beyond the functionals (a drop in the
     simulator, the closed loop's); a pose it refuses does not end the search; when none
@@ -93,6 +96,9 @@ def optimise_hang(problem: HangProblem, rng: np.random.Generator,
         if sol.feasible and settings.robust_samples:
             sol.robust_h = robust_median(problem, sol.pose, rng, settings)
             done = sol.robust_h <= settings.robust_kappa
+        if sol.feasible and problem.check is not None:
+            sol.check_h = problem.check_value(sol.pose)
+            done = done and sol.check_h <= settings.check_kappa
         if _better(sol, best):
             best = sol
         if done and accept is not None:

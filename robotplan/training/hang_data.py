@@ -33,15 +33,16 @@ from robotplan.scene.hang_ranges import HangRanges, load_hang_ranges
 from robotplan.sdf.hang_shapes import MUG_FIELDS, Hook, Mug
 from robotplan.training.shards import make_shards, prepare_folder
 
-__all__ = ["OPTIMISED", "HangDataSpec", "HangScene", "decode_hook", "decode_mug",
+__all__ = ["IN_HOOK", "OPTIMISED", "HangDataSpec", "HangScene", "decode_hook", "decode_mug",
            "generate_hang", "load_hang_shards", "simulate_hang_scene"]
 
 FORMAT = 2
 MAX_PARTS = 3
 DRAW_BATCH = 256  # poses drawn from the scene's generator at a time
 # where a kept pose came from (the ``role`` of each pose in a shard); OPTIMISED: an end pose
-# of the planner's program (:mod:`robotplan.training.hang_mining`)
-SETTLED, JITTER, DRAWN, NEAR_ARM, OPTIMISED = 0, 1, 2, 3, 4
+# of the planner's program (:mod:`robotplan.training.hang_mining`); IN_HOOK: a pose that
+# starts in collision (:mod:`robotplan.training.hang_in_hook`)
+SETTLED, JITTER, DRAWN, NEAR_ARM, OPTIMISED, IN_HOOK = 0, 1, 2, 3, 4, 5
 
 
 @dataclass(frozen=True)

@@ -3,6 +3,7 @@ arguments refused with exit 2."""
 
 import json
 
+from robotplan.base.resources import learned_dir
 from robotplan.bench.hang import METHODS, summarize_hang
 from robotplan.cli.main import main
 
@@ -48,11 +49,17 @@ def test_one_real_scene_and_bad_arguments(tmp_path, tiny_hang_data, capsys):
     assert 1 <= row["sampling_k2"]["evaluations"] <= row["sampling_k3"]["evaluations"] <= 128
     assert main([*bench, "--evaluations", "64"]) == 2, "a folder of another budget"
     assert main([*bench, "--evaluations", "128", "--collision", "none"]) == 2, "and of a row"
-    assert json.loads((tmp_path / "b" / "run.json").read_text())["collision"] == "sdf"
+    assert main([*bench, "--evaluations", "128", "--check", "none"]) == 2, "and of a check"
+    run_json = json.loads((tmp_path / "b" / "run.json").read_text())
+    assert run_json["collision"] == "sdf"
+    assert run_json["check"] == str(learned_dir("hang_check")), "the shipped check by default"
     assert main(["bench", "hang", "--model", str(model), "--out", str(tmp_path / "c"),
                  "--methods", "guess"]) == 2
     assert main(["bench", "hang", "--model", str(tmp_path), "--out", str(tmp_path / "c")]) == 2
+    assert main(["bench", "hang", "--model", str(model), "--check", str(tmp_path),
+                 "--out", str(tmp_path / "c")]) == 2
     err = capsys.readouterr().err
     assert "--methods" in err and "--model" in err and "other settings" in err
+    assert f"{tmp_path}: --check: not a model folder" in err
     assert set(METHODS) == {"opt_sampling", "opt_only", "sampling_k1", "sampling_k2",
                             "sampling_k3"}

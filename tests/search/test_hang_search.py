@@ -176,3 +176,24 @@ def test_the_collision_row_on_what_the_model_reads():
     assert jac.abs().max() > 0
     same = HangProblem(sdf_model, MUG, HOOK, "model")
     assert same.collision_cm3(X0)[0] == on_sdf.collision_cm3(X0)[0]
+
+
+def test_a_check_network_refuses_a_found_pose_and_the_search_goes_on(problem):
+    """With a check network a feasible pose ends the restarts only where that network's
+    H_hang is ≤ check_kappa too; when none is, every restart runs and the feasible pose of
+    least check value wins. Each check costs one evaluation."""
+    torch.manual_seed(1)
+    check = HangSuccess(HangSpec(**TINY_HANG_SPEC)).eval()
+    checked = HangProblem(problem.model, MUG, HOOK, check=check)
+    base = HangSettings(kappa=1e6, major_iterations=4, approach_iterations=0)
+    strict = optimise_hang(checked, np.random.default_rng(4),
+                           HangSettings(**{**base.__dict__, "check_kappa": -1e6}), restarts=3)
+    assert strict.feasible and strict.restarts == 3
+    assert strict.check_h == pytest.approx(checked.check_value(strict.pose), abs=1e-9)
+    loose = optimise_hang(checked, np.random.default_rng(4),
+                          HangSettings(**{**base.__dict__, "check_kappa": 1e6}), restarts=3)
+    assert loose.feasible and loose.restarts == 1
+    assert strict.check_h <= loose.check_h, "the same first solve, and two more to pick from"
+    plain = optimise_hang(problem, np.random.default_rng(4), base, restarts=3)
+    assert plain.check_h is None and np.array_equal(plain.pose, loose.pose)
+    assert plain.evaluations + 1 == loose.evaluations
