@@ -86,8 +86,7 @@ def bench_scene(index: int, seed: int, model_dir: str | Path,
             return world.drop(sol.pose).hangs
 
         if CLOSED_LOOP in methods:  # the drops are its check (solve_hang's rule)
-            unchecked = HangProblem(problem.model, mug, hook, settings.collision)
-            found[CLOSED_LOOP] = optimise_hang(unchecked,
+            found[CLOSED_LOOP] = optimise_hang(problem.unchecked(),
                                                np.random.default_rng([seed, index, 1]),
                                                settings, accept=hangs)
         for method in methods:

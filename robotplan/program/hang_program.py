@@ -9,6 +9,7 @@ first without the row on H_hang (``approach_iterations``), then whole;
 
 from __future__ import annotations
 
+import copy
 import time
 from dataclasses import dataclass
 from typing import Literal
@@ -110,6 +111,12 @@ class HangProblem:
         self.h_coll = FixedCollision3D(mug, hook, (self.lo - reach, self.hi + reach),
                                        read=read)
         self.evaluations = 0
+
+    def unchecked(self) -> HangProblem:
+        """This problem without its check network (the functionals shared, not rebuilt)."""
+        plain = copy.copy(self)
+        plain.check = None
+        return plain
 
     def hang_values(self, X: np.ndarray) -> np.ndarray:
         """H_hang ``(n,)`` at poses ``(n, 7)`` (n evaluations)."""

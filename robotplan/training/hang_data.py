@@ -19,6 +19,7 @@ seed whatever the number of workers.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -34,7 +35,7 @@ from robotplan.sdf.hang_shapes import MUG_FIELDS, Hook, Mug
 from robotplan.training.shards import make_shards, prepare_folder
 
 __all__ = ["IN_HOOK", "OPTIMISED", "HangDataSpec", "HangScene", "decode_hook", "decode_mug",
-           "generate_hang", "load_hang_shards", "simulate_hang_scene"]
+           "derived_shard", "generate_hang", "load_hang_shards", "simulate_hang_scene"]
 
 FORMAT = 2
 MAX_PARTS = 3
@@ -170,6 +171,29 @@ def decode_hook(code: np.ndarray, post_radius: float, rod_radius: float) -> Hook
 
 def decode_mug(code: np.ndarray) -> Mug:
     return Mug(**{name: float(v) for name, v in zip(MUG_FIELDS, code, strict=True)})
+
+
+def derived_shard(data: dict[str, np.ndarray], first: int, last: int, seed: int, role: int,
+                  label: Callable[..., dict[str, np.ndarray]]
+                  ) -> tuple[dict[str, np.ndarray], int]:
+    """A shard of a folder made from the scenes ``first ≤ i < last`` of the hang data ``data``
+    (:func:`load_hang_shards`' arrays): ``label(i, hook, mug, world, rng)`` gets scene ``i``'s
+    shapes, a pybullet world of them and ``default_rng([seed, scene_index])``, and returns
+    its ``k`` labelled poses, per pose ``poses (k, 7)``, ``hangs``, ``caught``, ``collision``
+    and any more. The shard keeps each scene's shapes and gives every pose ``role``; returns
+    the arrays and the number of poses."""
+    rows = []
+    for i in range(first, last):
+        hook, mug = decode_hook(data["hook"][i], *data["hook_radii"][i]), decode_mug(data["mug"][i])
+        with HangWorld(hook, mug) as world:
+            rows.append(label(i, hook, mug, world,
+                              np.random.default_rng([seed, int(data["scene_index"][i])])))
+    stacked = {key: np.array([r[key] for r in rows]) for key in rows[0]}
+    head = {key: data[key][first:last] for key in ("scene_index", "mug", "hook", "hook_radii")}
+    n = last - first
+    return dict(**head, role=np.full(stacked["hangs"].shape, role, dtype=np.int8),
+                draws=np.zeros(n, dtype=int), found=stacked["hangs"].any(axis=1),
+                **stacked), int(stacked["hangs"].size)
 
 
 def _make_shard(args: tuple) -> tuple[dict[str, np.ndarray], int]:

@@ -32,8 +32,7 @@ from robotplan.geometry.transforms import perturbed_poses
 from robotplan.sdf.hang_shapes import Hook, Mug
 from robotplan.training.hang_data import (
     IN_HOOK,
-    decode_hook,
-    decode_mug,
+    derived_shard,
     handle_on_arm_poses,
     load_hang_shards,
 )
@@ -76,27 +75,17 @@ def _in_hook_shard(args: tuple) -> tuple[dict[str, np.ndarray], int]:
     A scene with fewer colliding candidates than asked for repeats them."""
     first, last, data, seed, spec = args
     one_thread()
-    poses = []
-    for i in range(first, last):
-        hook = decode_hook(data["hook"][i], *data["hook_radii"][i])
-        mug = decode_mug(data["mug"][i])
-        with HangWorld(hook, mug) as world:
-            rng = np.random.default_rng([seed, int(data["scene_index"][i])])
-            found = in_hook_poses(world, hook, mug, rng, data["poses"][i][data["hangs"][i]],
-                                  spec)
+    no = np.zeros(spec.per_scene, dtype=bool)
+
+    def label(i: int, hook: Hook, mug: Mug, world: HangWorld, rng: np.random.Generator):
+        found = in_hook_poses(world, hook, mug, rng, data["poses"][i][data["hangs"][i]], spec)
         if not len(found):
             raise RuntimeError(f"scene {int(data['scene_index'][i])}: no candidate pose "
                                "starts in collision with the hook")
-        poses.append(found[np.arange(spec.per_scene) % len(found)])
-    n, k = last - first, spec.per_scene
-    no = np.zeros((n, k), dtype=bool)
-    arrays = dict(
-        scene_index=data["scene_index"][first:last], mug=data["mug"][first:last],
-        hook=data["hook"][first:last], hook_radii=data["hook_radii"][first:last],
-        poses=np.array(poses), hangs=no, caught=no, collision=~no,
-        role=np.full((n, k), IN_HOOK, dtype=np.int8), draws=np.zeros(n, dtype=int),
-        found=np.zeros(n, dtype=bool))
-    return arrays, n * k
+        return {"poses": found[np.arange(spec.per_scene) % len(found)], "hangs": no,
+                "caught": no, "collision": ~no}
+
+    return derived_shard(data, first, last, seed, IN_HOOK, label)
 
 
 def make_in_hook(data: Path, out: Path, seed: int, scenes: int | None = None,

@@ -34,7 +34,7 @@ from robotplan.program.hang_program import (
     solve_hang_once,
 )
 from robotplan.search.hang_search import start_pose
-from robotplan.training.hang_data import OPTIMISED, decode_hook, decode_mug, load_hang_shards
+from robotplan.training.hang_data import OPTIMISED, derived_shard, load_hang_shards
 from robotplan.training.shards import make_shards, prepare_folder
 
 __all__ = ["MiningSpec", "mine_hang", "mine_scene"]
@@ -76,22 +76,9 @@ def _mine_shard(args: tuple) -> tuple[dict[str, np.ndarray], int]:
     first, last, data, model_dir, seed, spec = args
     one_thread()
     model = load_hang_model(model_dir)
-    rows = []
-    for i in range(first, last):
-        hook = decode_hook(data["hook"][i], *data["hook_radii"][i])
-        mug = decode_mug(data["mug"][i])
-        with HangWorld(hook, mug) as world:
-            rows.append(mine_scene(HangProblem(model, mug, hook),
-                                   np.random.default_rng([seed, int(data["scene_index"][i])]),
-                                   spec, world))
-    stacked = {key: np.array([r[key] for r in rows]) for key in rows[0]}
-    n = last - first
-    arrays = dict(
-        scene_index=data["scene_index"][first:last], mug=data["mug"][first:last],
-        hook=data["hook"][first:last], hook_radii=data["hook_radii"][first:last],
-        role=np.full((n, spec.starts), OPTIMISED, dtype=np.int8),
-        draws=np.zeros(n, dtype=int), found=stacked["hangs"].any(axis=1), **stacked)
-    return arrays, n * spec.starts
+    return derived_shard(data, first, last, seed, OPTIMISED,
+                         lambda i, hook, mug, world, rng: mine_scene(
+                             HangProblem(model, mug, hook), rng, spec, world))
 
 
 def _weights_digest(model_dir: Path) -> str:
