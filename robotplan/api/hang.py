@@ -241,6 +241,7 @@ def solve_hang(scene: Scene, out: Path, model: str | Path | None = None, *, seed
            "goal": "hang", "model": planned.model,
            "check": None if check is None else str(check),
            "check_h": None if sol.check_h is None else round(sol.check_h, 5),
+           "thread_mm": None if sol.thread_mm is None else round(sol.thread_mm, 3),
            "plan_seconds": round(sol.seconds, 2), "restarts": sol.restarts,
            "evaluations": sol.evaluations, "h_hang": round(sol.h_hang, 5),
            "h_coll_cm3": round(sol.h_coll_cm3, 6), "pose": _r(compose(planned.X_WH, sol.pose)),

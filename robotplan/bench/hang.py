@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import json
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -35,7 +36,8 @@ from robotplan.program.hang_program import HANG_DEFAULTS, HangProblem, HangSetti
 from robotplan.scene.hang_ranges import load_hang_ranges
 from robotplan.search.hang_search import optimise_hang, sample_hang
 
-__all__ = ["CLOSED_LOOP", "METHODS", "PAPER_TAB3", "run_bench_hang", "summarize_hang"]
+__all__ = ["CLOSED_LOOP", "METHODS", "PAPER_HANG", "PAPER_TAB3", "run_bench_hang",
+           "summarize_hang"]
 
 METHODS = ("opt_sampling", "opt_only", "sampling_k1", "sampling_k2", "sampling_k3")
 CLOSED_LOOP = "closed_loop"  # not in the paper: run when asked for (module docstring)
@@ -46,6 +48,9 @@ PAPER_TAB3 = {"opt_sampling": (0.987, 0.885, 1.0, 0.873),
               "sampling_k1": (0.838, 0.823, 1.0, 0.689),
               "sampling_k2": (1.0, 0.356, 1.0, 0.356),
               "sampling_k3": (0.260, 0.875, 1.0, 0.228)}
+# the paper's protocol (``reproduce``): uniform random starts and no H_thread row; with
+# ``check_dir=None``, its one network
+PAPER_HANG = replace(HANG_DEFAULTS, threading=False)
 
 
 def _scene(index: int, seed: int):
@@ -102,6 +107,8 @@ def bench_scene(index: int, seed: int, model_dir: str | Path,
                            "robust_h": (None if sol.robust_h is None
                                         else round(sol.robust_h, 4)),
                            "check_h": None if sol.check_h is None else round(sol.check_h, 4),
+                           "thread_mm": (None if sol.thread_mm is None
+                                         else round(sol.thread_mm, 3)),
                            "seconds": round(sol.seconds, 2),
                            "pose": [round(float(v), 5) for v in sol.pose]}
         if CLOSED_LOOP in methods:
@@ -157,6 +164,7 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
     run = {"seed": seed, "model": str(model_dir), "evaluations": settings.evaluations,
            "start_pool": settings.start_pool, "robust_samples": settings.robust_samples,
            "approach_iterations": settings.approach_iterations,
+           "threading": settings.threading,
            "methods": list(methods), "collision": settings.collision,
            "check": None if check_dir is None else str(check_dir),
            "check_kappa": settings.check_kappa}

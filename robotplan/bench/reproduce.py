@@ -14,7 +14,7 @@ from pathlib import Path
 
 from robotplan.base.files import write_atomically
 from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
-from robotplan.bench.hang import METHODS
+from robotplan.bench.hang import METHODS, PAPER_HANG
 from robotplan.bench.paper import FLOW_REPRESENTATIONS, REPRESENTATIONS, spec_flags
 from robotplan.bench.report import write_report
 from robotplan.bench.reproduce_hang import HANG_REPRESENTATIONS, hang_representations
@@ -237,9 +237,9 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
         "bench_hang", {"scenes": sizes.hang_scenes, "seed": 2, "methods": methods},
         lambda f: run_bench_hang(sizes.hang_scenes, 2, f / "bench", learned_dir("hang"),
                                  workers=workers, progress=False,
-                                 methods=sizes.hang_methods, ray=ray),
+                                 methods=sizes.hang_methods, ray=ray, settings=PAPER_HANG),
         f"robotplan bench hang --scenes {sizes.hang_scenes} --seed 2 --methods {methods} "
-        "--check none")
+        "--check none --no-threading")
     results["tab3_representations"] = hang_representations(steps, sizes, workers, ray)
     if results["fig5"]:
         plot_contact_pushes({k: v["result"] for k, v in results["fig5"].items()},

@@ -36,8 +36,7 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
     collision row for it, and with ``sizes.hang_every_collision_row`` also with its others:
     key → ``{"train": the training step's result (its last row scores the held-out scenes),
     "bench": the main bench step's result, "bench_<collision>": the others'}``."""
-    from robotplan.bench.hang import run_bench_hang
-    from robotplan.program.hang_program import HANG_DEFAULTS
+    from robotplan.bench.hang import PAPER_HANG, run_bench_hang
     from robotplan.training.hang_data import generate_hang
     from robotplan.training.hang_train import HangTrainConfig, train_hang
 
@@ -50,7 +49,7 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
     train_folder, train_dir = data("data_hang", sizes.hang_train_scenes, 0)
     test_folder, test_dir = data("data_hang_test", sizes.hang_test_scenes, 1)
     n = sizes.hang_train_steps
-    settings = replace(HANG_DEFAULTS, evaluations=sizes.hang_evaluations)
+    settings = replace(PAPER_HANG, evaluations=sizes.hang_evaluations)
     methods = ",".join(sizes.hang_representation_methods)
     bench_scenes = sizes.hang_representation_scenes
     out: dict[str, dict] = {}
@@ -78,5 +77,5 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
                     methods=sizes.hang_representation_methods, settings=c, ray=ray),
                 f"robotplan bench hang --scenes {bench_scenes} --seed 2 --model MODEL "
                 f"--methods {methods} --evaluations {sizes.hang_evaluations} "
-                f"--collision {collision} --check none")
+                f"--collision {collision} --check none --no-threading")
     return out

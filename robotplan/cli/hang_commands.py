@@ -186,7 +186,7 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     settings = replace(HANG_DEFAULTS, evaluations=args.evaluations,
                        start_pool=pool, robust_samples=robust, approach_iterations=approach,
-                       collision=args.collision)
+                       collision=args.collision, threading=args.threading)
     try:
         summary = run_bench_hang(args.scenes, args.seed, Path(args.out), model,
                                  workers=args.workers, methods=methods, settings=settings,

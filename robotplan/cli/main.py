@@ -126,6 +126,9 @@ def _parser() -> argparse.ArgumentParser:
     bh.add_argument("--approach-iterations", type=int, default=None, metavar="N",
                     help="SNOPT iterations without the H_hang row before each whole program "
                     "(0: none, the paper's; default: HangSettings.approach_iterations)")
+    bh.add_argument("--no-threading", dest="threading", action="store_false",
+                    help="uniform random starts and no H_thread row (the paper's); default: "
+                    "starts threaded on the arm, kept threaded (HangSettings.threading)")
     bh.add_argument("--check", default=None, metavar="DIR|none",
                     help="a second H_hang whose value a found pose of the optimisation rows "
                     "must keep ≤ 0.2 too, else the restarts go on (default: "

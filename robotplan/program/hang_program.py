@@ -3,8 +3,10 @@ mug's pose X_HM = (x, y, z, qw, qx, qy, qz) in the hook frame, with the learned 
 functional as the cost H_hang² and the row |H_hang| ≤ κ (the network is trained towards 0
 where the mug hangs and has no data below 0, so the row keeps the optimiser out of there),
 the collision functional H_coll (eq. 7, a = 1000) as the row H_coll ≤ ``collision_cm3``,
-the unit quaternion, and the position within X_h. SNOPT solves it from one initial pose,
-first without the row on H_hang (``approach_iterations``), then whole;
+the unit quaternion, the position within X_h, and (``threading``, robotplan's default) the
+analytic row H_thread ≥ 0 that keeps the hook's arm through the handle's opening. SNOPT
+solves it from one initial pose, first without the row on H_hang (``approach_iterations``),
+then whole;
 :mod:`robotplan.search.hang_search` restarts it and samples."""
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from pydrake.solvers import MathematicalProgram, SnoptSolver, SolverOptions
 
 from robotplan.functionals.collision3d import FixedCollision3D
 from robotplan.functionals.hang import HangSuccessFunctional
+from robotplan.functionals.threading import HandleThreading
 from robotplan.models.encoder import represent_grids
 from robotplan.models.hang import HangSuccess
 from robotplan.program.bridge import bridge, stepwise
@@ -29,6 +32,7 @@ from robotplan.sdf.hang_shapes import Hook, Mug
 __all__ = ["HANG_DEFAULTS", "HangProblem", "HangSettings", "HangSolution", "solve_hang_once"]
 
 CM3 = 1e6  # m³ → cm³: the collision row in units SNOPT's tolerances suit
+MM = 1e3  # m → mm: the threading row in units SNOPT's tolerances suit
 
 
 @dataclass(frozen=True)
@@ -67,6 +71,22 @@ class HangSettings:
     # restarts go on and the feasible pose with the least check value wins at the end
     # (docs/experiments.md#hang-check)
     check_kappa: float = 0.2
+    # optimisations start threaded on the hook's arm (the best of thread_pool such poses,
+    # robotplan.search.hang_starts) and keep the arm through the handle's opening by the row
+    # H_thread ≥ 0; a found pose is threaded. The learned H_hang accepts poses beside the arm
+    # that fall; threaded poses clear of the hook hang (docs/experiments.md#hang-threading).
+    # False: uniform random starts and no such row, the paper's
+    threading: bool = True
+    thread_pool: int = 16
+    # H_coll's bound for threaded poses: an arm through a narrow opening leaves smoothed
+    # overlap where the surfaces are millimetres apart; threaded poses clear in pybullet
+    # reach ~0.1 cm³, those that start inside the hook begin near 0.12
+    # (docs/experiments.md#hang-threading)
+    thread_collision_cm3: float = 0.05
+
+    def collision_bound(self, threaded: bool) -> float:
+        """H_coll's bound (cm³) for a threaded pose or another."""
+        return self.thread_collision_cm3 if threaded else self.collision_cm3
 
 
 HANG_DEFAULTS = HangSettings()
@@ -86,6 +106,8 @@ class HangSolution:
     robust_h: float | None = None
     # the check network's H_hang here (HangSettings.check_kappa), None: not checked
     check_h: float | None = None
+    # H_thread here (mm; > 0: the arm through the handle), None: solved without its row
+    thread_mm: float | None = None
 
 
 class HangProblem:
@@ -110,6 +132,7 @@ class HangProblem:
                 return represent_grids(phi, rep, b)[0]
         self.h_coll = FixedCollision3D(mug, hook, (self.lo - reach, self.hi + reach),
                                        read=read)
+        self.h_thread = HandleThreading(mug, hook)
         self.evaluations = 0
 
     def unchecked(self) -> HangProblem:
@@ -145,22 +168,28 @@ class HangProblem:
         return self.hang_values(X), self.collision_cm3(X)
 
     def feasible(self, h: np.ndarray, c: np.ndarray, settings: HangSettings,
-                 kappa: float | None = None) -> np.ndarray:
-        """H_hang ≤ κ and H_coll ≤ its bound, each within SNOPT's feasibility tolerance (the
-        solver stops on the bound; a pose it calls feasible is one)."""
+                 kappa: float | None = None, thread_mm: np.ndarray | None = None) -> np.ndarray:
+        """H_hang ≤ κ and H_coll ≤ its bound (and H_thread ≥ 0 where given, in mm), each
+        within SNOPT's feasibility tolerance (the solver stops on the bound; a pose it calls
+        feasible is one)."""
         tol = settings.feasibility_tol
         hangs = h <= (settings.kappa if kappa is None else kappa) + tol
+        if thread_mm is not None:
+            hangs = hangs & (thread_mm >= -tol)
         if settings.collision == "none":
             return hangs
-        return hangs & (c <= settings.collision_cm3 + tol)
+        return hangs & (c <= settings.collision_bound(thread_mm is not None) + tol)
 
     @staticmethod
     def violation(sol: HangSolution, settings: HangSettings) -> float:
-        """How far ``sol``'s pose lies outside the rows H_hang ≤ κ and H_coll ≤ its bound
-        (the rows of :meth:`feasible`, without the tolerance)."""
+        """How far ``sol``'s pose lies outside the rows H_hang ≤ κ, H_coll ≤ its bound and
+        H_thread ≥ 0 where solved with it (the rows of :meth:`feasible`, without the
+        tolerance; H_thread in mm)."""
         over = max(sol.h_hang - settings.kappa, 0.0)
+        if sol.thread_mm is not None:
+            over = max(over, -sol.thread_mm)
         if settings.collision != "none":
-            over = max(over, sol.h_coll_cm3 - settings.collision_cm3)
+            over = max(over, sol.h_coll_cm3 - settings.collision_bound(sol.thread_mm is not None))
         return over
 
 
@@ -177,9 +206,10 @@ def _square(v):
 
 
 def _snopt(problem: HangProblem, X0: np.ndarray, settings: HangSettings, with_row: bool,
-           iterations: int) -> np.ndarray:
-    """SNOPT on the program from ``X0``, with or without the row |H_hang| ≤ κ; the end pose
-    ``(7,)`` with a unit quaternion."""
+           iterations: int, part: int | None = None) -> np.ndarray:
+    """SNOPT on the program from ``X0``, with or without the row |H_hang| ≤ κ, and with the
+    row H_thread ≥ 0 on arm part ``part`` (None: none); the end pose ``(7,)`` with a unit
+    quaternion."""
     prog = MathematicalProgram()
     X = prog.NewContinuousVariables(7, "X_HM")
     prog.AddBoundingBoxConstraint(problem.lo, problem.hi, X[:3])
@@ -193,7 +223,12 @@ def _snopt(problem: HangProblem, X0: np.ndarray, settings: HangSettings, with_ro
         prog.AddConstraint(hang, [-settings.kappa], [settings.kappa], hang_vars)
     if settings.collision != "none":
         coll_fn, coll_vars = stepwise(problem.h_coll, [block], CM3)
-        prog.AddConstraint(bridge(coll_fn), [0.0], [settings.collision_cm3], coll_vars)
+        prog.AddConstraint(bridge(coll_fn), [0.0], [settings.collision_bound(part is not None)],
+                           coll_vars)
+    if part is not None:
+        thread_fn, thread_vars = stepwise(HandleThreading(problem.mug, problem.hook, part),
+                                          [block], MM)
+        prog.AddConstraint(bridge(thread_fn), [0.0], [np.inf], thread_vars)
     q = np.asarray(X0[3:], dtype=float)
     prog.SetInitialGuess(X, np.concatenate([X0[:3], q / np.linalg.norm(q)]))
     solver = SnoptSolver()
@@ -206,17 +241,22 @@ def _snopt(problem: HangProblem, X0: np.ndarray, settings: HangSettings, with_ro
 
 
 def solve_hang_once(problem: HangProblem, X0: np.ndarray,
-                    settings: HangSettings = HANG_DEFAULTS) -> HangSolution:
+                    settings: HangSettings = HANG_DEFAULTS,
+                    part: int | None = None) -> HangSolution:
     """One solve from pose ``X0 (7,)``: with ``settings.approach_iterations``, first the
     program without the row |H_hang| ≤ κ (the cost H_hang² and the collision row bring the
-    mug towards the hook), then the whole program from where that ends. H_coll is evaluated
-    at the end pose also without its row, so that a drop can be judged against it."""
+    mug towards the hook), then the whole program from where that ends. With ``part`` (the
+    arm part ``X0`` is threaded on) both carry the row H_thread ≥ 0 on it, and a feasible pose
+    meets it. H_coll is evaluated at the end pose also without its row, so that a drop can be
+    judged against it."""
     t0 = time.perf_counter()
     start_evals = problem.evaluations
     if settings.approach_iterations:
-        X0 = _snopt(problem, X0, settings, False, settings.approach_iterations)
-    pose = _snopt(problem, X0, settings, True, settings.major_iterations)
+        X0 = _snopt(problem, X0, settings, False, settings.approach_iterations, part)
+    pose = _snopt(problem, X0, settings, True, settings.major_iterations, part)
     h, c = problem.evaluate(pose[None])
+    thread = None if part is None else problem.h_thread.values(pose)[:1] * MM
     return HangSolution(pose, float(h[0]), float(c[0]),
-                        bool(problem.feasible(h, c, settings)[0]),
-                        problem.evaluations - start_evals, time.perf_counter() - t0)
+                        bool(problem.feasible(h, c, settings, thread_mm=thread)[0]),
+                        problem.evaluations - start_evals, time.perf_counter() - t0,
+                        thread_mm=None if thread is None else float(thread[0]))

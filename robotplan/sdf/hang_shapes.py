@@ -133,6 +133,14 @@ class Mug(Shape3D):
         """``(7,)`` in :data:`MUG_FIELDS` order, for the batched :func:`mug_sdf`."""
         return torch.tensor([getattr(self, f) for f in MUG_FIELDS], dtype=dtype)
 
+    def opening(self) -> tuple[float, float, float, float]:
+        """The handle's opening in the mug's plane y = 0: the half-ellipse inside the tube,
+        ``(x0, z0, a, b)``: its centre ``(x0, z0)`` (on the centre line's axis, inside the
+        wall) and semi-axes ``a`` (along x) and ``b`` (along z); the opening is the part of
+        that ellipse outside the cup, x ≥ ``radius``."""
+        return (self.radius - self.handle_radius, self.handle_height * self.height,
+                self.handle_reach, self.handle_span - self.handle_radius)
+
     def handle_points(self) -> np.ndarray:
         """The handle's centre line ``(segments + 1, 3)``: a half-ellipse from the top
         attachment down to the bottom one, its ends ``handle_radius`` inside the wall."""

@@ -11,7 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from robotplan.geometry.transforms import perturbed_poses, uniform_poses
+from robotplan.geometry.transforms import perturbed_poses
 from robotplan.program.hang_program import (
     HANG_DEFAULTS,
     HangProblem,
@@ -19,29 +19,11 @@ from robotplan.program.hang_program import (
     HangSolution,
     solve_hang_once,
 )
+from robotplan.search.hang_starts import start_pose, uniform_starts
 
 __all__ = ["optimise_hang", "robust_median", "sample_hang", "start_pose"]
 
 SAMPLE_BATCH = 64  # poses scored per network call while sampling
-
-
-def _random_starts(problem: HangProblem, rng: np.random.Generator, n: int) -> np.ndarray:
-    return uniform_poses(rng, (problem.lo + problem.hi) / 2, float(problem.hi[0] - problem.lo[0]),
-                         n)
-
-
-def start_pose(problem: HangProblem, rng: np.random.Generator,
-               settings: HangSettings = HANG_DEFAULTS) -> np.ndarray:
-    """Where one optimisation starts ``(7,)``: a uniform random pose, or with
-    ``settings.start_pool`` > 1 the pool's pose of least H_hang among those within the
-    collision bound (of least H_hang overall when none is); the pool's evaluations count."""
-    pool = _random_starts(problem, rng, settings.start_pool)
-    if len(pool) == 1:
-        return pool[0]
-    h, c = problem.evaluate(pool)
-    clear = (c <= settings.collision_cm3 if settings.collision != "none"
-             else np.ones(len(c), bool))
-    return pool[int(np.argmin(np.where(clear, h, np.inf)) if clear.any() else np.argmin(h))]
 
 
 def robust_median(problem: HangProblem, pose: np.ndarray, rng: np.random.Generator,
@@ -90,7 +72,8 @@ def optimise_hang(problem: HangProblem, rng: np.random.Generator,
     solves = resume.restarts if resume is not None else 0
     spent = resume.seconds if resume is not None else 0.0
     while solves < n and problem.evaluations < settings.evaluations:
-        sol = solve_hang_once(problem, start_pose(problem, rng, settings), settings)
+        X0, part = start_pose(problem, rng, settings)
+        sol = solve_hang_once(problem, X0, settings, part)
         solves += 1
         done = sol.feasible
         if sol.feasible and settings.robust_samples:
@@ -127,7 +110,7 @@ def sample_hang(problem: HangProblem, rng: np.random.Generator, kappas: tuple[fl
     best_h, best_X, best_c = np.inf, None, np.inf
     while open_ and problem.evaluations < settings.evaluations:
         n = min(SAMPLE_BATCH, settings.evaluations - problem.evaluations)
-        X = _random_starts(problem, rng, n)
+        X = uniform_starts(problem, rng, n)
         h = problem.hang_values(X)
         c = np.full(n, np.inf)
         below = np.nonzero(h <= max(open_.values()))[0]  # H_coll only where it can matter

@@ -33,7 +33,7 @@ from robotplan.program.hang_program import (
     HangSettings,
     solve_hang_once,
 )
-from robotplan.search.hang_search import start_pose
+from robotplan.search.hang_starts import start_pose
 from robotplan.training.hang_data import OPTIMISED, derived_shard, load_hang_shards
 from robotplan.training.shards import make_shards, prepare_folder
 
@@ -54,12 +54,14 @@ def mine_scene(problem: HangProblem, rng: np.random.Generator, spec: MiningSpec,
                world: HangWorld) -> dict[str, np.ndarray]:
     """``spec.starts`` end poses of the program on one scene, each dropped: ``poses (n, 7)``,
     ``hangs`` (in place), ``caught``, ``collision``, ``h_model`` (H_hang there)."""
+    # the program without H_thread from uniform starts: where the learned H_hang alone leads
     settings = HangSettings(major_iterations=spec.major_iterations,
                             start_pool=spec.start_pool,
-                            approach_iterations=spec.approach_iterations)
+                            approach_iterations=spec.approach_iterations, threading=False)
     rows = []
     for _ in range(spec.starts):
-        sol = solve_hang_once(problem, start_pose(problem, rng, settings), settings)
+        X0, part = start_pose(problem, rng, settings)
+        sol = solve_hang_once(problem, X0, settings, part)
         r = world.drop(sol.pose)
         rows.append((sol.pose, r.in_place(world.physics), r.hangs, r.collision_at_start,
                      sol.h_hang))

@@ -50,8 +50,9 @@ def test_one_real_scene_and_bad_arguments(tmp_path, tiny_hang_data, capsys):
     assert main([*bench, "--evaluations", "64"]) == 2, "a folder of another budget"
     assert main([*bench, "--evaluations", "128", "--collision", "none"]) == 2, "and of a row"
     assert main([*bench, "--evaluations", "128", "--check", "none"]) == 2, "and of a check"
+    assert main([*bench, "--evaluations", "128", "--no-threading"]) == 2, "and of the starts"
     run_json = json.loads((tmp_path / "b" / "run.json").read_text())
-    assert run_json["collision"] == "sdf"
+    assert run_json["collision"] == "sdf" and run_json["threading"] is True
     assert run_json["check"] == str(learned_dir("hang_check")), "the shipped check by default"
     assert main(["bench", "hang", "--model", str(model), "--out", str(tmp_path / "c"),
                  "--methods", "guess"]) == 2

@@ -172,6 +172,7 @@ def test_h_hang_on_each_representation_is_trained_alike_and_planned_with(tmp_pat
             run = json.loads((tmp_path / bench["folder"] / "bench" / "run.json").read_text())
             assert run["evaluations"] == 64 and f"/train_hang_{key}-" in run["model"]
             assert run["collision"] == (collision if name == "bench" else "none")
+            assert run["threading"] is False and run["check"] is None, "the paper's protocol"
             assert bench["result"]["sampling_k1"]["found"] in (0.0, 1.0)
         held_out = step["train"]["result"]["validation"]
         assert held_out["samples"] == 20 and "k1" in held_out

@@ -1,5 +1,7 @@
 """The hanging program in Drake and the search around it, on a real (untrained, seeded)
-H_hang: outcomes any sound solver path must give."""
+H_hang: outcomes any sound solver path must give. The search's bookkeeping (budgets, accept,
+resume, checks) is tested from uniform starts, four SNOPT iterations a solve; the threaded
+program, which needs more, has its own test."""
 
 import math
 
@@ -11,7 +13,8 @@ from robotplan.geometry.transforms import uniform_poses
 from robotplan.models.hang import HangSpec, HangSuccess
 from robotplan.program.hang_program import HangProblem, HangSettings, solve_hang_once
 from robotplan.sdf.hang_shapes import Hook, Mug
-from robotplan.search.hang_search import optimise_hang, sample_hang, start_pose
+from robotplan.search.hang_search import optimise_hang, sample_hang
+from robotplan.search.hang_starts import start_pose
 from tests.conftest import TINY_HANG_SPEC
 
 HOOK = Hook(post_height=0.3, lengths=(0.12, 0.04), angles=(math.radians(10), math.radians(60)))
@@ -42,12 +45,35 @@ def test_the_program_moves_a_mug_out_of_the_hook(problem, approach):
     assert sol.evaluations > 0
 
 
+def test_a_threaded_solve_keeps_the_arm_through_the_handle(problem):
+    """From a threaded start the program with the row H_thread ≥ 0 ends threaded and clear
+    of the hook (within its bound for threaded poses): κ above anything the network says,
+    so the rows left are the collision and threading rows, both met at the start's pool."""
+    settings = HangSettings(kappa=1e6, major_iterations=30, approach_iterations=10)
+    X0, part = start_pose(problem, np.random.default_rng(2), settings)
+    assert part is not None
+    sol = solve_hang_once(problem, X0, settings, part)
+    tol = settings.feasibility_tol
+    assert sol.feasible and sol.thread_mm is not None and sol.thread_mm >= -tol
+    assert sol.h_coll_cm3 <= settings.thread_collision_cm3 + tol
+    margin = problem.h_thread.values(sol.pose)[0] * 1e3
+    assert margin == pytest.approx(sol.thread_mm)
+    assert problem.violation(sol, settings) <= tol
+    plain = solve_hang_once(problem, X0, HangSettings(major_iterations=1, approach_iterations=0))
+    assert plain.thread_mm is None, "without a part, no row"
+
+
 def test_feasible_means_within_the_solvers_tolerance_of_each_bound(problem):
     s = HangSettings()
     tol = s.feasibility_tol
     h = np.array([s.kappa + tol / 2, s.kappa + 2 * tol, 0.0, 0.0])
     c = np.array([0.0, 0.0, s.collision_cm3 + tol / 2, s.collision_cm3 + 2 * tol])
     assert problem.feasible(h, c, s).tolist() == [True, False, True, False]
+    threaded = np.array([0.0, 0.0, s.thread_collision_cm3 + tol / 2, 0.0])
+    thread_mm = np.array([-tol / 2, -2 * tol, 1.0, 1.0])
+    assert problem.feasible(np.zeros(4), threaded, s, thread_mm=thread_mm).tolist() == [
+        True, False, True, True]
+    assert not problem.feasible(np.zeros(1), threaded[2:3], s)[0], "unthreaded: the tight bound"
 
 
 def test_without_a_collision_row_a_pose_in_the_hook_is_kept(problem):
@@ -69,18 +95,19 @@ def test_without_a_collision_row_a_pose_in_the_hook_is_kept(problem):
 
 
 def test_a_pooled_start_is_the_pools_best_pose_within_the_collision_bound(problem):
-    settings = HangSettings(start_pool=32)
+    settings = HangSettings(start_pool=32, threading=False)
     pool = uniform_poses(np.random.default_rng(5), (problem.lo + problem.hi) / 2,
                          float(problem.hi[0] - problem.lo[0]), 32)
     h, c = problem.evaluate(pool)
     clear = c <= settings.collision_cm3
     assert clear.any() and not clear.all(), "the pool holds both kinds"
     problem.evaluations = 0
-    X0 = start_pose(problem, np.random.default_rng(5), settings)
+    X0, part = start_pose(problem, np.random.default_rng(5), settings)
+    assert part is None
     i = int(np.nonzero((pool == X0).all(axis=1))[0][0])
     assert clear[i] and h[i] == h[clear].min()
     assert problem.evaluations == 32
-    single = start_pose(problem, np.random.default_rng(5), HangSettings())
+    single, _ = start_pose(problem, np.random.default_rng(5), HangSettings(threading=False))
     one = uniform_poses(np.random.default_rng(5), (problem.lo + problem.hi) / 2,
                         float(problem.hi[0] - problem.lo[0]), 1)[0]
     assert np.array_equal(single, one) and problem.evaluations == 32
@@ -106,7 +133,8 @@ def test_sampling_thresholds_share_one_stream_of_poses(problem):
 def test_restarts_stop_at_the_budget(problem):
     rng = np.random.default_rng(1)
     sol = optimise_hang(problem, rng, HangSettings(kappa=1e-12, evaluations=30,
-                                                   major_iterations=5, approach_iterations=3),
+                                                   major_iterations=5, approach_iterations=3,
+                                                   threading=False),
                         restarts=20)
     assert not sol.feasible and sol.restarts < 20 and sol.evaluations >= 30
 
@@ -115,7 +143,8 @@ def test_a_refused_pose_does_not_end_the_search_and_a_resumed_one_goes_on(proble
     """``accept`` (the closed loop's drop) sees every feasible pose; the first it takes ends
     the search; ``resume`` goes on from a refused result with the same generator, as if the
     search had never stopped."""
-    settings = HangSettings(kappa=1e6, major_iterations=4, approach_iterations=2)
+    settings = HangSettings(kappa=1e6, major_iterations=4, approach_iterations=2,
+                            threading=False)
     seen: list[np.ndarray] = []
 
     def second(sol) -> bool:
@@ -144,7 +173,8 @@ def test_a_robust_search_goes_on_past_a_pose_whose_neighbourhood_it_rejects(prob
     """With ``robust_samples`` a feasible pose ends the restarts only when H_hang's median
     about it is ≤ robust_kappa; when none is, every restart runs and the feasible pose of
     least median wins."""
-    base = HangSettings(kappa=1e6, major_iterations=4, robust_samples=8, approach_iterations=0)
+    base = HangSettings(kappa=1e6, major_iterations=4, robust_samples=8, approach_iterations=0,
+                        threading=False)
     strict = optimise_hang(problem, np.random.default_rng(4),
                            HangSettings(**{**base.__dict__, "robust_kappa": -1e6}), restarts=3)
     assert strict.feasible and strict.restarts == 3 and strict.robust_h is not None
@@ -154,7 +184,8 @@ def test_a_robust_search_goes_on_past_a_pose_whose_neighbourhood_it_rejects(prob
     # the same first solve: the strict search kept the least median of its three
     assert strict.robust_h <= loose.robust_h
     plain = optimise_hang(problem, np.random.default_rng(4),
-                          HangSettings(kappa=1e6, major_iterations=4, approach_iterations=0),
+                          HangSettings(kappa=1e6, major_iterations=4, approach_iterations=0,
+                                       threading=False),
                           restarts=3)
     assert plain.robust_h is None and plain.evaluations + 8 == loose.evaluations
 
@@ -185,7 +216,7 @@ def test_a_check_network_refuses_a_found_pose_and_the_search_goes_on(problem):
     torch.manual_seed(1)
     check = HangSuccess(HangSpec(**TINY_HANG_SPEC)).eval()
     checked = HangProblem(problem.model, MUG, HOOK, check=check)
-    base = HangSettings(kappa=1e6, major_iterations=4, approach_iterations=0)
+    base = HangSettings(kappa=1e6, major_iterations=4, approach_iterations=0, threading=False)
     strict = optimise_hang(checked, np.random.default_rng(4),
                            HangSettings(**{**base.__dict__, "check_kappa": -1e6}), restarts=3)
     assert strict.feasible and strict.restarts == 3
