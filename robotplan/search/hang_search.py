@@ -1,6 +1,8 @@
-"""Finding a hanging pose (paper §7.1.1–7.1.2, app. A.5): optimisation restarted from random
-poses (*optimisation + sampling*), one optimisation (*optimisation only*), or pure sampling
-of poses until H_hang < κ and H_coll is within bounds (*sampling only*, per threshold κ).
+"""Finding a hanging pose (paper §7.1.1–7.1.2, app. A.5): optimisation restarted from new
+starts (*optimisation + sampling*; random poses in the paper, threaded on the arm by
+default here: :mod:`robotplan.search.hang_starts`), one optimisation (*optimisation
+only*), or pure sampling of poses until H_hang < κ and H_coll is within bounds (*sampling
+only*, per threshold κ).
 All share one budget of functional evaluations (the paper's 20,000)."""
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from robotplan.program.hang_program import (
 )
 from robotplan.search.hang_starts import start_pose, uniform_starts
 
-__all__ = ["optimise_hang", "robust_median", "sample_hang", "start_pose"]
+__all__ = ["optimise_hang", "robust_median", "sample_hang"]
 
 SAMPLE_BATCH = 64  # poses scored per network call while sampling
 
@@ -51,8 +53,10 @@ def optimise_hang(problem: HangProblem, rng: np.random.Generator,
                   settings: HangSettings = HANG_DEFAULTS, restarts: int | None = None,
                   accept: Callable[[HangSolution], bool] | None = None,
                   resume: HangSolution | None = None) -> HangSolution:
-    """SNOPT from random poses until a feasible pose, ``restarts`` solves (default
-    ``settings.restarts``; 1 = optimisation only) or the evaluation budget is spent. Returns
+    """SNOPT from starts (:func:`~robotplan.search.hang_starts.start_pose`: threaded on the
+    arm with ``settings.threading``, else uniform) until a feasible pose, ``restarts``
+    solves (default ``settings.restarts``; 1 = optimisation only) or the evaluation budget
+    is spent. Returns
     the first feasible solution, else the one with the least H_hang. With
     ``settings.robust_samples`` a feasible pose ends the search only where H_hang is low
     about it too (:func:`robust_median` ≤ ``robust_kappa``), and with a check network

@@ -4,7 +4,7 @@ A success model trained on drawn poses is right on poses like those it saw and c
 where an optimiser goes looking for its minimum: SNOPT descends H_hang to ≈ 0 at poses whose
 drop falls (docs/experiments.md#hang-mining). For every scene of a data folder, this runs the
 planner's own program (:func:`robotplan.program.hang_program.solve_hang_once`) ``starts``
-times from where the planner starts (:func:`robotplan.search.hang_search.start_pose`),
+times from where the planner starts (:func:`robotplan.search.hang_starts.start_pose`),
 drops each end pose in pybullet and stores it labelled, in the format of
 :mod:`robotplan.training.hang_data` with the role ``OPTIMISED``, beside the model's value
 there. Training on the data folder plus such folders (``robotplan train hang --mined``)
