@@ -20,9 +20,7 @@ import torch
 from torch import Tensor
 
 __all__ = [
-    "axis_angle_matrix",
     "carry_with_body",
-    "matrix_to_quaternion",
     "perturbed_poses",
     "planar_to_body",
     "planar_to_world",
@@ -130,34 +128,6 @@ def perturbed_poses(rng: np.random.Generator, X: np.ndarray, shift: float, turn:
                   w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1], axis=1)
     q *= np.where(q[:, :1] < 0, -1.0, 1.0)
     return np.concatenate([pos, q], axis=1)
-
-
-def axis_angle_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
-    """The rotation ``(3, 3)`` by ``angle`` (rad) about the unit vector ``axis (3,)``
-    (Rodrigues)."""
-    k = np.asarray(axis, dtype=float)
-    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * K @ K
-
-
-def matrix_to_quaternion(R: np.ndarray) -> np.ndarray:
-    """The unit quaternion ``(4,)`` ``(w, x, y, z)``, w ≥ 0, of a rotation ``(3, 3)``: from
-    the largest of the four squared components (Shepperd), so it is accurate for any R."""
-    R = np.asarray(R, dtype=float)
-    t = np.trace(R)
-    squares = np.array([1.0 + t, 1.0 + 2 * R[0, 0] - t, 1.0 + 2 * R[1, 1] - t,
-                        1.0 + 2 * R[2, 2] - t])  # 4·(w², x², y², z²)
-    i = int(np.argmax(squares))
-    big = math.sqrt(squares[i]) / 2  # the largest |component|
-    zy, xz, yx = R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]  # 4w·(x, y, z)
-    xy, xz_, yz = R[0, 1] + R[1, 0], R[0, 2] + R[2, 0], R[1, 2] + R[2, 1]
-    rows = ((big, zy / (4 * big), xz / (4 * big), yx / (4 * big)),
-            (zy / (4 * big), big, xy / (4 * big), xz_ / (4 * big)),
-            (xz / (4 * big), xy / (4 * big), big, yz / (4 * big)),
-            (yx / (4 * big), xz_ / (4 * big), yz / (4 * big), big))
-    q = np.array(rows[i])
-    q /= np.linalg.norm(q)
-    return -q if q[0] < 0 else q
 
 
 def wrap_angle(a: float) -> float:

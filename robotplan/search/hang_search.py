@@ -56,8 +56,7 @@ def optimise_hang(problem: HangProblem, rng: np.random.Generator,
     """SNOPT from starts (:func:`~robotplan.search.hang_starts.start_pose`: threaded on the
     arm with ``settings.threading``, else uniform) until a feasible pose, ``restarts``
     solves (default ``settings.restarts``; 1 = optimisation only) or the evaluation budget
-    is spent. Returns
-    the first feasible solution, else the one with the least H_hang. With
+    is spent. Returns the first feasible solution, else the one with the least H_hang. With
     ``settings.robust_samples`` a feasible pose ends the search only where H_hang is low
     about it too (:func:`robust_median` ≤ ``robust_kappa``), and with a check network
     (``problem.check``) only where that network's value is ≤ ``check_kappa`` too; else the

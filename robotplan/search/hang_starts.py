@@ -14,8 +14,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from pydrake.common.eigen_geometry import AngleAxis
+from pydrake.math import RotationMatrix
 
-from robotplan.geometry.transforms import axis_angle_matrix, matrix_to_quaternion, uniform_poses
+from robotplan.geometry.transforms import uniform_poses
 from robotplan.program.hang_program import HANG_DEFAULTS, HangProblem, HangSettings
 from robotplan.sdf.hang_shapes import Hook, Mug
 
@@ -32,6 +34,11 @@ def uniform_starts(problem: HangProblem, rng: np.random.Generator, n: int) -> np
     """``n`` poses ``(n, 7)`` uniform in X_h (position) and SO(3)."""
     return uniform_poses(rng, (problem.lo + problem.hi) / 2, float(problem.hi[0] - problem.lo[0]),
                          n)
+
+
+def _turn(axis: np.ndarray, angle: float) -> np.ndarray:
+    """The rotation ``(3, 3)`` by ``angle`` (rad) about the unit vector ``axis``."""
+    return RotationMatrix(AngleAxis(angle, axis)).matrix()
 
 
 def threaded_poses(mug: Mug, hook: Hook, rng: np.random.Generator,
@@ -57,15 +64,16 @@ def threaded_poses(mug: Mug, hook: Hook, rng: np.random.Generator,
         y = along * rng.choice((-1.0, 1.0))
         z = np.array([0.0, 0.0, 1.0]) - y[2] * y
         z /= np.linalg.norm(z)
-        R = axis_angle_matrix(y, rng.uniform(-THREAD_SWING, THREAD_SWING)) @ np.stack(
+        R = _turn(y, rng.uniform(-THREAD_SWING, THREAD_SWING)) @ np.stack(
             (np.cross(y, z), y, z), axis=1)
         turn = rng.normal(0.0, THREAD_TURN, 3)
         angle = float(np.linalg.norm(turn))
         if angle > 0:
-            R = R @ axis_angle_matrix(turn / angle, angle)
+            R = R @ _turn(turn / angle, angle)
         point = arm[k] + rng.uniform(lo[k], lo[k] + room[k]) * along
         position = point - R @ centre_M + rng.normal(0.0, THREAD_SHIFT, 3)
-        poses.append(np.concatenate((position, matrix_to_quaternion(R))))
+        q = RotationMatrix(R).ToQuaternion()  # w ≥ 0
+        poses.append(np.array([*position, q.w(), q.x(), q.y(), q.z()]))
         which.append(k)
     return np.array(poses), np.array(which)
 
@@ -81,14 +89,14 @@ def start_pose(problem: HangProblem, rng: np.random.Generator,
     collision bound (of least H_hang overall when none is). A pool's evaluations count."""
     if settings.threading:
         pool, parts = threaded_poses(problem.mug, problem.hook, rng, settings.thread_pool)
-        h, c = problem.evaluate(pool)
-        clear = c <= settings.collision_bound(True)
-        i = int(np.argmin(np.where(clear, h, np.inf)) if clear.any() else np.argmin(c))
-        return pool[i], int(parts[i])
-    pool = uniform_starts(problem, rng, settings.start_pool)
-    if len(pool) == 1:
-        return pool[0], None
+    else:
+        pool, parts = uniform_starts(problem, rng, settings.start_pool), None
+        if len(pool) == 1:
+            return pool[0], None
     h, c = problem.evaluate(pool)
-    clear = (c <= settings.collision_cm3 if settings.collision != "none"
-             else np.ones(len(c), bool))
-    return pool[int(np.argmin(np.where(clear, h, np.inf)) if clear.any() else np.argmin(h))], None
+    clear = (c <= settings.collision_bound(parts is not None)
+             if parts is not None or settings.collision != "none" else np.ones(len(c), bool))
+    # none clear: a threaded start nearest to clearing the hook, a uniform one of least H_hang
+    fallback = c if parts is not None else h
+    i = int(np.argmin(np.where(clear, h, np.inf)) if clear.any() else np.argmin(fallback))
+    return pool[i], None if parts is None else int(parts[i])
