@@ -17,6 +17,10 @@ def architecture(args: argparse.Namespace) -> dict:
     for name in ("channels", "kernels", "strides", "sdf_features", "hidden"):
         if getattr(args, name) is not None:
             spec[name] = getattr(args, name)
+    if args.frame == "object":
+        from robotplan.models.spec import OBJECT_WINDOW
+
+        spec.update(frame="object", **OBJECT_WINDOW)
     return spec
 
 
@@ -24,7 +28,14 @@ def architecture_problem(args: argparse.Namespace) -> str | None:
     """Why the widths given to ``train push`` cannot build a model, or None."""
     from robotplan.models.spec import DynamicsSpec, conv_output_side
 
-    default = DynamicsSpec()
+    if args.frame == "object":
+        if args.model != "rigid":
+            return "--frame object: only with --model rigid (F_q)"
+        if args.rigid_loss != "delta" or args.augment != "none":
+            return ("--frame object: trains with --rigid-loss delta and no --augment (turns "
+                    "leave an object-frame model's inputs unchanged)")
+    default = DynamicsSpec(**{k: v for k, v in architecture(args).items()
+                              if k in ("grid", "workspace_size")})
     layers = len(default.kernels)
     for option, values in (("channels", args.channels), ("kernels", args.kernels),
                            ("strides", args.strides)):

@@ -6,6 +6,12 @@ the step, ``Δq = (Δx, Δy, Δα)``: a turn by Δα about the pivot, then a shi
 all in the table frame. The pivot is a point the SDF itself defines, the area centroid of
 φ1_{t−1} < 0 on X_h (:func:`sdf_pivot`), so the model needs no pose of the object: the
 next SDF is φ1_t = T(Δq)[φ1_{t−1}], φ1_t(x) = φ1_{t−1}(T(Δq)⁻¹ x).
+
+With ``spec.frame == "object"`` X_h is attached to the object at t−1 (:func:`object_frame`):
+its origin is the pivot and its axes the body's, and the network's Δq is given in that frame
+(:func:`delta_in_frame` turns it to the table's). Planar pushing on a uniform table does not
+change when the whole scene is moved or turned, so such a model sees each push the same
+wherever and at whatever heading it happens, and learns from far fewer samples.
 """
 
 from __future__ import annotations
@@ -16,13 +22,14 @@ from pathlib import Path
 import torch
 from torch import Tensor, nn
 
+from robotplan.geometry.transforms import planar_to_world
 from robotplan.models.encoder import SDFEncoder
 from robotplan.models.encoder_passes import EncoderPasses
 from robotplan.models.pointnet import cloud_encoder
 from robotplan.models.spec import DynamicsSpec, read_model_folder, write_model_folder
 
-__all__ = ["RigidMotion", "load_rigid", "moved_pivot_delta", "save_rigid", "sdf_pivot",
-           "transform_points"]
+__all__ = ["RigidMotion", "delta_in_frame", "load_rigid", "moved_pivot_delta", "object_frame",
+           "save_rigid", "sdf_pivot", "transform_points"]
 
 
 def sdf_pivot(phi: Tensor, grid_points: Tensor) -> Tensor:
@@ -32,6 +39,21 @@ def sdf_pivot(phi: Tensor, grid_points: Tensor) -> Tensor:
     area = inside.sum(1, keepdim=True)
     centre = grid_points.mean(0)
     return torch.where(area > 0, inside @ grid_points / area.clamp_min(1.0), centre)
+
+
+def object_frame(X_WB: Tensor, centroid_B: Tensor) -> Tensor:
+    """The object frame of poses ``X_WB (B, 3)`` as planar poses ``(B, 3)``: the origin at
+    the footprint's centroid ``centroid_B (B, 2)`` (body frame), the axes the body's."""
+    return torch.cat((planar_to_world(centroid_B[:, None], X_WB)[:, 0], X_WB[:, 2:]), 1)
+
+
+def delta_in_frame(delta: Tensor, yaw: Tensor, to_table: bool = True) -> Tensor:
+    """Δq ``(B, 3)`` given in frames of heading ``yaw (B,)`` in the table frame (or, with
+    ``to_table`` False, the table's Δq in those frames): the shift turned, the turn kept."""
+    c, s = torch.cos(yaw), torch.sin(yaw)
+    s = s if to_table else -s
+    return torch.stack((c * delta[:, 0] - s * delta[:, 1], s * delta[:, 0] + c * delta[:, 1],
+                        delta[:, 2]), 1)
 
 
 def moved_pivot_delta(pivot: Tensor, X_prev: Tensor, X_now: Tensor) -> Tensor:

@@ -15,8 +15,14 @@ from torch import nn
 from robotplan.base.arith import bfloat16_head
 from robotplan.sdf.grid import Workspace
 
-__all__ = ["DynamicsSpec", "conv_output_side", "head_matmul_dtype", "read_model_folder",
-           "read_spec", "write_model_folder"]
+__all__ = ["OBJECT_WINDOW", "DynamicsSpec", "conv_output_side", "head_matmul_dtype",
+           "read_model_folder", "read_spec", "write_model_folder"]
+
+
+# X_h of an object-frame F_q: 64 × 64 points over 0.64 m (1 cm cells, as on the table),
+# which hold every footprint of the data and a pusher touching it (docs/experiments.md)
+OBJECT_WINDOW = {"grid": (64, 64), "workspace_center": (0.0, 0.0),
+                 "workspace_size": (0.64, 0.64)}
 
 
 def head_matmul_dtype(model_dtype: torch.dtype) -> torch.dtype:
@@ -64,6 +70,11 @@ class DynamicsSpec:
     cloud_neighbours: int = 16
     cloud_local_widths: tuple[int, ...] = (32, 64)
     cloud_local_scale: float = 50.0
+    # where X_h lies: "table", fixed on the table (the paper's); "object", attached to the
+    # object at t−1, its origin at the footprint's centroid and its axes the body's, so that
+    # the inputs and Δq (given in that frame) are the same for a push anywhere on the table
+    # at any heading: planar pushing's exact symmetry (see docs/experiments.md#fq-object-frame)
+    frame: Literal["table", "object"] = "table"
     out_scale: float = 0.01  # the network's output is multiplied by this (m)
     turn_scale: float = 0.05  # F_q's turn output is multiplied by this (rad)
     extra: dict = field(default_factory=dict)  # free-form notes (not used by the network)

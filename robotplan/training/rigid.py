@@ -23,8 +23,10 @@ from torch import Tensor
 
 from robotplan.models.rigid import (
     RigidMotion,
+    delta_in_frame,
     load_rigid,
     moved_pivot_delta,
+    object_frame,
     save_rigid,
     sdf_pivot,
     transform_points,
@@ -48,9 +50,18 @@ __all__ = ["delta_q_errors", "evaluate_rigid", "rigid_targets", "sdf_space_loss"
            "table5_errors", "train_rigid", "turn_gain"]
 
 
-def rigid_targets(batch: SampleBatch, grid: Tensor, shape: tuple[int, int]
-                  ) -> tuple[Tensor, Tensor, Tensor]:
-    """The model inputs ``(B, 3, H, W)``, the pivots ``(B, 2)`` and the true Δq ``(B, 3)``."""
+def rigid_targets(batch: SampleBatch, grid: Tensor, shape: tuple[int, int],
+                  frame: str = "table") -> tuple[Tensor, Tensor, Tensor]:
+    """The model inputs ``(B, 3, H, W)``, the pivots ``(B, 2)`` and the true Δq ``(B, 3)``,
+    for X_h (``grid (N, 2)``) in the model's ``frame``: the table's, with the pivot read from
+    the grid (:func:`sdf_pivot`) and Δq in the table frame; or the object's at t−1, with the
+    footprint's centroid as the pivot and Δq in that frame."""
+    if frame == "object":
+        X_F = object_frame(batch.object_prev, batch.centroid)
+        pivot = X_F[:, :2]
+        true = moved_pivot_delta(pivot, batch.object_prev, batch.object_now)
+        return (batch.inputs(grid, shape, X_F), pivot,
+                delta_in_frame(true, X_F[:, 2], to_table=False))
     inputs = batch.inputs(grid, shape)
     pivot = sdf_pivot(inputs[:, 0].flatten(1), grid)
     return inputs, pivot, moved_pivot_delta(pivot, batch.object_prev, batch.object_now)
@@ -75,12 +86,17 @@ def sdf_space_loss(delta: Tensor, phi_prev_grid: Tensor, pivot: Tensor, phi_now:
 @torch.no_grad()
 def delta_q_errors(model: RigidMotion, batch: SampleBatch, grid: Tensor,
                    shape: tuple[int, int], chunk: int = 64) -> tuple[np.ndarray, np.ndarray]:
-    """Predicted and true Δq, each ``(B, 3)`` in m, m, rad."""
+    """Predicted and true Δq, each ``(B, 3)`` in m, m, rad, in the table frame."""
     preds, trues = [], []
+    frame = model.spec.frame
     for i in range(0, len(batch.radius), chunk):
         sub = batch.slice(i, i + chunk)
-        inputs, _, true = rigid_targets(sub, grid, shape)
-        preds.append(model(inputs))
+        inputs, _, true = rigid_targets(sub, grid, shape, frame)
+        pred = model(inputs)
+        if frame == "object":
+            yaw = sub.object_prev[:, 2]
+            pred, true = delta_in_frame(pred, yaw), delta_in_frame(true, yaw)
+        preds.append(pred)
         trues.append(true)
     return torch.cat(preds).cpu().numpy(), torch.cat(trues).cpu().numpy()
 
@@ -103,10 +119,13 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
     row (Δq errors against the ground truth, whichever loss trains)."""
     if cfg.rigid_loss not in ("delta", "sdf"):
         raise ValueError(f"rigid_loss {cfg.rigid_loss!r}: expected 'delta' or 'sdf'")
+    spec = DynamicsSpec(**{"encoder": "joint", **cfg.spec, "kind": "rigid"})
+    if spec.frame == "object" and (cfg.rigid_loss != "delta" or cfg.augment != "none"):
+        raise ValueError("an object-frame F_q trains on the simulator's Δq (rigid_loss "
+                         "'delta') without augmentation: turns leave its inputs unchanged")
     out, device = Path(cfg.out), torch.device(cfg.device)
     ckpt_path = out / "checkpoint.pt"
     torch.manual_seed(cfg.seed)
-    spec = DynamicsSpec(**{"encoder": "joint", **cfg.spec, "kind": "rigid"})
     model = RigidMotion(spec).to(device)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
     if cfg.init_weights and not resume:
@@ -145,7 +164,7 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
 
     def step_loss(step: int) -> torch.Tensor:
         batch = augmented(samples.batch(batch_of(step), device=device), cfg, ws, step)
-        inputs, pivot, true = rigid_targets(batch, grid, ws.shape)
+        inputs, pivot, true = rigid_targets(batch, grid, ws.shape, spec.frame)
         if cfg.rigid_loss == "sdf":
             gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
             pts = query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)

@@ -16,9 +16,10 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from robotplan.geometry.transforms import planar_to_body
+from robotplan.geometry.transforms import planar_to_body, planar_to_world
 from robotplan.sdf import Shape2D
 from robotplan.sdf.closed_form import lshape_sdf, safe_hypot
+from robotplan.sdf.footprint import footprint_centroid
 from robotplan.training.footprints import LSHAPE
 from robotplan.training.push_data import load_shards, scene_footprint
 
@@ -51,6 +52,7 @@ class SampleBatch:
     pusher_now: Tensor  # (B, 2)
     contact: Tensor  # (B,) bool
     shapes: tuple[Shape2D, ...] | None = None  # per sample, where not all are boxes and Ls
+    centroid: Tensor | None = None  # (B, 2) the footprint's area centroid, body frame
 
     def _phi1(self, X_WB: Tensor, points: Tensor) -> Tensor:
         if self.shapes is None:
@@ -91,9 +93,11 @@ class SampleBatch:
                        object_now=pose(self.object_now), pusher_prev=xy(self.pusher_prev),
                        pusher_now=xy(self.pusher_now))
 
-    def inputs(self, grid_points: Tensor, shape: tuple[int, int]) -> Tensor:
-        """The model inputs φ1_{t−1}, φ2_{t−1}, φ2_t on X_h: ``(B, 3, H, W)``."""
-        g = grid_points[None]
+    def inputs(self, grid_points: Tensor, shape: tuple[int, int], frame: Tensor | None = None
+               ) -> Tensor:
+        """The model inputs φ1_{t−1}, φ2_{t−1}, φ2_t on X_h: ``(B, 3, H, W)``; X_h's points
+        ``(N, 2)`` in the table frame, or in the planar frames ``frame (B, 3)``."""
+        g = grid_points[None] if frame is None else planar_to_world(grid_points[None], frame)
         fields = (self.phi1_prev(g), pusher_sdf(self.radius, self.pusher_prev, g),
                   pusher_sdf(self.radius, self.pusher_now, g))
         return torch.stack(fields, dim=1).reshape(len(self.radius), 3, *shape)
@@ -120,6 +124,8 @@ class PushSamples:
         self.footprints: list[Shape2D] | None = (
             [scene_footprint(d, k) for k in range(len(lengths))]
             if (d["shape_type"] > LSHAPE).any() else None)
+        self.centroids = np.array([footprint_centroid(scene_footprint(d, k))
+                                   for k in range(len(lengths))])
 
     @property
     def num_scenes(self) -> int:
@@ -152,4 +158,5 @@ class PushSamples:
             contact=torch.as_tensor(self.contact[idx], device=device),
             shapes=(None if self.footprints is None
                     else tuple(self.footprints[k] for k in self.scene[idx])),
+            centroid=t(self.centroids[self.scene[idx]]),
         )

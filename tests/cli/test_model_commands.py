@@ -89,3 +89,27 @@ def test_data_push_on_ray_without_the_package_is_one_line_and_writes_nothing(
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and err.startswith("error: --ray needs the ray package")
     assert not (tmp_path / "d").exists()
+
+
+def test_train_push_builds_an_object_frame_f_q(tiny_push_data, tmp_path, capsys):
+    """``--frame object``: the spec carries the frame and the window X_h of 64 × 64 cm."""
+    from robotplan.models.rigid import load_rigid
+
+    assert _train(tiny_push_data, tmp_path / "fq", "--frame", "object") == 0
+    spec = json.loads((tmp_path / "fq" / "spec.json").read_text())
+    assert spec["frame"] == "object" and spec["grid"] == [64, 64]
+    assert spec["workspace_center"] == [0.0, 0.0] and spec["workspace_size"] == [0.64, 0.64]
+    assert load_rigid(tmp_path / "fq").spec.frame == "object"
+    capsys.readouterr()
+
+
+def test_train_push_refuses_what_an_object_frame_cannot_use(tiny_push_data, tmp_path, capsys):
+    for extra, why in ((("--augment", "turns"), "no --augment"),
+                       (("--rigid-loss", "sdf"), "--rigid-loss delta")):
+        assert _train(tiny_push_data, tmp_path / "fq", "--frame", "object", *extra) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("error: --frame object:") and why in err and "\n" not in err
+        assert not (tmp_path / "fq").exists()
+    assert main(["train", "push", "--data", str(tiny_push_data), "--out", str(tmp_path / "m"),
+                 "--model", "flow", "--frame", "object"]) == 2
+    assert capsys.readouterr().err.strip() == "error: --frame object: only with --model rigid (F_q)"

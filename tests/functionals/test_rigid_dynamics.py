@@ -173,3 +173,50 @@ def test_jacobian_through_a_point_cloud_f_q(obj, encoder):
     atol = 1e-5 * float(j2.abs().max())
     torch.testing.assert_close(j2, fd2, rtol=0.0, atol=atol)
     torch.testing.assert_close(j1, fd1, rtol=0.0, atol=atol)
+
+
+# an F_q on a grid attached to the object (spec.frame "object"), coarse enough to be cheap
+OBJECT_FRAME = {**SPEC, "frame": "object", "grid": (32, 32), "workspace_size": (0.64, 0.64)}
+
+
+@pytest.fixture
+def object_frame_model() -> RigidMotion:
+    torch.manual_seed(8)
+    return RigidMotion(DynamicsSpec(kind="rigid", encoder="joint", **OBJECT_FRAME)).double()
+
+
+@pytest.mark.parametrize("actor", ["disc", "object"])
+def test_object_frame_jacobian_matches_finite_differences(object_frame_model, obj, actor):
+    """The object's state t − 1 moves F_t, so the pusher's grids and the predicted shift's
+    direction: its Jacobian column carries both. Against central differences (float64) to
+    1e-5 of J2's size, the part that passes through F_q's grids: a term of F_t missing
+    there would miss by about that whole part."""
+    X1, X2 = trajectory()
+    pusher = PUSHER
+    if actor == "object":
+        pusher = Body("red", "object", Box((0.08, 0.08)), (0, 0, 0), 0.0, 0.06)
+        X2 = torch.cat((X2 - torch.tensor([0.03, 0.0], dtype=F64),
+                        torch.linspace(0.05, 0.09, len(X2), dtype=F64)[:, None]), 1)
+    H = RigidDynamics(object_frame_model, obj, pusher)
+    values, j1, j2 = H.evaluate(X1, X2)
+    assert (values > 0).all() and (j2.abs().amax(2) > 0).all()
+    fd1, fd2 = step_jacobians_by_differences(H, X1, X2, h=1e-7)
+    atol = 1e-5 * float(j2.abs().max())
+    torch.testing.assert_close(j2, fd2, rtol=0.0, atol=atol)
+    torch.testing.assert_close(j1, fd1, rtol=0.0, atol=atol)
+
+
+def test_object_frame_prediction_moves_and_turns_with_the_scene(object_frame_model, obj):
+    """Moving and turning the whole scene (object and pusher) moves and turns F_q's
+    table-frame step with it and leaves its turn: the symmetry the object frame builds in."""
+    X1, X2 = trajectory()
+    H = RigidDynamics(object_frame_model, obj, PUSHER)
+    delta = H.predict(X1, X2)
+    assert delta.abs().max() > 0
+    angle, shift = 0.7, torch.tensor([0.11, -0.05], dtype=F64)
+    c, s = math.cos(angle), math.sin(angle)
+    R = torch.tensor([[c, -s], [s, c]], dtype=F64)
+    moved1 = torch.cat((X1[:, :2] @ R.T + shift, X1[:, 2:] + angle), 1)
+    moved = H.predict(moved1, X2 @ R.T + shift)
+    torch.testing.assert_close(moved[:, :2], delta[:, :2] @ R.T, rtol=0, atol=1e-9)
+    torch.testing.assert_close(moved[:, 2], delta[:, 2], rtol=0, atol=1e-9)

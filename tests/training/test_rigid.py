@@ -141,3 +141,62 @@ def test_quarter_turns_turn_the_rendered_inputs_and_the_delta_q(tiny_push_data,
                                  s * delta[:, 0] + c * delta[:, 1]), 1)
             assert (t_delta[:, :2] - shift).abs().max() < 1e-9
             assert (t_delta[:, 2] - delta[:, 2]).abs().max() < 1e-9
+
+
+def test_object_frame_inputs_and_delta_q_do_not_change_with_the_scenes_place(tiny_push_data):
+    """In the object's frame the rendered grids and the true Δq of a push are the same
+    wherever the whole scene is moved and however it is turned (exact, float64); φ1_{t−1}
+    there is the footprint's SDF about its centroid, and Δq turned back to the table is the
+    table-frame Δq about that centroid."""
+    from dataclasses import replace as with_fields
+
+    from robotplan.models.rigid import delta_in_frame, moved_pivot_delta, object_frame
+    from robotplan.models.spec import OBJECT_WINDOW, DynamicsSpec
+    from robotplan.training.rigid import rigid_targets
+    from robotplan.training.samples import PushSamples, object_sdf
+
+    ws = DynamicsSpec(kind="rigid", frame="object", **OBJECT_WINDOW).workspace()
+    grid = ws.points(torch.float64).reshape(-1, 2)
+    samples = PushSamples(tiny_push_data)
+    batch = samples.batch(torch.arange(0, len(samples), 7).numpy(), dtype=torch.float64)
+    inputs, pivot, delta = rigid_targets(batch, grid, ws.shape, "object")
+    assert batch.contact.any() and delta[batch.contact].abs().max() > 1e-4
+    at_origin = torch.cat((-batch.centroid, torch.zeros_like(batch.radius)[:, None]), 1)
+    phi1 = object_sdf(batch.params, at_origin, grid[None]).reshape(-1, *ws.shape)
+    assert (inputs[:, 0] - phi1).abs().max() < 1e-12
+    assert (pivot - object_frame(batch.object_prev, batch.centroid)[:, :2]).abs().max() == 0
+    table = moved_pivot_delta(pivot, batch.object_prev, batch.object_now)
+    assert (delta_in_frame(delta, batch.object_prev[:, 2]) - table).abs().max() < 1e-12
+    angle, shift = 1.1, torch.tensor([0.07, -0.12], dtype=torch.float64)
+    c, s = math.cos(angle), math.sin(angle)
+
+    def moved(p):
+        xy = torch.stack((c * p[:, 0] - s * p[:, 1], s * p[:, 0] + c * p[:, 1]), 1) + shift
+        return torch.cat((xy, p[:, 2:] + angle), 1) if p.shape[1] == 3 else xy
+
+    other = with_fields(batch, object_prev=moved(batch.object_prev),
+                        object_now=moved(batch.object_now),
+                        pusher_prev=moved(batch.pusher_prev), pusher_now=moved(batch.pusher_now))
+    o_inputs, _, o_delta = rigid_targets(other, grid, ws.shape, "object")
+    assert (o_inputs - inputs).abs().max() < 1e-9
+    assert (o_delta - delta).abs().max() < 1e-9
+
+
+def test_an_object_frame_f_q_learns_and_reports_table_frame_errors(tiny_push_data, tmp_path):
+    from robotplan.models.spec import OBJECT_WINDOW
+
+    cfg = config(tiny_push_data, tmp_path / "fq", 80)
+    cfg.spec = {**cfg.spec, "frame": "object", **OBJECT_WINDOW}
+    last = train_rigid(cfg, progress=False)
+    history = json.loads((tmp_path / "fq" / "training.json").read_text())["history"]
+
+    def shift_error(row):  # in contact, where the pushed object moves
+        err = row["val_delta_q_error"]["contact"]
+        return err["x_mm"][0] + err["y_mm"][0]
+
+    assert shift_error(last) < 0.8 * shift_error(history[0])
+    result = evaluate_rigid(tmp_path / "fq", tiny_push_data)
+    base = result["baseline_delta_q_error"]
+    assert result["delta_q_error"]["x_mm"][0] < base["x_mm"][0] + base["y_mm"][0]
+    with pytest.raises(ValueError, match="object-frame"):
+        train_rigid(replace(cfg, out=str(tmp_path / "b"), augment="turns"), progress=False)
