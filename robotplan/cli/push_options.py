@@ -31,9 +31,11 @@ def architecture_problem(args: argparse.Namespace) -> str | None:
     if args.frame == "object":
         if args.model != "rigid":
             return "--frame object: only with --model rigid (F_q)"
-        if args.rigid_loss != "delta" or args.augment != "none":
-            return ("--frame object: trains with --rigid-loss delta and no --augment (turns "
-                    "leave an object-frame model's inputs unchanged)")
+        if args.rigid_loss != "delta" or args.augment == "turns":
+            return ("--frame object: trains with --rigid-loss delta and without --augment "
+                    "turns (they leave an object-frame model's inputs unchanged)")
+    elif args.augment == "headings":
+        return "--augment headings: only with --frame object"
     default = DynamicsSpec(**{k: v for k, v in architecture(args).items()
                               if k in ("grid", "workspace_size")})
     layers = len(default.kernels)

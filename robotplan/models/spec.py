@@ -20,7 +20,8 @@ __all__ = ["OBJECT_WINDOW", "DynamicsSpec", "conv_output_side", "head_matmul_dty
 
 
 # X_h of an object-frame F_q: 64 × 64 points over 0.64 m (1 cm cells, as on the table),
-# which hold every footprint of the data and a pusher touching it (docs/experiments.md)
+# which hold every footprint of the data and a pusher touching it
+# (measured: docs/experiments.md#fq-object-frame)
 OBJECT_WINDOW = {"grid": (64, 64), "workspace_center": (0.0, 0.0),
                  "workspace_size": (0.64, 0.64)}
 

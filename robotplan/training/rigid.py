@@ -51,13 +51,17 @@ __all__ = ["delta_q_errors", "evaluate_rigid", "rigid_targets", "sdf_space_loss"
 
 
 def rigid_targets(batch: SampleBatch, grid: Tensor, shape: tuple[int, int],
-                  frame: str = "table") -> tuple[Tensor, Tensor, Tensor]:
+                  frame: str = "table", heading: Tensor | None = None
+                  ) -> tuple[Tensor, Tensor, Tensor]:
     """The model inputs ``(B, 3, H, W)``, the pivots ``(B, 2)`` and the true Δq ``(B, 3)``,
     for X_h (``grid (N, 2)``) in the model's ``frame``: the table's, with the pivot read from
     the grid (:func:`sdf_pivot`) and Δq in the table frame; or the object's at t−1, with the
-    footprint's centroid as the pivot and Δq in that frame."""
+    footprint's centroid as the pivot and Δq in that frame, its axes turned by ``heading
+    (B,)`` (rad) from the body's where given."""
     if frame == "object":
         X_F = object_frame(batch.object_prev, batch.centroid)
+        if heading is not None:
+            X_F = torch.cat((X_F[:, :2], X_F[:, 2:] + heading[:, None]), 1)
         pivot = X_F[:, :2]
         true = moved_pivot_delta(pivot, batch.object_prev, batch.object_now)
         return (batch.inputs(grid, shape, X_F), pivot,
@@ -120,9 +124,12 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
     if cfg.rigid_loss not in ("delta", "sdf"):
         raise ValueError(f"rigid_loss {cfg.rigid_loss!r}: expected 'delta' or 'sdf'")
     spec = DynamicsSpec(**{"encoder": "joint", **cfg.spec, "kind": "rigid"})
-    if spec.frame == "object" and (cfg.rigid_loss != "delta" or cfg.augment != "none"):
+    if spec.frame == "object" and (cfg.rigid_loss != "delta" or cfg.augment == "turns"):
         raise ValueError("an object-frame F_q trains on the simulator's Δq (rigid_loss "
-                         "'delta') without augmentation: turns leave its inputs unchanged")
+                         "'delta'), without turns (they leave its inputs unchanged)")
+    if cfg.augment == "headings" and spec.frame != "object":
+        raise ValueError("augment 'headings' turns an object-frame F_q's axes; this F_q's "
+                         "X_h is the table's")
     out, device = Path(cfg.out), torch.device(cfg.device)
     ckpt_path = out / "checkpoint.pt"
     torch.manual_seed(cfg.seed)
@@ -163,8 +170,15 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
     batch_of = epoch_batch(train_idx, cfg.batch, cfg.seed)
 
     def step_loss(step: int) -> torch.Tensor:
-        batch = augmented(samples.batch(batch_of(step), device=device), cfg, ws, step)
-        inputs, pivot, true = rigid_targets(batch, grid, ws.shape, spec.frame)
+        if cfg.augment == "headings":  # X_h's axes at a heading drawn from (seed, step)
+            batch = samples.batch(batch_of(step), device=device)
+            rng = np.random.default_rng([cfg.seed, 13, step])
+            heading = torch.as_tensor(rng.uniform(-math.pi, math.pi, len(batch.radius)),
+                                      dtype=batch.radius.dtype, device=device)
+            inputs, pivot, true = rigid_targets(batch, grid, ws.shape, spec.frame, heading)
+        else:
+            batch = augmented(samples.batch(batch_of(step), device=device), cfg, ws, step)
+            inputs, pivot, true = rigid_targets(batch, grid, ws.shape, spec.frame)
         if cfg.rigid_loss == "sdf":
             gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
             pts = query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)

@@ -104,7 +104,7 @@ def test_train_push_builds_an_object_frame_f_q(tiny_push_data, tmp_path, capsys)
 
 
 def test_train_push_refuses_what_an_object_frame_cannot_use(tiny_push_data, tmp_path, capsys):
-    for extra, why in ((("--augment", "turns"), "no --augment"),
+    for extra, why in ((("--augment", "turns"), "without --augment turns"),
                        (("--rigid-loss", "sdf"), "--rigid-loss delta")):
         assert _train(tiny_push_data, tmp_path / "fq", "--frame", "object", *extra) == 2
         err = capsys.readouterr().err.strip()
@@ -113,3 +113,6 @@ def test_train_push_refuses_what_an_object_frame_cannot_use(tiny_push_data, tmp_
     assert main(["train", "push", "--data", str(tiny_push_data), "--out", str(tmp_path / "m"),
                  "--model", "flow", "--frame", "object"]) == 2
     assert capsys.readouterr().err.strip() == "error: --frame object: only with --model rigid (F_q)"
+    assert _train(tiny_push_data, tmp_path / "fq", "--augment", "headings") == 2
+    assert capsys.readouterr().err.strip() == "error: --augment headings: only with --frame object"
+    assert not (tmp_path / "fq").exists()

@@ -200,3 +200,28 @@ def test_an_object_frame_f_q_learns_and_reports_table_frame_errors(tiny_push_dat
     assert result["delta_q_error"]["x_mm"][0] < base["x_mm"][0] + base["y_mm"][0]
     with pytest.raises(ValueError, match="object-frame"):
         train_rigid(replace(cfg, out=str(tmp_path / "b"), augment="turns"), progress=False)
+
+
+def test_a_turned_object_frame_keeps_the_table_frame_delta_q(tiny_push_data):
+    """``augment headings``: the window's axes turned by u about the object show the
+    footprint turned by −u, and Δq given in those axes is the same step on the table."""
+    from robotplan.models.rigid import delta_in_frame
+    from robotplan.models.spec import OBJECT_WINDOW, DynamicsSpec
+    from robotplan.training.rigid import rigid_targets
+    from robotplan.training.samples import PushSamples, object_sdf
+
+    ws = DynamicsSpec(kind="rigid", frame="object", **OBJECT_WINDOW).workspace()
+    grid = ws.points(torch.float64).reshape(-1, 2)
+    samples = PushSamples(tiny_push_data)
+    batch = samples.batch(torch.arange(0, len(samples), 11).numpy(), dtype=torch.float64)
+    heading = torch.linspace(-3.0, 3.0, len(batch.radius), dtype=torch.float64)
+    inputs, _, delta = rigid_targets(batch, grid, ws.shape, "object", heading)
+    plain = rigid_targets(batch, grid, ws.shape, "object")[2]
+    yaw = batch.object_prev[:, 2]
+    torch.testing.assert_close(delta_in_frame(delta, yaw + heading),
+                               delta_in_frame(plain, yaw), rtol=0, atol=1e-12)
+    turned = torch.stack((-batch.centroid[:, 0] * heading.cos() - batch.centroid[:, 1]
+                          * heading.sin(), batch.centroid[:, 0] * heading.sin()
+                          - batch.centroid[:, 1] * heading.cos(), -heading), 1)
+    phi1 = object_sdf(batch.params, turned, grid[None]).reshape(-1, *ws.shape)
+    assert (inputs[:, 0] - phi1).abs().max() < 1e-12
