@@ -43,12 +43,14 @@ def test_shipped_model_beats_the_no_motion_baseline(name):
     assert result["rmse_mm"]["free"] < FREE_BOUND_MM[name]
 
 
-def test_shipped_rigid_model_predicts_the_motion_and_the_turn():
-    """F_q on the fixed held-out sample: far below the no-motion error, and it turns the
-    object with the world (a positive least-squares gain on both shapes)."""
-    folder = LEARNED / "push_rigid"
+@pytest.mark.parametrize("name", ["push_rigid", "push_rigid_object"])
+def test_shipped_rigid_model_predicts_the_motion_and_the_turn(name):
+    """F_q (table or object frame) on the fixed held-out sample: far below the no-motion
+    error, and it turns the object with the world (a positive least-squares gain on both
+    shapes)."""
+    folder = LEARNED / name
     if not folder.is_dir():
-        pytest.skip("learned/push_rigid is not trained yet")
+        pytest.skip(f"learned/{name} is not trained yet")
     result = evaluate_rigid(folder, DATA / "push_sample")
     err, base = result["delta_q_error"], result["baseline_delta_q_error"]
     assert result["samples"]["contact"] >= 100
