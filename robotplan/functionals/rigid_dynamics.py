@@ -187,24 +187,34 @@ class RigidDynamics:
 
         return delta, grid_gradient
 
+    def _residual(self, X1: Tensor, shift: Tensor, turn: Tensor, jacobian: bool):
+        """H_q ``(T,)`` of the planned poses ``X1 (T+1, 3)`` against the predicted steps
+        (table-frame ``shift (T, 2)`` of the pivot, ``turn (T,)``) and, with ``jacobian``,
+        ∂H/∂r (``g_xy (T, 2)``, ``g_a (T,)``) and the explicit terms of ∂H/∂(state t − 1)
+        and ∂H/∂(state t) through the pivots and angles (``(T, 3)`` each)."""
+        pivot_offset, turned = _rotate(X1[:, 2], self.centre)  # R c and dR/dα c, (T+1, 2)
+        pivots = X1[:, :2] + pivot_offset
+        r_xy = pivots[1:] - pivots[:-1] - shift  # (T, 2)
+        r_a = X1[1:, 2] - X1[:-1, 2] - turn  # (T,)
+        rho2 = self.rho ** 2
+        H = (r_xy * r_xy).sum(1) + rho2 * r_a * r_a
+        if not jacobian:
+            return H, None
+        g_xy, g_a = 2.0 * r_xy, 2.0 * rho2 * r_a  # ∂H/∂r
+        now = torch.cat((g_xy, ((g_xy * turned[1:]).sum(1) + g_a)[:, None]), 1)
+        prev = -torch.cat((g_xy, ((g_xy * turned[:-1]).sum(1) + g_a)[:, None]), 1)
+        return H, (g_xy, g_a, prev, now)
+
     def evaluate(self, X1: Tensor, X2: Tensor, jacobian: bool = True
                  ) -> tuple[Tensor, Tensor | None, Tensor | None]:
         X1, X2 = X1.to(self.dtype), X2.to(self.dtype)
         if self.frame == "object":
             return self._evaluate_in_object_frame(X1, X2, jacobian)
         delta, grid_gradient, dphi1, dphi2 = self._forward(X1, X2, jacobian)  # Δq (T, 3)
-        pivot_offset, turned = _rotate(X1[:, 2], self.centre)  # R c and dR/dα c, (T+1, 2)
-        pivots = X1[:, :2] + pivot_offset
-        r_xy = pivots[1:] - pivots[:-1] - delta[:, :2]  # (T, 2)
-        r_a = X1[1:, 2] - X1[:-1, 2] - delta[:, 2]  # (T,)
-        rho2 = self.rho ** 2
-        H = (r_xy * r_xy).sum(1) + rho2 * r_a * r_a
+        H, explicit = self._residual(X1, delta[:, :2], delta[:, 2], jacobian)
         if not jacobian:
             return H, None, None
-        g_xy, g_a = 2.0 * r_xy, 2.0 * rho2 * r_a  # ∂H/∂r
-        # explicit terms: the pivots and angles of states t (+) and t − 1 (−)
-        now = torch.cat((g_xy, ((g_xy * turned[1:]).sum(1) + g_a)[:, None]), 1)
-        prev = -torch.cat((g_xy, ((g_xy * turned[:-1]).sum(1) + g_a)[:, None]), 1)
+        g_xy, g_a, prev, now = explicit
         # through F_q: ∂H/∂Δq = −(g_xy, g_a), times the scale: ∂H/∂(the network's outputs)
         g_delta = -torch.cat((g_xy, g_a[:, None]), 1) * self.model.scale
         G = grid_gradient(g_delta)  # (T, 3, H·W)
@@ -220,17 +230,10 @@ class RigidDynamics:
         delta, grid_gradient, relative, dphi2 = self._forward_in_object_frame(X1, X2, jacobian)
         yaw = X1[:-1, 2]
         shift = _turn(delta[:, :2], yaw)  # R(α_{t−1}) Δq_xy, (T, 2)
-        pivot_offset, turned = _rotate(X1[:, 2], self.centre)
-        pivots = X1[:, :2] + pivot_offset
-        r_xy = pivots[1:] - pivots[:-1] - shift
-        r_a = X1[1:, 2] - X1[:-1, 2] - delta[:, 2]
-        rho2 = self.rho ** 2
-        H = (r_xy * r_xy).sum(1) + rho2 * r_a * r_a
+        H, explicit = self._residual(X1, shift, delta[:, 2], jacobian)
         if not jacobian:
             return H, None, None
-        g_xy, g_a = 2.0 * r_xy, 2.0 * rho2 * r_a
-        now = torch.cat((g_xy, ((g_xy * turned[1:]).sum(1) + g_a)[:, None]), 1)
-        prev = -torch.cat((g_xy, ((g_xy * turned[:-1]).sum(1) + g_a)[:, None]), 1)
+        g_xy, g_a, prev, now = explicit
         # the shift turns with F_t: ∂(−g · R(α) d)/∂α = −g · (−shift_y, shift_x)
         prev[:, 2] += g_xy[:, 0] * shift[:, 1] - g_xy[:, 1] * shift[:, 0]
         # through F_q: ∂H/∂Δq_xy = −R(α)ᵀ g_xy, ∂H/∂Δα = −g_a; times the outputs' scale
