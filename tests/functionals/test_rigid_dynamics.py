@@ -77,15 +77,21 @@ def test_the_predicted_step_has_no_residual(model, obj):
         assert first == pytest.approx(expected, rel=1e-9, abs=1e-20)
 
 
+def pushed_by(actor: str) -> tuple[Body, torch.Tensor, torch.Tensor]:
+    """The pusher and the trajectories: a disc (positions) or an object that pushes (poses,
+    a chain)."""
+    X1, X2 = trajectory()
+    if actor == "disc":
+        return PUSHER, X1, X2
+    X2 = torch.cat((X2 - torch.tensor([0.03, 0.0], dtype=F64),
+                    torch.linspace(0.05, 0.09, len(X2), dtype=F64)[:, None]), 1)
+    return Body("red", "object", Box((0.08, 0.08)), (0, 0, 0), 0.0, 0.06), X1, X2
+
+
 @pytest.mark.parametrize("actor", ["disc", "object"])
 def test_jacobian_matches_finite_differences(model, obj, actor):
     """For a disc pusher (positions) and for an object that pushes (poses, a chain)."""
-    X1, X2 = trajectory()
-    pusher = PUSHER
-    if actor == "object":
-        pusher = Body("red", "object", Box((0.08, 0.08)), (0, 0, 0), 0.0, 0.06)
-        X2 = torch.cat((X2 - torch.tensor([0.03, 0.0], dtype=F64),
-                        torch.linspace(0.05, 0.09, len(X2), dtype=F64)[:, None]), 1)
+    pusher, X1, X2 = pushed_by(actor)
     H = RigidDynamics(model, obj, pusher)
     values, j1, j2 = H.evaluate(X1, X2)
     d2 = X2.shape[1]
@@ -191,12 +197,7 @@ def test_object_frame_jacobian_matches_finite_differences(object_frame_model, ob
     direction: its Jacobian column carries both. Against central differences (float64) to
     1e-5 of J2's size, the part that passes through F_q's grids: a term of F_t missing
     there would miss by about that whole part."""
-    X1, X2 = trajectory()
-    pusher = PUSHER
-    if actor == "object":
-        pusher = Body("red", "object", Box((0.08, 0.08)), (0, 0, 0), 0.0, 0.06)
-        X2 = torch.cat((X2 - torch.tensor([0.03, 0.0], dtype=F64),
-                        torch.linspace(0.05, 0.09, len(X2), dtype=F64)[:, None]), 1)
+    pusher, X1, X2 = pushed_by(actor)
     H = RigidDynamics(object_frame_model, obj, pusher)
     values, j1, j2 = H.evaluate(X1, X2)
     assert (values > 0).all() and (j2.abs().amax(2) > 0).all()
