@@ -94,9 +94,14 @@ def start_pose(problem: HangProblem, rng: np.random.Generator,
         if len(pool) == 1:
             return pool[0], None
     h, c = problem.evaluate(pool)
-    clear = (c <= settings.collision_bound(parts is not None)
-             if parts is not None or settings.collision != "none" else np.ones(len(c), bool))
+    threaded = parts is not None
+    # a threaded start must clear the hook whatever the program's rows; a uniform one only
+    # where the program bounds H_coll
+    if threaded or settings.collision != "none":
+        clear = c <= settings.collision_bound(threaded)
+    else:
+        clear = np.ones(len(c), bool)
     # none clear: a threaded start nearest to clearing the hook, a uniform one of least H_hang
-    fallback = c if parts is not None else h
+    fallback = c if threaded else h
     i = int(np.argmin(np.where(clear, h, np.inf)) if clear.any() else np.argmin(fallback))
-    return pool[i], None if parts is None else int(parts[i])
+    return pool[i], int(parts[i]) if threaded else None

@@ -170,15 +170,14 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
     batch_of = epoch_batch(train_idx, cfg.batch, cfg.seed)
 
     def step_loss(step: int) -> torch.Tensor:
+        batch, heading = samples.batch(batch_of(step), device=device), None
         if cfg.augment == "headings":  # X_h's axes at a heading drawn from (seed, step)
-            batch = samples.batch(batch_of(step), device=device)
             rng = np.random.default_rng([cfg.seed, 13, step])
             heading = torch.as_tensor(rng.uniform(-math.pi, math.pi, len(batch.radius)),
                                       dtype=batch.radius.dtype, device=device)
-            inputs, pivot, true = rigid_targets(batch, grid, ws.shape, spec.frame, heading)
         else:
-            batch = augmented(samples.batch(batch_of(step), device=device), cfg, ws, step)
-            inputs, pivot, true = rigid_targets(batch, grid, ws.shape, spec.frame)
+            batch = augmented(batch, cfg, ws, step)
+        inputs, pivot, true = rigid_targets(batch, grid, ws.shape, spec.frame, heading)
         if cfg.rigid_loss == "sdf":
             gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
             pts = query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)
