@@ -34,8 +34,8 @@ def architecture_problem(args: argparse.Namespace) -> str | None:
         if args.rigid_loss != "delta" or args.augment == "turns":
             return ("--frame object: trains with --rigid-loss delta and without --augment "
                     "turns (they leave an object-frame model's inputs unchanged)")
-    elif args.augment == "headings":
-        return "--augment headings: only with --frame object"
+    elif args.augment in ("headings", "placements"):
+        return f"--augment {args.augment}: only with --frame object"
     default = DynamicsSpec(**{k: v for k, v in architecture(args).items()
                               if k in ("grid", "workspace_size")})
     layers = len(default.kernels)

@@ -61,11 +61,14 @@ def add_train_push_parser(tsub) -> None:
     tp.add_argument("--near-share", type=float, default=0.25,
                     help="share of the query points drawn within 10 cm of the object (the "
                          "rest uniform on the table); more resolves the object's turning")
-    tp.add_argument("--augment", choices=["none", "turns", "headings"], default="none",
+    tp.add_argument("--augment", choices=["none", "turns", "headings", "placements"],
+                    default="none",
                     help="turns: show each push with the scene turned by a random multiple "
                          "of 90 degrees about the grid's centre (an exact symmetry); "
                          "headings (--frame object): the grid's axes at a random heading "
-                         "about the object, so that each footprint is seen at every heading")
+                         "about the object, so that each footprint is seen at every heading; "
+                         "placements (--frame object): also the grid's origin, the pivot, "
+                         "moved up to 6 cm from the centroid")
     tp.add_argument("--anneal-by-time", action="store_true",
                     help="with --minutes: the learning rate reaches its floor when the "
                          "minutes run out, even if fewer steps fit")

@@ -17,6 +17,7 @@ missing shards.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -28,6 +29,8 @@ from robotplan.execution.sim import PHYSICS, PushWorld
 from robotplan.sdf import Box, LShape, Shape2D
 from robotplan.sdf.footprint import footprint_centroid
 from robotplan.training.footprints import (
+    BOX,
+    LSHAPE,
     MAX_VERTICES,
     OOD_FAMILIES,
     decode_footprint,
@@ -36,8 +39,8 @@ from robotplan.training.footprints import (
 )
 from robotplan.training.shards import make_shards, prepare_folder
 
-__all__ = ["PushDataSpec", "SceneRecord", "generate", "load_shards", "scene_footprint",
-           "simulate_scene"]
+__all__ = ["PushDataSpec", "SceneRecord", "generate", "load_shards", "scene_families",
+           "scene_footprint", "simulate_scene"]
 
 FORMAT = 1
 PER_SCENE = ("scene_index", "shape_type", "size", "thickness", "vertices", "pusher_radius")
@@ -253,3 +256,14 @@ def scene_footprint(data: dict[str, np.ndarray], scene: int) -> Shape2D:
     """The footprint of ``scene`` (a row of :func:`load_shards`' per-scene arrays)."""
     return decode_footprint(int(data["shape_type"][scene]), data["size"][scene],
                             float(data["thickness"][scene]), data["vertices"][scene])
+
+
+def scene_families(folder: Path, data: dict[str, np.ndarray]) -> np.ndarray:
+    """The footprint family of each scene of :func:`load_shards`' ``data`` from ``folder``,
+    ``(S,)`` strings: "box" or "lshape" for training data; for unseen footprints
+    (``shapes: ood`` in ``meta.json``) scene ``i``'s family ``OOD_FAMILIES[i mod 8]``."""
+    meta = json.loads((Path(folder) / "meta.json").read_text())
+    if meta.get("spec", {}).get("shapes") == "ood":
+        return np.array(OOD_FAMILIES)[data["scene_index"] % len(OOD_FAMILIES)]
+    names = {BOX: "box", LSHAPE: "lshape"}
+    return np.array([names.get(int(code), "other") for code in data["shape_type"]])

@@ -21,6 +21,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from robotplan.geometry.transforms import planar_to_world
 from robotplan.models.rigid import (
     RigidMotion,
     delta_in_frame,
@@ -36,6 +37,7 @@ from robotplan.training.evaluation import pick_samples
 from robotplan.training.footprints import BOX, LSHAPE
 from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
 from robotplan.training.model_card import earlier_stages
+from robotplan.training.push_data import scene_families
 from robotplan.training.samples import PushSamples, SampleBatch
 from robotplan.training.train import (
     TrainConfig,
@@ -46,22 +48,31 @@ from robotplan.training.train import (
     write_json,
 )
 
-__all__ = ["delta_q_errors", "evaluate_rigid", "rigid_targets", "sdf_space_loss",
-           "table5_errors", "train_rigid", "turn_gain"]
+__all__ = ["PLACEMENT_REACH", "WINDOW_AUGMENTS", "delta_q_errors", "evaluate_rigid",
+           "rigid_targets", "sdf_space_loss", "table5_errors", "train_rigid", "turn_gain",
+           "window_placements"]
+
+WINDOW_AUGMENTS = ("headings", "placements")
+"""Augmentations that place an object-frame F_q's window about the object."""
+PLACEMENT_REACH = 0.06
+"""m: how far "placements" moves the window's origin from the centroid; the largest
+footprint (half-diagonal 0.21 m) and a pusher touching it stay inside the 0.64 m window."""
 
 
 def rigid_targets(batch: SampleBatch, grid: Tensor, shape: tuple[int, int],
-                  frame: str = "table", heading: Tensor | None = None
+                  frame: str = "table", placement: Tensor | None = None
                   ) -> tuple[Tensor, Tensor, Tensor]:
     """The model inputs ``(B, 3, H, W)``, the pivots ``(B, 2)`` and the true Δq ``(B, 3)``,
     for X_h (``grid (N, 2)``) in the model's ``frame``: the table's, with the pivot read from
     the grid (:func:`sdf_pivot`) and Δq in the table frame; or the object's at t−1, with the
-    footprint's centroid as the pivot and Δq in that frame, its axes turned by ``heading
-    (B,)`` (rad) from the body's where given."""
+    footprint's centroid as the pivot and Δq in that frame. Where given, ``placement (B, 3)``
+    = (x, y, yaw) places the window in that frame (X_OF): its origin, the pivot, moved by
+    (x, y) and its axes turned by yaw from the body's."""
     if frame == "object":
         X_F = object_frame(batch.object_prev, batch.centroid)
-        if heading is not None:
-            X_F = torch.cat((X_F[:, :2], X_F[:, 2:] + heading[:, None]), 1)
+        if placement is not None:
+            X_F = torch.cat((planar_to_world(placement[:, None, :2], X_F)[:, 0],
+                             X_F[:, 2:] + placement[:, 2:]), 1)
         pivot = X_F[:, :2]
         true = moved_pivot_delta(pivot, batch.object_prev, batch.object_now)
         return (batch.inputs(grid, shape, X_F), pivot,
@@ -69,6 +80,22 @@ def rigid_targets(batch: SampleBatch, grid: Tensor, shape: tuple[int, int],
     inputs = batch.inputs(grid, shape)
     pivot = sdf_pivot(inputs[:, 0].flatten(1), grid)
     return inputs, pivot, moved_pivot_delta(pivot, batch.object_prev, batch.object_now)
+
+
+def window_placements(cfg: TrainConfig, step: int, n: int) -> Tensor:
+    """The object-frame window placements X_OF ``(n, 3)`` of training step ``step`` under
+    ``cfg.augment``, drawn from ``(seed, step)`` so a resumed run sees the same ones:
+    "headings", the axes at a uniform heading; "placements", also the origin moved
+    uniformly within ``PLACEMENT_REACH`` of the centroid, so that the object is seen off
+    the window's centre, about pivots other than its centroid, as on a table-fixed grid."""
+    rng = np.random.default_rng([cfg.seed, 13, step])
+    yaw = rng.uniform(-math.pi, math.pi, n)
+    xy = np.zeros((n, 2))
+    if cfg.augment == "placements":
+        r = PLACEMENT_REACH * np.sqrt(rng.uniform(0.0, 1.0, n))
+        a = rng.uniform(-math.pi, math.pi, n)
+        xy = np.stack((r * np.cos(a), r * np.sin(a)), 1)
+    return torch.as_tensor(np.concatenate((xy, yaw[:, None]), 1), dtype=torch.float32)
 
 
 def sdf_space_loss(delta: Tensor, phi_prev_grid: Tensor, pivot: Tensor, phi_now: Tensor,
@@ -127,9 +154,9 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
     if spec.frame == "object" and (cfg.rigid_loss != "delta" or cfg.augment == "turns"):
         raise ValueError("an object-frame F_q trains on the simulator's Δq (rigid_loss "
                          "'delta'), without turns (they leave its inputs unchanged)")
-    if cfg.augment == "headings" and spec.frame != "object":
-        raise ValueError("augment 'headings' turns an object-frame F_q's axes; this F_q's "
-                         "X_h is the table's")
+    if cfg.augment in WINDOW_AUGMENTS and spec.frame != "object":
+        raise ValueError(f"augment {cfg.augment!r} places an object-frame F_q's window; "
+                         "this F_q's X_h is the table's")
     out, device = Path(cfg.out), torch.device(cfg.device)
     ckpt_path = out / "checkpoint.pt"
     torch.manual_seed(cfg.seed)
@@ -170,14 +197,12 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
     batch_of = epoch_batch(train_idx, cfg.batch, cfg.seed)
 
     def step_loss(step: int) -> torch.Tensor:
-        batch, heading = samples.batch(batch_of(step), device=device), None
-        if cfg.augment == "headings":  # X_h's axes at a heading drawn from (seed, step)
-            rng = np.random.default_rng([cfg.seed, 13, step])
-            heading = torch.as_tensor(rng.uniform(-math.pi, math.pi, len(batch.radius)),
-                                      dtype=batch.radius.dtype, device=device)
+        batch, placement = samples.batch(batch_of(step), device=device), None
+        if cfg.augment in WINDOW_AUGMENTS:
+            placement = window_placements(cfg, step, len(batch.radius)).to(batch.radius)
         else:
             batch = augmented(batch, cfg, ws, step)
-        inputs, pivot, true = rigid_targets(batch, grid, ws.shape, spec.frame, heading)
+        inputs, pivot, true = rigid_targets(batch, grid, ws.shape, spec.frame, placement)
         if cfg.rigid_loss == "sdf":
             gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
             pts = query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)
@@ -207,6 +232,14 @@ def evaluate_rigid(model_dir: str | Path, data_dir: str | Path, scenes: int | No
     code = samples.data["shape_type"][samples.scene[idx]]
     c = contact
     kinds = {"box": code == BOX, "lshape": code == LSHAPE, "other": code > LSHAPE}
+    family = scene_families(samples.folder, samples.data)[samples.scene[idx]]
+    by_footprint = {}
+    for name in dict.fromkeys(family):  # in the order the scenes draw them
+        m = c & (family == name)
+        if m.any():
+            by_footprint[str(name)] = {"samples": int(m.sum()),
+                                       "delta_q_error": table5_errors(pred[m], true[m]),
+                                       "turn_gain": round(turn_gain(pred[m], true[m]), 3)}
     return {
         "model": str(model_dir), "kind": "rigid", "data": str(data_dir),
         "scenes": samples.num_scenes,
@@ -216,5 +249,6 @@ def evaluate_rigid(model_dir: str | Path, data_dir: str | Path, scenes: int | No
         "baseline_delta_q_error": table5_errors(np.zeros_like(true[c]), true[c]),
         "turn_gain": {k: round(turn_gain(pred[c & m], true[c & m]), 3)
                       for k, m in kinds.items() if (c & m).any()},
+        "by_footprint": by_footprint,
         "seconds": round(time.time() - t0, 1), "device": str(device),
     }

@@ -30,7 +30,7 @@ from robotplan.training.samples import PushSamples, SampleBatch
 __all__ = ["AUGMENTS", "TrainConfig", "augmented", "grid_rmse", "hardware", "query_points",
            "train", "validation_indices", "write_json"]
 
-AUGMENTS = ("none", "turns", "headings")
+AUGMENTS = ("none", "turns", "headings", "placements")
 
 
 @dataclass
@@ -62,7 +62,8 @@ class TrainConfig:
     # "turns": each sample's scene turned by a random multiple of 90° about X_h's centre
     # (an exact symmetry, SampleBatch.turned), four orientations of every push; "headings"
     # (an object-frame F_q): X_h's axes at a random heading about the object, so that the
-    # model sees each footprint at every heading, as a table-frame model does
+    # model sees each footprint at every heading, as a table-frame model does; "placements":
+    # also the window's origin, the pivot, moved up to a few cm from the object's centroid
     augment: str = "none"
     anneal_by_time: bool = False  # the cosine also ends when ``minutes`` run out
 
@@ -92,9 +93,9 @@ def augmented(batch: SampleBatch, cfg: TrainConfig, ws: Workspace, step: int) ->
     from ``(seed, step)`` so a resumed run sees the same ones."""
     if cfg.augment == "none":
         return batch
-    if cfg.augment == "headings":
-        raise ValueError("augment 'headings' turns an object-frame F_q's axes, drawn where "
-                         "its frame is built")
+    if cfg.augment in ("headings", "placements"):
+        raise ValueError(f"augment {cfg.augment!r} places an object-frame F_q's window, "
+                         "drawn where its frame is built")
     if cfg.augment != "turns":
         raise ValueError(f"augment {cfg.augment!r}: expected one of {', '.join(AUGMENTS)}")
     k = np.random.default_rng([cfg.seed, 11, step]).integers(0, 4, len(batch.radius))

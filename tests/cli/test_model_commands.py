@@ -113,6 +113,8 @@ def test_train_push_refuses_what_an_object_frame_cannot_use(tiny_push_data, tmp_
     assert main(["train", "push", "--data", str(tiny_push_data), "--out", str(tmp_path / "m"),
                  "--model", "flow", "--frame", "object"]) == 2
     assert capsys.readouterr().err.strip() == "error: --frame object: only with --model rigid (F_q)"
-    assert _train(tiny_push_data, tmp_path / "fq", "--augment", "headings") == 2
-    assert capsys.readouterr().err.strip() == "error: --augment headings: only with --frame object"
-    assert not (tmp_path / "fq").exists()
+    for window in ("headings", "placements"):
+        assert _train(tiny_push_data, tmp_path / "fq", "--augment", window) == 2
+        assert (capsys.readouterr().err.strip()
+                == f"error: --augment {window}: only with --frame object")
+        assert not (tmp_path / "fq").exists()

@@ -125,3 +125,28 @@ def test_unseen_footprints_are_pushed_stored_and_rendered_exactly(tiny_ood_push_
     assert contact.mean() > 0.2
     assert np.median(gap.numpy()[contact]) < 0.01
     assert np.median(gap.numpy()[~contact]) > 0.01
+
+
+def test_scene_families_name_each_scene_footprint(tiny_push_data, tiny_ood_push_data):
+    """Training data: box or lshape as stored; unseen footprints: family i mod 8, each one
+    the footprint the scene holds (a disc for the circle, polygons of its vertex count)."""
+    from robotplan.sdf import Box, Circle, LShape, Polygon
+    from robotplan.training.footprints import OOD_FAMILIES
+    from robotplan.training.push_data import scene_families, scene_footprint
+
+    d = load_shards(tiny_push_data)
+    names = scene_families(tiny_push_data, d)
+    kinds = {Box: "box", LShape: "lshape"}
+    assert names.tolist() == [kinds[type(scene_footprint(d, k))] for k in range(len(names))]
+    assert set(names) == {"box", "lshape"}
+    d = load_shards(tiny_ood_push_data)
+    names = scene_families(tiny_ood_push_data, d)
+    assert sorted(names.tolist()) == sorted(OOD_FAMILIES)
+    corners = {"triangle": 3, "trapezoid": 4, "pentagon": 5, "hexagon": 6, "T": 8, "U": 8,
+               "cross": 12}
+    for k, name in enumerate(names):
+        shape = scene_footprint(d, k)
+        if name == "circle":
+            assert isinstance(shape, Circle)
+        else:
+            assert isinstance(shape, Polygon) and len(shape.vertices) == corners[name]

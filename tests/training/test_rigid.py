@@ -110,6 +110,26 @@ def test_training_on_sdfs_alone_lowers_the_delta_q_error(tiny_push_data, tmp_pat
     assert turn_error(last) < 0.85 * turn_error(history[0])
 
 
+def test_evaluation_breaks_the_errors_down_by_footprint(tmp_path, tiny_push_data,
+                                                        tiny_ood_push_data):
+    """``by_footprint``: every family's contact samples, their errors and turn gain, which
+    together make up the whole set's."""
+    cfg = TrainConfig(data=str(tiny_push_data), out=str(tmp_path / "fq"), kind="rigid",
+                      steps=2, batch=8, val_every=2, spec=TINY_SPEC)
+    train_rigid(cfg, progress=False)
+    for folder, names in ((tiny_push_data, {"box", "lshape"}),
+                          (tiny_ood_push_data, {"triangle", "pentagon", "hexagon", "circle",
+                                                "T", "cross", "U", "trapezoid"})):
+        result = evaluate_rigid(tmp_path / "fq", folder)
+        parts = result["by_footprint"]
+        assert set(parts) <= names and len(parts) >= len(names) - 1
+        assert sum(p["samples"] for p in parts.values()) == result["samples"]["contact"]
+        for key in ("x_mm", "alpha_deg"):
+            mean = sum(p["samples"] * p["delta_q_error"][key][0] for p in parts.values())
+            assert mean / result["samples"]["contact"] == pytest.approx(
+                result["delta_q_error"][key][0], abs=2e-3)
+
+
 def test_quarter_turns_turn_the_rendered_inputs_and_the_delta_q(tiny_push_data,
                                                                  tiny_ood_push_data):
     """Turning the scene by k × 90° about X_h's centre rotates the rendered grids by k
@@ -202,10 +222,14 @@ def test_an_object_frame_f_q_learns_and_reports_table_frame_errors(tiny_push_dat
         train_rigid(replace(cfg, out=str(tmp_path / "b"), augment="turns"), progress=False)
 
 
-def test_a_turned_object_frame_keeps_the_table_frame_delta_q(tiny_push_data):
-    """``augment headings``: the window's axes turned by u about the object show the
-    footprint turned by −u, and Δq given in those axes is the same step on the table."""
-    from robotplan.models.rigid import delta_in_frame
+@pytest.mark.parametrize("offset", [(0.0, 0.0), (0.04, -0.05)])
+def test_a_placed_object_frame_keeps_the_table_frame_delta_q(tiny_push_data, offset):
+    """``augment headings`` / ``placements``: the window placed at X_OF = (x, y, u) in the
+    object frame shows the footprint at X_OF⁻¹ X_OB, and Δq given in the window's axes about
+    its origin is the same step on the table as the simulator's poses give about that
+    point."""
+    from robotplan.geometry.transforms import planar_to_body, planar_to_world
+    from robotplan.models.rigid import delta_in_frame, moved_pivot_delta, object_frame
     from robotplan.models.spec import OBJECT_WINDOW, DynamicsSpec
     from robotplan.training.rigid import rigid_targets
     from robotplan.training.samples import PushSamples, object_sdf
@@ -214,14 +238,47 @@ def test_a_turned_object_frame_keeps_the_table_frame_delta_q(tiny_push_data):
     grid = ws.points(torch.float64).reshape(-1, 2)
     samples = PushSamples(tiny_push_data)
     batch = samples.batch(torch.arange(0, len(samples), 11).numpy(), dtype=torch.float64)
-    heading = torch.linspace(-3.0, 3.0, len(batch.radius), dtype=torch.float64)
-    inputs, _, delta = rigid_targets(batch, grid, ws.shape, "object", heading)
-    plain = rigid_targets(batch, grid, ws.shape, "object")[2]
-    yaw = batch.object_prev[:, 2]
-    torch.testing.assert_close(delta_in_frame(delta, yaw + heading),
-                               delta_in_frame(plain, yaw), rtol=0, atol=1e-12)
-    turned = torch.stack((-batch.centroid[:, 0] * heading.cos() - batch.centroid[:, 1]
-                          * heading.sin(), batch.centroid[:, 0] * heading.sin()
-                          - batch.centroid[:, 1] * heading.cos(), -heading), 1)
-    phi1 = object_sdf(batch.params, turned, grid[None]).reshape(-1, *ws.shape)
+    n = len(batch.radius)
+    heading = torch.linspace(-3.0, 3.0, n, dtype=torch.float64)
+    placement = torch.cat((torch.tensor(offset, dtype=torch.float64).expand(n, 2),
+                           heading[:, None]), 1)
+    inputs, pivot, delta = rigid_targets(batch, grid, ws.shape, "object", placement)
+    X_WO = object_frame(batch.object_prev, batch.centroid)
+    origin = planar_to_world(placement[:, None, :2], X_WO)[:, 0]
+    torch.testing.assert_close(pivot, origin, rtol=0, atol=1e-12)
+    yaw_F = batch.object_prev[:, 2] + heading
+    true = moved_pivot_delta(origin, batch.object_prev, batch.object_now)
+    torch.testing.assert_close(delta_in_frame(delta, yaw_F), true, rtol=0, atol=1e-12)
+    # the body's origin seen from the placed window, and its heading there
+    body_O = -batch.centroid - placement[:, :2]
+    c, s = heading.cos(), heading.sin()
+    X_FB = torch.stack((c * body_O[:, 0] + s * body_O[:, 1],
+                        -s * body_O[:, 0] + c * body_O[:, 1], -heading), 1)
+    phi1 = object_sdf(batch.params, X_FB, grid[None]).reshape(-1, *ws.shape)
     assert (inputs[:, 0] - phi1).abs().max() < 1e-12
+    # the pusher's SDF is read at the same table points
+    g_W = planar_to_world(grid[None], torch.cat((origin, yaw_F[:, None]), 1))
+    r = planar_to_body(g_W, torch.cat((batch.pusher_prev, 0 * heading[:, None]), 1))
+    phi2 = (r.norm(dim=-1) - batch.radius[:, None]).reshape(-1, *ws.shape)
+    assert (inputs[:, 1] - phi2).abs().max() < 1e-12
+
+
+def test_window_placements_are_drawn_per_step_within_reach():
+    """Headings move no origin; placements stay within PLACEMENT_REACH, cover it, and are
+    the same for a step whenever it is drawn (a resumed run sees the same ones)."""
+    from robotplan.training.rigid import PLACEMENT_REACH, window_placements
+    from robotplan.training.train import TrainConfig
+
+    cfg = TrainConfig(data="d", out="o", kind="rigid", augment="headings")
+    headings = window_placements(cfg, 7, 4000)
+    assert (headings[:, :2] == 0).all()
+    assert headings[:, 2].abs().max() <= math.pi and headings[:, 2].std() > 1.5
+    placed = window_placements(replace(cfg, augment="placements"), 7, 4000)
+    torch.testing.assert_close(placed[:, 2], headings[:, 2])
+    reach = placed[:, :2].norm(dim=1)
+    assert reach.max() <= PLACEMENT_REACH + 1e-6 and reach.max() > 0.95 * PLACEMENT_REACH
+    assert (reach < PLACEMENT_REACH / 2).float().mean().item() == pytest.approx(0.25, abs=0.03)
+    torch.testing.assert_close(window_placements(replace(cfg, augment="placements"), 7, 4000),
+                               placed, rtol=0, atol=0)
+    assert not torch.equal(window_placements(replace(cfg, augment="placements"), 8, 4000),
+                           placed)
