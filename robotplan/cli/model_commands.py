@@ -66,7 +66,8 @@ def cmd_train_push(args: argparse.Namespace) -> int:
                       val_every=args.val_every, contact_share=args.contact_share,
                       warmup=args.warmup, rigid_loss=args.rigid_loss,
                       near_share=args.near_share, spec=architecture(args),
-                      augment=args.augment, anneal_by_time=args.anneal_by_time,
+                      augment=args.augment, placement_reach=args.placement_reach,
+                      anneal_by_time=args.anneal_by_time,
                       init_weights=args.init_weights,
                       command=" ".join(["robotplan", *sys.argv[1:]]))
     if args.resume:  # the run's settings come from its checkpoint; only the budget may change

@@ -36,6 +36,10 @@ def architecture_problem(args: argparse.Namespace) -> str | None:
                     "turns (they leave an object-frame model's inputs unchanged)")
     elif args.augment in ("headings", "placements"):
         return f"--augment {args.augment}: only with --frame object"
+    if not 0.0 <= args.placement_reach <= 0.2:
+        return f"--placement-reach {args.placement_reach}: expected 0 to 0.2 m"
+    if args.placement_reach != 0.06 and args.augment != "placements":
+        return "--placement-reach: only with --augment placements"
     default = DynamicsSpec(**{k: v for k, v in architecture(args).items()
                               if k in ("grid", "workspace_size")})
     layers = len(default.kernels)

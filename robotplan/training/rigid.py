@@ -54,9 +54,10 @@ __all__ = ["PLACEMENT_REACH", "WINDOW_AUGMENTS", "delta_q_errors", "evaluate_rig
 
 WINDOW_AUGMENTS = ("headings", "placements")
 """Augmentations that place an object-frame F_q's window about the object."""
-PLACEMENT_REACH = 0.06
-"""m: how far "placements" moves the window's origin from the centroid; the largest
-footprint (half-diagonal 0.21 m) and a pusher touching it stay inside the 0.64 m window."""
+PLACEMENT_REACH = TrainConfig.placement_reach
+"""m: how far "placements" moves the window's origin from the centroid by default
+(``TrainConfig.placement_reach``); at 6 cm the largest footprint (half-diagonal 0.21 m) and
+a pusher touching it stay inside the 0.64 m window."""
 
 
 def rigid_targets(batch: SampleBatch, grid: Tensor, shape: tuple[int, int],
@@ -86,13 +87,13 @@ def window_placements(cfg: TrainConfig, step: int, n: int) -> Tensor:
     """The object-frame window placements X_OF ``(n, 3)`` of training step ``step`` under
     ``cfg.augment``, drawn from ``(seed, step)`` so a resumed run sees the same ones:
     "headings", the axes at a uniform heading; "placements", also the origin moved
-    uniformly within ``PLACEMENT_REACH`` of the centroid, so that the object is seen off
+    uniformly within ``cfg.placement_reach`` of the centroid, so that the object is seen off
     the window's centre, about pivots other than its centroid, as on a table-fixed grid."""
     rng = np.random.default_rng([cfg.seed, 13, step])
     yaw = rng.uniform(-math.pi, math.pi, n)
     xy = np.zeros((n, 2))
     if cfg.augment == "placements":
-        r = PLACEMENT_REACH * np.sqrt(rng.uniform(0.0, 1.0, n))
+        r = cfg.placement_reach * np.sqrt(rng.uniform(0.0, 1.0, n))
         a = rng.uniform(-math.pi, math.pi, n)
         xy = np.stack((r * np.cos(a), r * np.sin(a)), 1)
     return torch.as_tensor(np.concatenate((xy, yaw[:, None]), 1), dtype=torch.float32)

@@ -65,6 +65,7 @@ class TrainConfig:
     # model sees each footprint at every heading, as a table-frame model does; "placements":
     # also the window's origin, the pivot, moved up to a few cm from the object's centroid
     augment: str = "none"
+    placement_reach: float = 0.06  # m, "placements": see robotplan.training.rigid
     anneal_by_time: bool = False  # the cosine also ends when ``minutes`` run out
 
 

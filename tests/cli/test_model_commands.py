@@ -113,6 +113,12 @@ def test_train_push_refuses_what_an_object_frame_cannot_use(tiny_push_data, tmp_
     assert main(["train", "push", "--data", str(tiny_push_data), "--out", str(tmp_path / "m"),
                  "--model", "flow", "--frame", "object"]) == 2
     assert capsys.readouterr().err.strip() == "error: --frame object: only with --model rigid (F_q)"
+    for extra, why in ((("--placement-reach", "0.1"), "only with --augment placements"),
+                       (("--augment", "placements", "--placement-reach", "nan"), "0 to 0.2 m")):
+        assert _train(tiny_push_data, tmp_path / "fq", "--frame", "object", *extra) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("error: --placement-reach") and why in err and "\n" not in err
+        assert not (tmp_path / "fq").exists()
     for window in ("headings", "placements"):
         assert _train(tiny_push_data, tmp_path / "fq", "--augment", window) == 2
         assert (capsys.readouterr().err.strip()

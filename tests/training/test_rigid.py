@@ -282,3 +282,6 @@ def test_window_placements_are_drawn_per_step_within_reach():
                                placed, rtol=0, atol=0)
     assert not torch.equal(window_placements(replace(cfg, augment="placements"), 8, 4000),
                            placed)
+    wide = window_placements(replace(cfg, augment="placements", placement_reach=0.12), 7, 4000)
+    assert wide[:, :2].norm(dim=1).max() <= 0.12 + 1e-6
+    torch.testing.assert_close(wide[:, :2], placed[:, :2] * (0.12 / PLACEMENT_REACH))
