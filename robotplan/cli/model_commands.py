@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from robotplan.base.resources import DYNAMICS_FOLDERS
@@ -66,10 +67,11 @@ def cmd_train_push(args: argparse.Namespace) -> int:
                       val_every=args.val_every, contact_share=args.contact_share,
                       warmup=args.warmup, rigid_loss=args.rigid_loss,
                       near_share=args.near_share, spec=architecture(args),
-                      augment=args.augment, placement_reach=args.placement_reach,
-                      anneal_by_time=args.anneal_by_time,
+                      augment=args.augment, anneal_by_time=args.anneal_by_time,
                       init_weights=args.init_weights,
                       command=" ".join(["robotplan", *sys.argv[1:]]))
+    if args.placement_reach is not None:
+        cfg = replace(cfg, placement_reach=args.placement_reach)
     if args.resume:  # the run's settings come from its checkpoint; only the budget may change
         saved = json.loads(torch.load(ckpt, weights_only=True)["config"])
         cfg = TrainConfig(**{**saved, "steps": args.steps or saved["steps"],

@@ -27,6 +27,7 @@ def architecture(args: argparse.Namespace) -> dict:
 def architecture_problem(args: argparse.Namespace) -> str | None:
     """Why the widths given to ``train push`` cannot build a model, or None."""
     from robotplan.models.spec import DynamicsSpec, conv_output_side
+    from robotplan.training.train import WINDOW_AUGMENTS
 
     if args.frame == "object":
         if args.model != "rigid":
@@ -34,12 +35,13 @@ def architecture_problem(args: argparse.Namespace) -> str | None:
         if args.rigid_loss != "delta" or args.augment == "turns":
             return ("--frame object: trains with --rigid-loss delta and without --augment "
                     "turns (they leave an object-frame model's inputs unchanged)")
-    elif args.augment in ("headings", "placements"):
+    elif args.augment in WINDOW_AUGMENTS:
         return f"--augment {args.augment}: only with --frame object"
-    if not 0.0 <= args.placement_reach <= 0.2:
-        return f"--placement-reach {args.placement_reach}: expected 0 to 0.2 m"
-    if args.placement_reach != 0.06 and args.augment != "placements":
-        return "--placement-reach: only with --augment placements"
+    if args.placement_reach is not None:
+        if not 0.0 <= args.placement_reach <= 0.2:
+            return f"--placement-reach {args.placement_reach}: expected 0 to 0.2 m"
+        if args.augment != "placements":
+            return "--placement-reach: only with --augment placements"
     default = DynamicsSpec(**{k: v for k, v in architecture(args).items()
                               if k in ("grid", "workspace_size")})
     layers = len(default.kernels)

@@ -69,7 +69,7 @@ def add_train_push_parser(tsub) -> None:
                          "about the object, so that each footprint is seen at every heading; "
                          "placements (--frame object): also the grid's origin, the pivot, "
                          "moved up to --placement-reach from the centroid")
-    tp.add_argument("--placement-reach", type=float, default=0.06, metavar="M",
+    tp.add_argument("--placement-reach", type=float, default=None, metavar="M",
                     help="with --augment placements: how far (m) the grid's origin may move "
                          "from the footprint's centroid (default 0.06)")
     tp.add_argument("--anneal-by-time", action="store_true",

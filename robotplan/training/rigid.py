@@ -40,6 +40,7 @@ from robotplan.training.model_card import earlier_stages
 from robotplan.training.push_data import scene_families
 from robotplan.training.samples import PushSamples, SampleBatch
 from robotplan.training.train import (
+    WINDOW_AUGMENTS,
     TrainConfig,
     augmented,
     hardware,
@@ -52,8 +53,6 @@ __all__ = ["PLACEMENT_REACH", "WINDOW_AUGMENTS", "delta_q_errors", "evaluate_rig
            "rigid_targets", "sdf_space_loss", "table5_errors", "train_rigid", "turn_gain",
            "window_placements"]
 
-WINDOW_AUGMENTS = ("headings", "placements")
-"""Augmentations that place an object-frame F_q's window about the object."""
 PLACEMENT_REACH = TrainConfig.placement_reach
 """m: how far "placements" moves the window's origin from the centroid by default
 (``TrainConfig.placement_reach``); at 6 cm the largest footprint (half-diagonal 0.21 m) and

@@ -27,10 +27,13 @@ from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
 from robotplan.training.model_card import earlier_stages
 from robotplan.training.samples import PushSamples, SampleBatch
 
-__all__ = ["AUGMENTS", "TrainConfig", "augmented", "grid_rmse", "hardware", "query_points",
-           "train", "validation_indices", "write_json"]
+__all__ = ["AUGMENTS", "WINDOW_AUGMENTS", "TrainConfig", "augmented", "grid_rmse", "hardware",
+           "query_points", "train", "validation_indices", "write_json"]
 
 AUGMENTS = ("none", "turns", "headings", "placements")
+WINDOW_AUGMENTS = ("headings", "placements")
+"""Augmentations that place an object-frame F_q's window about the object (drawn where
+its frame is built, :func:`robotplan.training.rigid.window_placements`)."""
 
 
 @dataclass
@@ -94,7 +97,7 @@ def augmented(batch: SampleBatch, cfg: TrainConfig, ws: Workspace, step: int) ->
     from ``(seed, step)`` so a resumed run sees the same ones."""
     if cfg.augment == "none":
         return batch
-    if cfg.augment in ("headings", "placements"):
+    if cfg.augment in WINDOW_AUGMENTS:
         raise ValueError(f"augment {cfg.augment!r} places an object-frame F_q's window, "
                          "drawn where its frame is built")
     if cfg.augment != "turns":
