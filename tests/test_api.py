@@ -69,4 +69,8 @@ def test_solve_records_the_mode_every_replan_and_both_executions(tmp_path):
     adopted = sum(r["solved"] for r in saved["execution"]["replans"])
     assert len(saved["replanned"]) == adopted
     assert 0.0 <= saved["open_loop"]["coverage"] <= 1.0
+    # the open loop ran the plan rehearsed in F_q (box_push plans with it by default)
+    rehearsal = saved["rehearsal"]
+    assert len(rehearsal["t"]) == len(rehearsal["pusher"]) == len(rehearsal["object"])
+    assert rehearsal["seconds"] <= saved["plan_seconds"]
     assert (tmp_path / "playback.html").exists()

@@ -31,10 +31,11 @@ from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
 from robotplan.execution.closed_loop import LoopSettings, execute_closed_loop, loop_settings_for
 from robotplan.execution.execute import Execution, plan_substeps, run_open_loop
 from robotplan.execution.perturb import Perturbation
+from robotplan.execution.rehearsal import Rehearsal, rehearsable, rehearse
 from robotplan.execution.scene_world import actuation
 from robotplan.execution.sim import PHYSICS
 from robotplan.functionals.clearance import OBSTACLE_MARGIN
-from robotplan.models.loading import dynamics_kind
+from robotplan.models.loading import dynamics_kind, load_dynamics
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import Solution
 from robotplan.program.solve import warm_guess
@@ -76,6 +77,9 @@ class Plan:
     space: SkeletonSpace | None = None
     # how it was planned (model folder, solver, workers, max_pushes): re-plans plan alike
     options: dict = field(default_factory=dict)
+    # the best plan rehearsed in F_q (:mod:`robotplan.execution.rehearsal`): what the open
+    # loop runs; None when not rehearsed
+    rehearsal: Rehearsal | None = None
 
     def summary(self) -> dict:
         """The plan's entries of ``result.json``."""
@@ -92,6 +96,7 @@ class Plan:
                 "cost": float(best.cost) if best else None,
                 "dynamics_rms_mm": round(best.dynamics_rms_mm, 3) if best else None,
                 "obstacle_clearance": metres(best.clearance) if best else None,
+                "rehearsal": self.rehearsal.summary() if self.rehearsal else None,
                 **({"program_settings": dict(self.options["program"])}
                    if self.options.get("program") else {})}
 
@@ -101,7 +106,8 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
          progress: bool = True, exhaustive: bool = False, quiet: bool = False,
          time_budget: float | None = None, warm_start: Plan | None = None,
          fallback: bool = True, program: Mapping[str, object] | None = None,
-         replan: bool = False, last_resort: float | None = None) -> Plan:
+         replan: bool = False, last_resort: float | None = None,
+         rehearse_plan: bool = False) -> Plan:
     """Search the scene's skeletons and solve their programs; no simulator runs.
 
     ``model``: the learned dynamics' folder (default: the shipped model of the scene's class,
@@ -117,6 +123,9 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     runs the ``replan`` overlay's smaller budget first. ``last_resort``: the violation within
     which the caller adopts an unsolved plan that meets the constraints; a region goal's
     fresh search that finds one in its first, fitted pushes stops there.
+    ``rehearse_plan``: with F_q, one free pusher, one object and no obstacles, rehearse the
+    best plan in F_q for the open loop (:mod:`robotplan.execution.rehearsal`; never in a
+    re-plan); its seconds count as planning.
     """
     if isinstance(scene.goal, HangGoal):  # kinematic: a pose of the mug, no skeleton
         return plan_hang(scene, model)
@@ -145,10 +154,20 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
         print(f"learned dynamics: {kind} from {model_dir}{named}")
         print(candidate_table(result, kind))
     best = result.best
-    return Plan(scene, obj, best, result.solved, result.candidates, result.seconds,
-                spaces.get(id(best)) if best is not None else None,
-                {"model": model_dir, "solver": solver, "workers": workers,
-                 "max_pushes": max_pushes, "program": dict(program or {})})
+    planned = Plan(scene, obj, best, result.solved, result.candidates, result.seconds,
+                   spaces.get(id(best)) if best is not None else None,
+                   {"model": model_dir, "solver": solver, "workers": workers,
+                    "max_pushes": max_pushes, "program": dict(program or {})})
+    if (rehearse_plan and not replan and best is not None and dynamics_kind(model_dir) == "rigid"
+            and rehearsable(scene)):
+        planned.rehearsal = rehearse(scene, obj, best, _replanner(planned),
+                                     load_dynamics(model_dir))
+        planned.seconds += planned.rehearsal.seconds
+        if not quiet:
+            r = planned.rehearsal
+            print(f"rehearsed in F_q: coverage {r.coverage:.3f} after {len(r.replans)} "
+                  f"re-plans ({r.seconds:.1f} s)")
+    return planned
 
 
 def execute(planned: Plan, scene: Scene | None = None, *, mode: str = "closed_loop",
@@ -159,7 +178,8 @@ def execute(planned: Plan, scene: Scene | None = None, *, mode: str = "closed_lo
     ``mode="closed_loop"`` observes the scene after every planned step and calls
     :func:`plan` again from the observed state when it departs from the plan
     (:mod:`robotplan.execution.closed_loop`); ``"open_loop"`` runs the plan as it is, the
-    paper's protocol (§7.2.3). Reaches run slower than the data's pushes (see
+    paper's protocol (§7.2.3): a rehearsed plan's pusher states (``planned.rehearsal``),
+    else the best plan's. Reaches run slower than the data's pushes (see
     ``plan_substeps``). ``perturb``: friction, mass and observation noise of a perturbed
     world. ``loop``: the closed loop's settings (default: those of the plan's scene class,
     ``skeletons/loop.yaml``). ``quiet=False`` prints a line per re-plan. A hang plan is
@@ -174,6 +194,10 @@ def execute(planned: Plan, scene: Scene | None = None, *, mode: str = "closed_lo
     scene = scene or planned.scene
     best, obj = planned.best, planned.obj
     physics = perturb.physics() if perturb is not None else PHYSICS
+    if mode == "open_loop" and planned.rehearsal is not None:
+        r = planned.rehearsal
+        return run_open_loop(scene, obj, {scene.pushers[0].name: r.pusher}, r.substeps,
+                             physics)
     if mode == "open_loop":
         return run_open_loop(scene, obj, actuation(scene, best.q_pusher, best.q_joints),
                              plan_substeps(scene, best, physics), physics)
@@ -213,8 +237,16 @@ def _plan_layer(scene: Scene, obj: str, sol: Solution, start: float, name: str,
 
 def playback_layers(planned: Plan, executed: Execution) -> list[Layer]:
     """The executed motion and every plan it followed (the first, then each re-plan), each
-    plan shown from when it was made until the next one."""
+    plan shown from when it was made until the next one; an open loop of a rehearsed plan
+    shows the rehearsal (F_q's object and the pusher) as its plan."""
     scene, obj, ex = planned.scene, planned.obj, executed
+    r = planned.rehearsal
+    if ex.mode == "open_loop" and r is not None:
+        rehearsed = Layer("rehearsal", r.times(), {obj: r.object_poses,
+                                                   scene.pushers[0].name: r.pusher})
+        return [rehearsed, Layer("executed", ex.times, {obj: ex.object_poses,
+                                                        scene.pushers[0].name:
+                                                        ex.pusher_positions}, ghost=False)]
     plans = ex.plans or [(0, planned.best)]
     starts = [float(ex.times[step]) for step, _ in plans]
     layers = []
@@ -240,17 +272,19 @@ def write_playback(planned: Plan, executed: Execution, path: Path) -> None:
 def solve(scene: Scene, out: Path, model: str | Path | None = None, *, quiet: bool = False,
           mode: str = "closed_loop", perturb: Perturbation | None = None,
           compare_open_loop: bool = False, loop: Mapping[str, object] | None = None,
-          **options: object) -> dict:
+          rehearse_plan: bool = True, **options: object) -> dict:
     """Plan, execute the best plan (``mode``, in a world perturbed by ``perturb``), write
     ``out/playback.html`` and ``out/result.json`` (whole or not at all); the result
     document. ``compare_open_loop`` also runs the same plan open loop and records its
     outcome under ``open_loop``. ``loop``: closed-loop settings that replace those of the
     scene's class (:class:`~robotplan.execution.closed_loop.LoopSettings` fields, recorded
-    in the result). ``options``: those of :func:`plan`."""
+    in the result). ``rehearse_plan``: rehearse the plan in F_q (:func:`plan`) when an
+    open loop runs. ``options``: those of :func:`plan`."""
     out = Path(out)
     if isinstance(scene.goal, HangGoal):
         return solve_hang(scene, out, model, mode=mode)
-    planned = plan(scene, model, quiet=quiet, **options)
+    rehearse_plan = rehearse_plan and (mode == "open_loop" or compare_open_loop)
+    planned = plan(scene, model, quiet=quiet, rehearse_plan=rehearse_plan, **options)
     doc: dict = {"scene": scene.name, **planned.summary()}
     if planned.best is not None:
         best = planned.best

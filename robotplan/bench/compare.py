@@ -77,7 +77,7 @@ def run_bench_compare(kinds: list[str], scenes: int, seed: int, out: Path, worke
                       shapes: tuple[str, ...] = ("box", "lshape"), exhaustive: bool = False,
                       time_budget: float | None = None, perturb: int | None = None,
                       loop: dict | None = None, ray: str | None = None,
-                      program: dict | None = None) -> dict:
+                      program: dict | None = None, rehearse: bool = True) -> dict:
     """One push benchmark per dynamics kind (``flow``, ``rigid``, ``direct``) on the same
     scenes, in ``out/<kind>/``; returns (and writes) the comparison. ``loop``: closed-loop
     settings in place of each scene class's, ``program`` its program settings."""
@@ -86,7 +86,8 @@ def run_bench_compare(kinds: list[str], scenes: int, seed: int, out: Path, worke
     for kind in kinds:
         print(f"== {kind}", flush=True)
         run_bench_push(scenes, seed, out / kind, learned_dir(DYNAMICS_FOLDERS[kind]), workers,
-                       shapes, exhaustive, time_budget, perturb, loop, ray, program)
+                       shapes, exhaustive, time_budget, perturb, loop, ray, program,
+                       rehearse=rehearse)
         lines = (out / kind / "rows.jsonl").read_text().splitlines()
         rows_by_kind[kind] = [row for row in map(json.loads, filter(str.strip, lines))
                               if row["scene"] in names]

@@ -165,11 +165,12 @@ def _box_plot(rows: list[dict], path: Path, model: str) -> None:
 def bench_scene(job: tuple) -> dict:
     """Plan and execute one benchmark scene (a unit of :func:`run_bench_push`): its row.
     ``job = (i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb,
-    loop, program)``; the scene file and the solution are written under ``out``."""
+    loop, program, rehearse)``; the scene file and the solution are written under ``out``."""
     from robotplan.api import solve
     from robotplan.execution.perturb import Perturbation
 
-    i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb, loop, program = job
+    (i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb, loop, program,
+     rehearse) = job
     doc = draw_scene(i, seed, kind)
     name = doc["name"]
     scene_path = out / "scenes" / f"{name}.yaml"
@@ -181,7 +182,7 @@ def bench_scene(job: tuple) -> dict:
     result = solve(scene, out / "solutions" / name, model_dir, workers=workers,
                    progress=False, exhaustive=exhaustive, quiet=True,
                    time_budget=time_budget, perturb=world, compare_open_loop=True,
-                   loop=loop, program=program)
+                   loop=loop, program=program, rehearse_plan=rehearse)
     ex = result.get("execution") or {}
     open_loop = result.get("open_loop") or {}
     return {"scene": name, "shape": kind, "family": family_of(i, kind),
@@ -206,12 +207,13 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
                    shapes: tuple[str, ...] = ("box", "lshape"), exhaustive: bool = False,
                    time_budget: float | None = None, perturb: int | None = None,
                    loop: dict | None = None, ray: str | None = None,
-                   program: dict | None = None) -> dict:
+                   program: dict | None = None, rehearse: bool = True) -> dict:
     """Solve and execute ``scenes`` scenes per shape type; returns the summary.
     ``model_dir``: the learned dynamics' folder, None for each scene's default.
     ``perturb``: the seed of the perturbed worlds (one per scene), None for the nominal.
     ``loop``: closed-loop settings in place of each scene class's (``LoopSettings`` fields),
     ``program`` its program settings (``ProgramSettings`` fields, e.g. the ablations).
+    ``rehearse``: rehearse F_q's plans before the open loop (``robotplan.api.plan``).
     ``workers``: processes of each scene's skeleton search. The scenes run one after the
     other here, or as Ray tasks of ``workers`` CPUs each (``ray``:
     :func:`robotplan.base.units.run_units`; the solutions are written under ``out``, so a
@@ -228,7 +230,7 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
                 done[row["scene"]] = row
     todo = [(i, kind) for i in range(scenes) for kind in shapes]
     jobs = [(i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb, loop,
-             program)
+             program, rehearse)
             for i, kind in todo if draw_scene(i, seed, kind)["name"] not in done]
     report = UnitsReport()
     for row in run_units(bench_scene, jobs, 1, ray, report, cpus_per_unit=workers):
@@ -246,6 +248,7 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
                     "exhaustive": exhaustive,
                     "time_budget_s": time_budget, "perturb": perturb,
                     "loop_settings": loop or {}, "program_settings": program or {},
+                    "rehearse": rehearse,
                     "units": report.as_dict()})
     buf = io.StringIO()
     flat = [{**{k: v for k, v in r.items() if k not in ("timings", "replans", "footprint")},

@@ -22,6 +22,7 @@ from robotplan.cli.common import (
     add_loop_option,
     add_program_option,
     add_ray_option,
+    add_rehearse_option,
 )
 from robotplan.cli.hang_commands import cmd_bench_hang, cmd_eval_hang, cmd_train_hang
 from robotplan.cli.hang_data_parsers import add_hang_data_parsers
@@ -102,6 +103,7 @@ def _parser() -> argparse.ArgumentParser:
                     help="execute in a perturbed world (friction and mass ±20 %%, observation "
                     "noise 1 mm / 0.5°), drawn per scene from SEED (default 0)")
     add_loop_option(bp)
+    add_rehearse_option(bp)
     add_program_option(bp)
     bp.set_defaults(run=cmd_bench_push)
     bh = bsub.add_parser("hang", help="find hanging poses on random mug-and-hook scenes and "

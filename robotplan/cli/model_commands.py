@@ -184,7 +184,8 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
             (out / name).unlink(missing_ok=True)
     summary = run_bench_push(args.scenes, args.seed, out, args.model, args.workers,
                              tuple(args.shapes.split(",")), args.exhaustive, args.time_budget,
-                             args.perturb, args.loop, args.ray, args.program)
+                             args.perturb, args.loop, args.ray, args.program,
+                             rehearse=not args.no_rehearse)
     if args.json:
         print(json.dumps(summary))
     else:
@@ -224,7 +225,7 @@ def _bench_compare(args: argparse.Namespace, kinds: list[str], out: Path) -> int
     result = run_bench_compare(kinds, args.scenes, args.seed, out, args.workers,
                                tuple(args.shapes.split(",")), args.exhaustive,
                                args.time_budget, args.perturb, args.loop, args.ray,
-                               args.program)
+                               args.program, rehearse=not args.no_rehearse)
     if args.json:
         print(json.dumps(result))
         return 0

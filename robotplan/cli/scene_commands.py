@@ -84,7 +84,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
                     skeleton=args.skeleton, max_pushes=args.max_pushes,
                     exhaustive=args.exhaustive, time_budget=args.time_budget,
                     mode="open_loop" if args.open_loop else "closed_loop",
-                    perturb=perturbation(args.perturb), loop=loop, program=program)
+                    perturb=perturbation(args.perturb), loop=loop, program=program,
+                    rehearse_plan=not args.no_rehearse)
     except UnsupportedScene as err:
         print(f"error: {args.scene}: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -154,16 +154,20 @@ class _Loop:
 def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner,
                         settings: LoopSettings | None = None, physics: Physics = PHYSICS,
                         observe: Callable[[Observation], Observation] | None = None,
-                        report: Callable[[str], None] | None = None) -> Execution:
+                        report: Callable[[str], None] | None = None,
+                        world_of: Callable[[Scene, str, Physics], SceneWorld] = SceneWorld
+                        ) -> Execution:
     """Execute ``sol`` in ``scene`` closing the loop through ``replan`` (see the module
     docstring). ``observe`` turns the true state into the perceived one (default: exact);
     ``report`` gets a line per re-plan. ``settings``: default those of the scene's
-    classes (:func:`loop_settings_for`)."""
+    classes (:func:`loop_settings_for`). ``world_of(scene, obj, physics)``: the world it
+    runs in (default pybullet's; :class:`~robotplan.execution.imagined_world.ImaginedWorld`
+    to rehearse the plan in the learned model)."""
     settings = settings or loop_settings_for(scene)
     observe = observe or (lambda seen: seen)
     loop = _Loop(scene, obj, sol, physics)
     stopped = None
-    with SceneWorld(scene, obj, physics) as world:
+    with world_of(scene, obj, physics) as world:
         truth = [world.observe()]
         seen = observe(truth[-1])
         command = {k: v[0] for k, v in loop.drive.items()}

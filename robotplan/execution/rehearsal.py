@@ -1,0 +1,77 @@
+"""Rehearsal: a plan run closed loop in the learned model F_q before it runs open loop.
+
+A plan's object trajectory meets F_q only as well as its learned stage could make it (the
+H_q row is a cost): the kinematic plans the search mostly keeps move an L-shape 10–40 mm
+per step away from where F_q sends it, and open loop the object follows the pusher, not the
+plan. Rehearsing it runs the plan in :class:`~robotplan.execution.imagined_world.ImaginedWorld`
+with the closed loop's re-plans (:func:`~robotplan.execution.closed_loop.execute_closed_loop`):
+where F_q's object leaves the plan, the rest is planned again from where F_q put it. The
+pusher's states of that run are the open-loop plan: they take F_q's object to the goal.
+Nothing of the simulator is used; the open loop then runs them in pybullet unchanged
+(measured: docs/experiments.md#rehearsal).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from robotplan.execution.closed_loop import Replanner, execute_closed_loop
+from robotplan.execution.imagined_world import ImaginedWorld
+from robotplan.execution.loop_settings import LoopSettings
+from robotplan.execution.sim import PHYSICS, Physics
+from robotplan.models.rigid import RigidMotion
+from robotplan.program.solution import Solution
+from robotplan.scene import Scene
+
+__all__ = ["Rehearsal", "rehearsable", "rehearse"]
+
+
+@dataclass
+class Rehearsal:
+    """The pusher's states ``pusher (M+1, 2)`` the open loop follows, step t over
+    ``substeps[t−1]`` simulation steps, and the object's poses ``object_poses (M+1, 3)``
+    (X_WB) F_q gives them; the goal coverage F_q's object ends at, the re-plans and the
+    plans followed (``(step, Solution)``), and the seconds it took."""
+
+    pusher: np.ndarray
+    object_poses: np.ndarray
+    substeps: list[int]
+    coverage: float
+    replans: list = field(default_factory=list)
+    plans: list = field(default_factory=list)
+    seconds: float = 0.0
+
+    def times(self, physics: Physics = PHYSICS) -> np.ndarray:
+        """``(M+1,)`` s of the states."""
+        return np.concatenate(([0.0], np.cumsum(self.substeps))) * physics.timestep
+
+    def summary(self, physics: Physics = PHYSICS) -> dict:
+        """The rehearsal's entry of ``result.json``."""
+        return {"model_coverage": self.coverage, "seconds": round(self.seconds, 2),
+                "replans": len(self.replans),
+                "adopted": sum(bool(r.adopted) for r in self.replans),
+                "t": [round(float(v), 6) for v in self.times(physics)],
+                "pusher": self.pusher.tolist(), "object": self.object_poses.tolist()}
+
+
+def rehearsable(scene: Scene) -> bool:
+    """Whether F_q can stand in for the simulator: one free pusher, one object, no
+    obstacles (F_q does not see them), a region or pose goal."""
+    return (not scene.robots and len(scene.pushers) == 1 and len(scene.objects) == 1
+            and not scene.obstacles and scene.goal.type in ("region", "pose"))
+
+
+def rehearse(scene: Scene, obj: str, sol: Solution, replan: Replanner, model: RigidMotion,
+             settings: LoopSettings | None = None, physics: Physics = PHYSICS) -> Rehearsal:
+    """Run ``sol`` closed loop in F_q (``model``), re-planning through ``replan`` as the
+    closed loop does (``settings``: the scene class's by default); see the module
+    docstring."""
+    t0 = time.perf_counter()
+    ex = execute_closed_loop(scene, obj, sol, replan, settings, physics,
+                             world_of=lambda s, o, p: ImaginedWorld(s, o, model, p))
+    substeps = [int(n) for n in np.rint(np.diff(ex.times) / physics.timestep)]
+    return Rehearsal(ex.pusher_positions, ex.object_poses, substeps, float(ex.coverage),
+                     ex.replans, ex.plans, time.perf_counter() - t0)
