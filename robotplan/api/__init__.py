@@ -25,6 +25,7 @@ from robotplan.api.hang import (
     solve_hang,
     write_hang_playback_page,
 )
+from robotplan.api.playback import playback_layers
 from robotplan.api.results import execution_summary
 from robotplan.base.files import write_atomically
 from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
@@ -51,7 +52,6 @@ from robotplan.search.scene_search import (
     metres,
     search_scene,
 )
-from robotplan.viz.viewer import Layer
 from robotplan.viz.viewer import write_playback as write_playback_html
 
 __all__ = ["Execution", "Plan", "UnsupportedScene", "execute", "plan", "solve",
@@ -222,44 +222,6 @@ def _replanner(planned: Plan):
                     last_resort=last_resort)
 
     return replan
-
-
-def _plan_layer(scene: Scene, obj: str, sol: Solution, start: float, name: str,
-                shown: tuple[float, float | None] | None) -> Layer:
-    """A plan as a ghosted playback layer from ``start`` s on."""
-    times = start + np.concatenate(([0.0], np.cumsum(plan_substeps(scene, sol)))) * (
-        PHYSICS.timestep)
-    tracks = {obj: sol.q_obj, **sol.q_others}
-    if scene.pushers and not scene.robots:
-        tracks[scene.pushers[0].name] = sol.q_pusher
-    return Layer(name, times, tracks, sol.q_joints, ghost=True, shown=shown)
-
-
-def playback_layers(planned: Plan, executed: Execution) -> list[Layer]:
-    """The executed motion and every plan it followed (the first, then each re-plan), each
-    plan shown from when it was made until the next one; an open loop of a rehearsed plan
-    shows the rehearsal (F_q's object and the pusher) as its plan."""
-    scene, obj, ex = planned.scene, planned.obj, executed
-    r = planned.rehearsal
-    if ex.mode == "open_loop" and r is not None:
-        rehearsed = Layer("rehearsal", r.times(), {obj: r.object_poses,
-                                                   scene.pushers[0].name: r.pusher})
-        return [rehearsed, Layer("executed", ex.times, {obj: ex.object_poses,
-                                                        scene.pushers[0].name:
-                                                        ex.pusher_positions}, ghost=False)]
-    plans = ex.plans or [(0, planned.best)]
-    starts = [float(ex.times[step]) for step, _ in plans]
-    layers = []
-    for k, (_step, sol) in enumerate(plans):
-        until = starts[k + 1] if k + 1 < len(plans) else None
-        shown = (starts[k], until) if len(plans) > 1 else None
-        layers.append(_plan_layer(scene, obj, sol, starts[k], "plan" if k == 0
-                                  else f"replan_{k}", shown))
-    tracks = {obj: ex.object_poses, **{k: v for k, v in ex.others.items()}}
-    if scene.pushers and not scene.robots:
-        tracks[scene.pushers[0].name] = ex.pusher_positions
-    layers.append(Layer("executed", ex.times, tracks, ex.joints, ghost=False))
-    return layers
 
 
 def write_playback(planned: Plan, executed: Execution, path: Path) -> None:

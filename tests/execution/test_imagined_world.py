@@ -1,6 +1,7 @@
 """The world that F_q moves: its step against pybullet's on a real push, no motion without
 contact, and its rigid step in float64."""
 
+import itertools
 import math
 
 import numpy as np
@@ -25,18 +26,19 @@ def _box_scene(pusher_xy):
     return scene.with_state({"box": (0.0, 0.0, 0.0), "pusher": (*pusher_xy, 0.0)})
 
 
+def _pivot(pose, centre):
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    return pose[:2] + np.array([[c, -s], [s, c]]) @ centre
+
+
 def test_a_rigid_step_turns_about_the_pivot_then_shifts_it():
     rng = np.random.default_rng(0)
     for _ in range(20):
         pose, centre = rng.normal(size=3), rng.normal(size=2) * 0.05
         delta = rng.normal(size=3) * [0.01, 0.01, 0.1]
         after = rigid_step(pose, delta, centre)
-
-        def pivot(p):
-            c, s = math.cos(p[2]), math.sin(p[2])
-            return p[:2] + np.array([[c, -s], [s, c]]) @ centre
-
-        assert np.abs(pivot(after) - pivot(pose) - delta[:2]).max() < 1e-15
+        shift = _pivot(after, centre) - _pivot(pose, centre)
+        assert np.abs(shift - delta[:2]).max() < 1e-15
         assert after[2] == pytest.approx(pose[2] + delta[2], abs=1e-15)
 
 
@@ -62,7 +64,7 @@ def test_a_push_moves_the_box_as_pybullet_does(fq):
     ends = []
     for world_of in (SceneWorld, lambda s, o: ImaginedWorld(s, o, fq)):
         with world_of(scene, "box") as world:
-            for a, b in zip(path[:-1], path[1:], strict=True):
+            for a, b in itertools.pairwise(path):
                 world.run_step({"pusher": a}, {"pusher": b}, 20)
             ends.append(world.observe().poses["box"])
     simulated, imagined = ends

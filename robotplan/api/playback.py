@@ -1,0 +1,57 @@
+"""The layers of a push plan's playback page: the executed motion and the plans it
+followed, ghosted."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from robotplan.execution.execute import Execution, plan_substeps
+from robotplan.execution.sim import PHYSICS
+from robotplan.program.solution import Solution
+from robotplan.scene import Scene
+from robotplan.viz.viewer import Layer
+
+if TYPE_CHECKING:
+    from robotplan.api import Plan
+
+__all__ = ["playback_layers"]
+
+
+def _plan_layer(scene: Scene, obj: str, sol: Solution, start: float, name: str,
+                shown: tuple[float, float | None] | None) -> Layer:
+    """A plan as a ghosted playback layer from ``start`` s on."""
+    times = start + np.concatenate(([0.0], np.cumsum(plan_substeps(scene, sol)))) * (
+        PHYSICS.timestep)
+    tracks = {obj: sol.q_obj, **sol.q_others}
+    if scene.pushers and not scene.robots:
+        tracks[scene.pushers[0].name] = sol.q_pusher
+    return Layer(name, times, tracks, sol.q_joints, ghost=True, shown=shown)
+
+
+def playback_layers(planned: Plan, executed: Execution) -> list[Layer]:
+    """The executed motion and every plan it followed (the first, then each re-plan), each
+    plan shown from when it was made until the next one; an open loop of a rehearsed plan
+    shows the rehearsal (F_q's object and the pusher) as its plan."""
+    scene, obj, ex = planned.scene, planned.obj, executed
+    r = planned.rehearsal
+    if ex.mode == "open_loop" and r is not None:
+        rehearsed = Layer("rehearsal", r.times(), {obj: r.object_poses,
+                                                   scene.pushers[0].name: r.pusher})
+        return [rehearsed, Layer("executed", ex.times, {obj: ex.object_poses,
+                                                        scene.pushers[0].name:
+                                                        ex.pusher_positions}, ghost=False)]
+    plans = ex.plans or [(0, planned.best)]
+    starts = [float(ex.times[step]) for step, _ in plans]
+    layers = []
+    for k, (_step, sol) in enumerate(plans):
+        until = starts[k + 1] if k + 1 < len(plans) else None
+        shown = (starts[k], until) if len(plans) > 1 else None
+        layers.append(_plan_layer(scene, obj, sol, starts[k], "plan" if k == 0
+                                  else f"replan_{k}", shown))
+    tracks = {obj: ex.object_poses, **{k: v for k, v in ex.others.items()}}
+    if scene.pushers and not scene.robots:
+        tracks[scene.pushers[0].name] = ex.pusher_positions
+    layers.append(Layer("executed", ex.times, tracks, ex.joints, ghost=False))
+    return layers
