@@ -123,9 +123,10 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     runs the ``replan`` overlay's smaller budget first. ``last_resort``: the violation within
     which the caller adopts an unsolved plan that meets the constraints; a region goal's
     fresh search that finds one in its first, fitted pushes stops there.
-    ``rehearse_plan``: with F_q, one free pusher, one object and no obstacles, rehearse the
-    best plan in F_q for the open loop (:mod:`robotplan.execution.rehearsal`; never in a
-    re-plan); its seconds count as planning.
+    ``rehearse_plan``: with F_q (and its learned stage), one free pusher, one object and no
+    obstacles, rehearse the best plan in F_q for the open loop
+    (:mod:`robotplan.execution.rehearsal`; never in a re-plan); its seconds count as
+    planning.
     """
     if isinstance(scene.goal, HangGoal):  # kinematic: a pose of the mug, no skeleton
         return plan_hang(scene, model)
@@ -158,8 +159,9 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
                    spaces.get(id(best)) if best is not None else None,
                    {"model": model_dir, "solver": solver, "workers": workers,
                     "max_pushes": max_pushes, "program": dict(program or {})})
-    if (rehearse_plan and not replan and best is not None and dynamics_kind(model_dir) == "rigid"
-            and rehearsable(scene)):
+    learned = (program or {}).get("learned_stage", True)  # no F_q behind an analytic plan
+    if (rehearse_plan and learned and not replan and best is not None
+            and dynamics_kind(model_dir) == "rigid" and rehearsable(scene)):
         planned.rehearsal = rehearse(scene, obj, best, _replanner(planned),
                                      load_dynamics(model_dir))
         planned.seconds += planned.rehearsal.seconds

@@ -210,27 +210,32 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
         f"robotplan eval push --model learned/push_flow --data DATA --pose-fit {sizes.pose_fit}")
 
     def bench(name: str, scenes: int, shapes: str, program: dict | None = None,
-              loop: dict | None = None) -> dict:
+              loop: dict | None = None, rehearse: bool = True) -> dict:
+        """``rehearse``: robotplan's open loop (the plan rehearsed in F_q), or the paper's
+        (the plan as searched), for the baselines and ablations of the paper's protocol."""
         params = {"scenes": scenes, "seed": 0, "shapes": shapes,
                   "time_budget": sizes.time_budget, "workers": workers,
-                  "program": program or {}, **({"loop": loop} if loop else {})}
+                  "program": program or {}, "rehearse": rehearse,
+                  **({"loop": loop} if loop else {})}
         flags = "".join(f" --{kind} {k}={str(v).lower()}"
                         for kind, settings in (("program", program), ("loop", loop))
                         for k, v in (settings or {}).items())
+        flags += "" if rehearse else " --no-rehearse"
         return steps.run(name, params, lambda f: run_bench_push(
             scenes, 0, f / "bench", None, workers, tuple(shapes.split(",")),
-            time_budget=sizes.time_budget, ray=ray, program=program, loop=loop),
+            time_budget=sizes.time_budget, ray=ray, program=program, loop=loop,
+            rehearse=rehearse),
             f"robotplan bench push --scenes {scenes} --seed 0 --shapes {shapes} "
             f"--time-budget {sizes.time_budget:g} --workers {workers}{flags}")
 
     results["fig3"] = bench("bench_push", sizes.push_scenes, "box,lshape")
     results["fig8"] = bench("bench_push_ood", sizes.ood_push_scenes, "ood")
     results["fig6"] = bench("bench_push_analytic", sizes.push_scenes, "box,lshape",
-                            ANALYTIC)
+                            ANALYTIC, rehearse=False)
     replans = ({"max_replans": sizes.ablation_replans}
                if sizes.ablation_replans is not None else None)
     results["fig11"] = {name: bench(f"ablation_{name}", sizes.ablation_scenes, "box", program,
-                                    replans)
+                                    replans, rehearse=False)
                         for name, program in ABLATIONS.items()}
     methods = ",".join(sizes.hang_methods)
     results["tab3"] = steps.run(
