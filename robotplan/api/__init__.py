@@ -28,7 +28,7 @@ from robotplan.api.hang import (
 from robotplan.api.playback import playback_layers
 from robotplan.api.results import execution_summary
 from robotplan.base.files import write_atomically
-from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
+from robotplan.base.resources import DYNAMICS_FOLDERS, REHEARSAL_FOLDER, learned_dir
 from robotplan.execution.closed_loop import LoopSettings, execute_closed_loop, loop_settings_for
 from robotplan.execution.execute import Execution, plan_substeps, run_open_loop
 from robotplan.execution.perturb import Perturbation
@@ -107,7 +107,7 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
          time_budget: float | None = None, warm_start: Plan | None = None,
          fallback: bool = True, program: Mapping[str, object] | None = None,
          replan: bool = False, last_resort: float | None = None,
-         rehearse_plan: bool = False) -> Plan:
+         rehearse_plan: bool = False, rehearsal_model: str | Path | None = None) -> Plan:
     """Search the scene's skeletons and solve their programs; no simulator runs.
 
     ``model``: the learned dynamics' folder (default: the shipped model of the scene's class,
@@ -126,12 +126,16 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     ``rehearse_plan``: with F_q (and its learned stage), one free pusher, one object and no
     obstacles, rehearse the best plan in F_q for the open loop
     (:mod:`robotplan.execution.rehearsal`; never in a re-plan); its seconds count as
-    planning.
+    planning. ``rehearsal_model``: the F_q folder the rehearsal's object moves by (default
+    the shipped object-frame F_q; the re-plans plan with ``model``).
     """
     if isinstance(scene.goal, HangGoal):  # kinematic: a pose of the mug, no skeleton
         return plan_hang(scene, model)
     model_dir = (Path(model) if model is not None
                  else learned_dir(DYNAMICS_FOLDERS[default_dynamics(scene)]))
+    world = Path(rehearsal_model or learned_dir(REHEARSAL_FOLDER))
+    if rehearse_plan and dynamics_kind(world) != "rigid":
+        raise ValueError(f"rehearsal_model {world}: not an F_q (spec kind 'rigid')")
     guesses = None
     if warm_start is not None and warm_start.best is not None and skeleton is None:
         skeleton = warm_start.best.skeleton
@@ -163,7 +167,7 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     if (rehearse_plan and learned and not replan and best is not None
             and dynamics_kind(model_dir) == "rigid" and rehearsable(scene)):
         planned.rehearsal = rehearse(scene, obj, best, _replanner(planned),
-                                     load_dynamics(model_dir))
+                                     load_dynamics(world))
         planned.seconds += planned.rehearsal.seconds
         if not quiet:
             r = planned.rehearsal

@@ -88,4 +88,6 @@ def test_plan_rehearses_only_when_asked_and_the_open_loop_runs_the_rehearsal(box
     assert (tmp_path / "playback.html").stat().st_size > 10_000
     flow = robotplan.plan(scene, learned_dir("push_flow"), skeleton="push@0", workers=1,
                           progress=False, quiet=True, rehearse_plan=True)
-    assert flow.rehearsal is None  # F_flow has no rigid step to rehearse with
+    assert flow.rehearsal is None  # F_flow plans are not rehearsed
+    with pytest.raises(ValueError, match="not an F_q"):
+        robotplan.plan(scene, rehearse_plan=True, rehearsal_model=learned_dir("push_flow"))
