@@ -22,18 +22,21 @@ def arguments(description: str) -> argparse.Namespace:
     parser.add_argument("--fast", action="store_true",
                         help="plan one given skeleton instead of searching")
     parser.add_argument("--open-loop", action="store_true",
-                        help="execute the plan as it is (default: closed loop, re-planning "
-                        "from the observed scene)")
+                        help="execute without re-planning, the plan rehearsed in F_q first "
+                        "where it can be (default: closed loop, re-planning from the "
+                        "observed scene)")
     return parser.parse_args()
 
 
 def run(scene: robotplan.Scene, out: Path, fast: bool, fast_skeleton: str,
         label: str | None = None, open_loop: bool = False) -> float | None:
     """Plan (``fast``: ``fast_skeleton`` only), execute in pybullet (closed loop unless
-    ``open_loop``), write ``out/playback.html``; print one line and return the coverage
+    ``open_loop``: then the plan rehearsed in F_q first, as ``robotplan solve --open-loop``
+    does), write ``out/playback.html``; print one line and return the coverage
     (touch goals: None)."""
     planned = robotplan.plan(scene, skeleton=fast_skeleton if fast else None,
-                             workers=1 if fast else 2, progress=not fast, quiet=fast)
+                             workers=1 if fast else 2, progress=not fast, quiet=fast,
+                             rehearse_plan=open_loop)
     name = label or scene.name
     if planned.best is None:
         print(f"{name}: no plan")

@@ -55,6 +55,15 @@ def test_summary_quartiles():
     assert s["plan_seconds"]["all"]["median"] == pytest.approx(20.0)
 
 
+def test_a_closed_loop_is_timed_without_the_rehearsal_an_open_loop_with_it():
+    rows = [{"shape": "box", "coverage": 1.0, "plan_seconds": 12.0, "rehearsal_seconds": 5.0,
+             "execute_seconds": 3.0, "open_loop_seconds": 1.0}]
+    s = summarize(rows)
+    assert s["closed_loop_seconds"]["box"]["median"] == pytest.approx(10.0)
+    assert s["open_loop_seconds"]["box"]["median"] == pytest.approx(13.0)
+    assert s["rehearsal_seconds"]["box"]["median"] == pytest.approx(5.0)
+
+
 def test_summary_counts_the_re_plans_the_loop_went_on_with():
     replans = [{"solved": True, "adopted": True, "seconds": 1.0},
                {"solved": False, "adopted": True, "seconds": 2.0},
