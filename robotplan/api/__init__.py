@@ -28,11 +28,11 @@ from robotplan.api.hang import (
 from robotplan.api.playback import playback_layers
 from robotplan.api.results import execution_summary
 from robotplan.base.files import write_atomically
-from robotplan.base.resources import DYNAMICS_FOLDERS, REHEARSAL_FOLDER, learned_dir
+from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
 from robotplan.execution.closed_loop import LoopSettings, execute_closed_loop, loop_settings_for
 from robotplan.execution.execute import Execution, plan_substeps, run_open_loop
 from robotplan.execution.perturb import Perturbation
-from robotplan.execution.rehearsal import Rehearsal, rehearsable, rehearse
+from robotplan.execution.rehearsal import Rehearsal, rehearsable, rehearsal_world, rehearse
 from robotplan.execution.scene_world import actuation
 from robotplan.execution.sim import PHYSICS
 from robotplan.functionals.clearance import OBSTACLE_MARGIN
@@ -126,16 +126,16 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     ``rehearse_plan``: with F_q (and its learned stage), one free pusher, one object and no
     obstacles, rehearse the best plan in F_q for the open loop
     (:mod:`robotplan.execution.rehearsal`; never in a re-plan); its seconds count as
-    planning. ``rehearsal_model``: the F_q folder the rehearsal's object moves by (default
-    the shipped object-frame F_q; the re-plans plan with ``model``).
+    planning. ``rehearsal_model``: the F_q folder the rehearsal's object moves by (default:
+    ``REHEARSAL_FOLDERS`` by the object's footprint type, else the plan's own F_q; the
+    re-plans plan with ``model``).
     """
     if isinstance(scene.goal, HangGoal):  # kinematic: a pose of the mug, no skeleton
         return plan_hang(scene, model)
     model_dir = (Path(model) if model is not None
                  else learned_dir(DYNAMICS_FOLDERS[default_dynamics(scene)]))
-    world = Path(rehearsal_model or learned_dir(REHEARSAL_FOLDER))
-    if rehearse_plan and dynamics_kind(world) != "rigid":
-        raise ValueError(f"rehearsal_model {world}: not an F_q (spec kind 'rigid')")
+    if rehearse_plan and rehearsal_model is not None and dynamics_kind(rehearsal_model) != "rigid":
+        raise ValueError(f"rehearsal_model {rehearsal_model}: not an F_q (spec kind 'rigid')")
     guesses = None
     if warm_start is not None and warm_start.best is not None and skeleton is None:
         skeleton = warm_start.best.skeleton
@@ -166,8 +166,9 @@ def plan(scene: Scene, model: str | Path | None = None, *, solver: str = "snopt"
     learned = (program or {}).get("learned_stage", True)  # no F_q behind an analytic plan
     if (rehearse_plan and learned and not replan and best is not None
             and dynamics_kind(model_dir) == "rigid" and rehearsable(scene)):
+        world = rehearsal_world(scene, obj, model_dir, rehearsal_model)
         planned.rehearsal = rehearse(scene, obj, best, _replanner(planned),
-                                     load_dynamics(world))
+                                     load_dynamics(world), folder=str(world))
         planned.seconds += planned.rehearsal.seconds
         if not quiet:
             r = planned.rehearsal

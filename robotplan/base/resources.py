@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-__all__ = ["DYNAMICS_FOLDERS", "REHEARSAL_FOLDER", "data_root", "learned_dir",
+__all__ = ["DYNAMICS_FOLDERS", "REHEARSAL_FOLDERS", "data_root", "learned_dir",
            "robots_dir", "skeletons_dir", "tasks_dir"]
 
 _PACKAGE = Path(__file__).resolve().parents[1]
@@ -35,9 +35,11 @@ def skeletons_dir() -> Path:
 
 # the shipped model of each kind of learned dynamics (``--dynamics``), under learned/
 DYNAMICS_FOLDERS = {"flow": "push_flow", "rigid": "push_rigid", "direct": "push_direct"}
-# the F_q a plan is rehearsed in before the open loop: the object-frame one follows pybullet
-# closest over whole plans (measured: docs/experiments.md#rehearsal)
-REHEARSAL_FOLDER = "push_rigid_object"
+# the F_q a plan is rehearsed in before the open loop, by footprint type: the object-frame one
+# where it was trained (it follows pybullet closest over whole plans); any other footprint in
+# the plan's own F_q (the object-frame one errs 3x as much on footprints never trained on)
+# (measured: docs/experiments.md#rehearsal, docs/experiments.md#fq-object-frame)
+REHEARSAL_FOLDERS = {"box": "push_rigid_object", "lshape": "push_rigid_object"}
 
 
 def learned_dir(model: str = "push_flow") -> Path:

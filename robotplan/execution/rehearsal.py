@@ -15,9 +15,11 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
+from robotplan.base.resources import REHEARSAL_FOLDERS, learned_dir
 from robotplan.execution.closed_loop import Replanner, execute_closed_loop
 from robotplan.execution.imagined_world import ImaginedWorld
 from robotplan.execution.loop_settings import LoopSettings
@@ -26,7 +28,7 @@ from robotplan.models.rigid import RigidMotion
 from robotplan.program.solution import Solution
 from robotplan.scene import Scene
 
-__all__ = ["Rehearsal", "rehearsable", "rehearse"]
+__all__ = ["Rehearsal", "rehearsable", "rehearsal_world", "rehearse"]
 
 
 @dataclass
@@ -34,7 +36,7 @@ class Rehearsal:
     """The pusher's states ``pusher (M+1, 2)`` the open loop follows, step t over
     ``substeps[t−1]`` simulation steps, and the object's poses ``object_poses (M+1, 3)``
     (X_WB) F_q gives them; the goal coverage F_q's object ends at, the re-plans and the
-    plans followed (``(step, Solution)``), and the seconds it took."""
+    plans followed (``(step, Solution)``), the seconds it took and the F_q's folder."""
 
     pusher: np.ndarray
     object_poses: np.ndarray
@@ -43,6 +45,7 @@ class Rehearsal:
     replans: list = field(default_factory=list)
     plans: list = field(default_factory=list)
     seconds: float = 0.0
+    model: str = ""
 
     def times(self, physics: Physics = PHYSICS) -> np.ndarray:
         """``(M+1,)`` s of the states."""
@@ -50,7 +53,8 @@ class Rehearsal:
 
     def summary(self, physics: Physics = PHYSICS) -> dict:
         """The rehearsal's entry of ``result.json``."""
-        return {"model_coverage": self.coverage, "seconds": round(self.seconds, 2),
+        return {"model": self.model, "model_coverage": self.coverage,
+                "seconds": round(self.seconds, 2),
                 "replans": len(self.replans),
                 "adopted": sum(bool(r.adopted) for r in self.replans),
                 "t": [round(float(v), 6) for v in self.times(physics)],
@@ -64,14 +68,27 @@ def rehearsable(scene: Scene) -> bool:
             and not scene.obstacles and scene.goal.type in ("region", "pose"))
 
 
+def rehearsal_world(scene: Scene, obj: str, model_dir: str | Path,
+                    rehearsal_model: str | Path | None = None) -> Path:
+    """The F_q folder a plan of ``obj`` made with ``model_dir`` is rehearsed in: the one
+    given, else ``REHEARSAL_FOLDERS``' for the object's footprint type, else the plan's own."""
+    if rehearsal_model is not None:
+        return Path(rehearsal_model)
+    footprint = scene.bodies[obj].shape.type
+    if footprint in REHEARSAL_FOLDERS:
+        return learned_dir(REHEARSAL_FOLDERS[footprint])
+    return Path(model_dir)
+
+
 def rehearse(scene: Scene, obj: str, sol: Solution, replan: Replanner, model: RigidMotion,
-             settings: LoopSettings | None = None, physics: Physics = PHYSICS) -> Rehearsal:
-    """Run ``sol`` closed loop in F_q (``model``), re-planning through ``replan`` as the
-    closed loop does (``settings``: the scene class's by default); see the module
-    docstring."""
+             settings: LoopSettings | None = None, physics: Physics = PHYSICS,
+             folder: str = "") -> Rehearsal:
+    """Run ``sol`` closed loop in F_q (``model``, read from ``folder``), re-planning through
+    ``replan`` as the closed loop does (``settings``: the scene class's by default); see the
+    module docstring."""
     t0 = time.perf_counter()
     ex = execute_closed_loop(scene, obj, sol, replan, settings, physics,
                              world_of=lambda s, o, p: ImaginedWorld(s, o, model, p))
     substeps = [int(n) for n in np.rint(np.diff(ex.times) / physics.timestep)]
     return Rehearsal(ex.pusher_positions, ex.object_poses, substeps, float(ex.coverage),
-                     ex.replans, ex.plans, time.perf_counter() - t0)
+                     ex.replans, ex.plans, time.perf_counter() - t0, folder)

@@ -1,6 +1,8 @@
 """Rehearsal: a plan run closed loop in F_q, with the real planner re-planning, then its
 pusher's states open loop in real pybullet physics."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -8,10 +10,12 @@ import robotplan
 from robotplan import load_scene
 from robotplan.api import _replanner, playback_layers
 from robotplan.base.resources import learned_dir
+from robotplan.bench.push_scenes import draw_scene
 from robotplan.execution.execute import plan_substeps, run_open_loop
 from robotplan.execution.imagined_world import ImaginedWorld
-from robotplan.execution.rehearsal import rehearsable, rehearse
+from robotplan.execution.rehearsal import rehearsable, rehearsal_world, rehearse
 from robotplan.models.loading import load_dynamics
+from robotplan.scene.loader import parse_scene
 from tests.conftest import TASKS
 
 
@@ -37,6 +41,19 @@ def test_only_one_pusher_one_object_and_no_obstacles_are_rehearsed():
                           "two_arm_left_only")}
     assert kinds == {"box_push": True, "lshape_push": True, "three_objects": False,
                      "obstacle_push": False, "two_arm_left_only": False}
+
+
+def test_boxes_and_l_shapes_rehearse_in_the_object_frame_f_q_other_footprints_in_their_own():
+    own = learned_dir("push_rigid")
+    for name in ("box_push", "lshape_push"):
+        scene = load_scene(TASKS / f"{name}.yaml")
+        world = rehearsal_world(scene, scene.objects[0].name, own)
+        assert world.name == "push_rigid_object"
+    doc = draw_scene(0, 0, "ood")
+    unseen = parse_scene(doc, "ood.yaml")
+    assert unseen.objects[0].shape.type == "polygon"
+    assert rehearsal_world(unseen, unseen.objects[0].name, own) == own
+    assert rehearsal_world(unseen, unseen.objects[0].name, own, "elsewhere") == Path("elsewhere")
 
 
 def test_without_re_plans_a_rehearsal_is_the_plan_run_in_f_q(box_plan, fq):
@@ -78,6 +95,7 @@ def test_plan_rehearses_only_when_asked_and_the_open_loop_runs_the_rehearsal(box
     r = planned.rehearsal
     assert r is not None and planned.seconds >= r.seconds
     assert planned.summary()["rehearsal"]["model_coverage"] == r.coverage
+    assert Path(r.model).name == "push_rigid_object"  # a box: the object-frame F_q
     ex = robotplan.execute(planned, mode="open_loop")
     assert len(ex.pusher_positions) == len(r.pusher)
     assert np.abs(ex.pusher_positions[-1] - r.pusher[-1]).max() < 0.01
