@@ -28,7 +28,12 @@ from robotplan.models.rigid import RigidMotion
 from robotplan.program.solution import Solution
 from robotplan.scene import Scene
 
-__all__ = ["Rehearsal", "rehearsable", "rehearsal_world", "rehearse"]
+__all__ = ["REHEARSAL_BUDGET", "Rehearsal", "rehearsable", "rehearsal_world", "rehearse"]
+
+# s after which a rehearsal asks for no more re-plans and runs its current plan to the end:
+# the benchmark's longest rehearsals that helped took 88 and 118 s, an unseen U-shape's ran
+# 276 s to end no closer (measured: docs/experiments.md#rehearsal)
+REHEARSAL_BUDGET = 120.0
 
 
 @dataclass
@@ -82,12 +87,19 @@ def rehearsal_world(scene: Scene, obj: str, model_dir: str | Path,
 
 def rehearse(scene: Scene, obj: str, sol: Solution, replan: Replanner, model: RigidMotion,
              settings: LoopSettings | None = None, physics: Physics = PHYSICS,
-             folder: str = "") -> Rehearsal:
+             folder: str = "", budget: float = REHEARSAL_BUDGET) -> Rehearsal:
     """Run ``sol`` closed loop in F_q (``model``, read from ``folder``), re-planning through
-    ``replan`` as the closed loop does (``settings``: the scene class's by default); see the
-    module docstring."""
+    ``replan`` as the closed loop does (``settings``: the scene class's by default) for up
+    to ``budget`` seconds, then on with the plan in hand; see the module docstring."""
     t0 = time.perf_counter()
-    ex = execute_closed_loop(scene, obj, sol, replan, settings, physics,
+
+    def within_budget(observed: Scene, tail: Solution | None, fresh: bool,
+                      last_resort: float | None = None):
+        if time.perf_counter() - t0 > budget:
+            return None  # nothing planned: the loop goes on with its plan
+        return replan(observed, tail, fresh, last_resort)
+
+    ex = execute_closed_loop(scene, obj, sol, within_budget, settings, physics,
                              world_of=lambda s, o, p: ImaginedWorld(s, o, model, p))
     substeps = [int(n) for n in np.rint(np.diff(ex.times) / physics.timestep)]
     return Rehearsal(ex.pusher_positions, ex.object_poses, substeps, float(ex.coverage),

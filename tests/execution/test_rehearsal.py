@@ -72,6 +72,21 @@ def test_without_re_plans_a_rehearsal_is_the_plan_run_in_f_q(box_plan, fq):
     assert entry["replans"] == len(r.replans) and len(entry["pusher"]) == len(entry["t"])
 
 
+def test_past_its_budget_a_rehearsal_asks_for_no_re_plan(box_plan, fq):
+    x, y, yaw = box_plan.scene.bodies["box"].pose
+    moved = box_plan.scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+    asked = []
+
+    def replan(*args):
+        asked.append(args)
+        return _nothing_plans(*args)
+
+    r = rehearse(moved, "box", box_plan.best, replan, fq, budget=0.0)
+    assert not asked and r.replans and not any(rp.adopted for rp in r.replans)
+    assert np.array_equal(r.pusher, box_plan.best.q_pusher[:, :2])
+    assert rehearse(moved, "box", box_plan.best, replan, fq).replans and asked
+
+
 def test_a_rehearsal_re_plans_where_f_q_leaves_the_plan_and_its_open_loop_ends_in_the_goal(
         box_plan, fq):
     """The box sits 6 cm and 17° from where the plan expects it. Run as it is, the plan
