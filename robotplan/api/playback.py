@@ -30,6 +30,20 @@ def _plan_layer(scene: Scene, obj: str, sol: Solution, start: float, name: str,
     return Layer(name, times, tracks, sol.q_joints, ghost=True, shown=shown)
 
 
+def _plan_layers(planned: Plan, ex: Execution) -> list[Layer]:
+    """Every plan ``ex`` followed (the first, then each re-plan), each shown from when it
+    was made until the next one."""
+    plans = ex.plans or [(0, planned.best)]
+    starts = [float(ex.times[step]) for step, _ in plans]
+    layers = []
+    for k, (_step, sol) in enumerate(plans):
+        until = starts[k + 1] if k + 1 < len(plans) else None
+        shown = (starts[k], until) if len(plans) > 1 else None
+        layers.append(_plan_layer(planned.scene, planned.obj, sol, starts[k],
+                                  "plan" if k == 0 else f"replan_{k}", shown))
+    return layers
+
+
 def playback_layers(planned: Plan, executed: Execution) -> list[Layer]:
     """The executed motion and every plan it followed (the first, then each re-plan), each
     plan shown from when it was made until the next one; an open loop of a rehearsed plan
@@ -37,19 +51,10 @@ def playback_layers(planned: Plan, executed: Execution) -> list[Layer]:
     scene, obj, ex = planned.scene, planned.obj, executed
     r = planned.rehearsal
     if ex.mode == "open_loop" and r is not None:
-        rehearsed = Layer("rehearsal", r.times(), {obj: r.object_poses,
-                                                   scene.pushers[0].name: r.pusher})
-        return [rehearsed, Layer("executed", ex.times, {obj: ex.object_poses,
-                                                        scene.pushers[0].name:
-                                                        ex.pusher_positions}, ghost=False)]
-    plans = ex.plans or [(0, planned.best)]
-    starts = [float(ex.times[step]) for step, _ in plans]
-    layers = []
-    for k, (_step, sol) in enumerate(plans):
-        until = starts[k + 1] if k + 1 < len(plans) else None
-        shown = (starts[k], until) if len(plans) > 1 else None
-        layers.append(_plan_layer(scene, obj, sol, starts[k], "plan" if k == 0
-                                  else f"replan_{k}", shown))
+        layers = [Layer("rehearsal", r.times(), {obj: r.object_poses,
+                                                 scene.pushers[0].name: r.pusher})]
+    else:
+        layers = _plan_layers(planned, ex)
     tracks = {obj: ex.object_poses, **{k: v for k, v in ex.others.items()}}
     if scene.pushers and not scene.robots:
         tracks[scene.pushers[0].name] = ex.pusher_positions

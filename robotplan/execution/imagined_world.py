@@ -12,15 +12,14 @@ of untouched objects would add up over a long reach.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import torch
 
 from robotplan.execution.scene_world import Observation
 from robotplan.execution.sim import PHYSICS, Physics
 from robotplan.functionals.rigid_dynamics import RigidDynamics
-from robotplan.models.rigid import RigidMotion
+from robotplan.geometry.transforms import planar_to_world
+from robotplan.models.rigid import RigidMotion, transform_points
 from robotplan.scene import Scene
 
 __all__ = ["CONTACT_GAP", "ImaginedWorld", "rigid_step"]
@@ -29,17 +28,14 @@ CONTACT_GAP = 0.01  # m between the pusher's rim and the object below which F_q 
 
 
 def rigid_step(pose: np.ndarray, delta: np.ndarray, centre: np.ndarray) -> np.ndarray:
-    """The pose ``X_WB (3,)`` after F_q's step ``delta = (Δx, Δy, Δα)``: a turn by Δα about
-    the pivot (the footprint's centroid ``centre`` in the body frame), then a shift of the
-    pivot by (Δx, Δy)."""
-
-    def turn(yaw: float) -> np.ndarray:
-        c, s = math.cos(yaw), math.sin(yaw)
-        return np.array([[c, -s], [s, c]])
-
-    pivot = pose[:2] + turn(pose[2]) @ centre + delta[:2]
-    yaw = float(pose[2] + delta[2])
-    return np.array([*(pivot - turn(yaw) @ centre), yaw])
+    """The pose ``X_WB (3,)`` after F_q's step ``delta = (Δx, Δy, Δα)``: T(Δq) about the
+    pivot (the footprint's centroid ``centre`` in the body frame) applied to the body's
+    origin, the heading turned by Δα."""
+    X = torch.as_tensor(pose, dtype=torch.float64)
+    d = torch.as_tensor(delta, dtype=torch.float64)[None]
+    pivot = planar_to_world(torch.as_tensor(centre, dtype=torch.float64)[None], X)
+    origin = transform_points(X[None, None, :2], pivot, d)[0, 0]
+    return np.array([*origin.tolist(), float(X[2] + d[0, 2])])
 
 
 class ImaginedWorld:
