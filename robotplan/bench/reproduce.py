@@ -114,7 +114,7 @@ def _representations(steps: Steps, sizes: ReproduceSizes, train: Path,
     """F_q trained alike on each of :data:`REPRESENTATIONS` (the shipped F_q's architecture,
     the same ``train`` data, seed and steps) and evaluated on each set: ``reps_<set>`` →
     key → the step result, and each key's model folder."""
-    from robotplan.training.rigid import evaluate_rigid
+    from robotplan.training.rigid_evaluation import evaluate_rigid
 
     n, per = sizes.representation_steps, sizes.per_scene
     results: dict[str, dict] = {f"reps_{name}": {} for name in sets}
@@ -166,7 +166,7 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
     from robotplan.training.evaluation import evaluate_push
     from robotplan.training.pose_fit import evaluate_pose_fit
     from robotplan.training.push_data import PushDataSpec, generate
-    from robotplan.training.rigid import evaluate_rigid
+    from robotplan.training.rigid_evaluation import evaluate_rigid
 
     out.mkdir(parents=True, exist_ok=True)
     steps = Steps(out, inputs_digest(), progress)

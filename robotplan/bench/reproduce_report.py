@@ -42,6 +42,11 @@ def _tab2(results: dict, set_name: str) -> list:
         rows.append([label, _ms((r["rmse_mm"]["contact"], r["rmse_std_mm"]["contact"])),
                      _ms((r["rmse_mm"]["free"], r["rmse_std_mm"]["free"])),
                      _ms(paper["contact"]), _ms(paper["free"])])
+    r = results[f"rigid_{set_name}"]["result"]
+    if "rmse_mm" in r:  # F_q's φ1_t = T(Δq)[φ1_{t−1}]; the paper gives no Tab. 2 row for it
+        rows.append(["F_q, T(Δq)[φ1_{t−1}]",
+                     _ms((r["rmse_mm"]["contact"], r["rmse_std_mm"]["contact"])),
+                     _ms((r["rmse_mm"]["free"], r["rmse_std_mm"]["free"])), "–", "–"])
     r = results[f"rmse_flow_{set_name}"]["result"]
     paper = TAB2["no motion"]
     rows.append(["no motion", _ms((r["baseline_rmse_mm"]["contact"],

@@ -38,6 +38,7 @@ from robotplan.cli.representation_options import add_representation_options
 from robotplan.cli.reproduce_commands import add_reproduce_parser
 from robotplan.cli.scene_commands import cmd_check, cmd_diagnose, cmd_render, cmd_solve, cmd_view
 from robotplan.cli.train_push_parser import add_train_push_parser
+from robotplan.models.symmetry import VIEW_COUNTS
 from robotplan.scene import SceneError
 
 
@@ -237,6 +238,9 @@ def _parser() -> argparse.ArgumentParser:
     ep.add_argument("--pose-fit", type=int, default=0, metavar="N",
                     help="also fit the pose that minimises H_t on N contact samples and "
                          "report translation and turn errors (~1 s a sample)")
+    ep.add_argument("--views", type=int, default=1, choices=VIEW_COUNTS,
+                    help="average the model over the scene's quarter turns (4) and mirrors "
+                         "(8), exact symmetries of X_h; costs as many network passes")
     ep.add_argument("--json", action="store_true")
     ep.add_argument("--record", action="store_true",
                     help="store the result in the model's metrics.json and model card")

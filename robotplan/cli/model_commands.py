@@ -104,8 +104,12 @@ def cmd_eval_push(args: argparse.Namespace) -> int:
             return EXIT_BAD_INPUT
     spec = json.loads((Path(args.model) / "spec.json").read_text()) if (
         Path(args.model) / "spec.json").is_file() else {}
+    problem = views_problem(args, spec)
+    if problem:
+        print(f"error: {args.model}: --views: {problem}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     if spec.get("kind") == "rigid":
-        from robotplan.training.rigid import evaluate_rigid
+        from robotplan.training.rigid_evaluation import evaluate_rigid
 
         if args.pose_fit > 0 or args.record:
             print("note: --pose-fit and --record apply to F_flow and F; F_q predicts Δq "
@@ -113,10 +117,11 @@ def cmd_eval_push(args: argparse.Namespace) -> int:
 
         print_result(evaluate_rigid(args.model, args.data, scenes=args.scenes,
                                     per_scene=args.per_scene or None, seed=args.seed,
-                                    device=device), args.json)
+                                    device=device, views=args.views), args.json)
         return 0
     result = evaluate_push(args.model, args.data, scenes=args.scenes,
-                           per_scene=args.per_scene or None, seed=args.seed, device=device)
+                           per_scene=args.per_scene or None, seed=args.seed, device=device,
+                           views=args.views)
     if args.pose_fit > 0:
         from robotplan.training.pose_fit import evaluate_pose_fit
 
@@ -134,6 +139,17 @@ def cmd_eval_push(args: argparse.Namespace) -> int:
         record_heldout(Path(args.model), result)
     print_result(result, args.json)
     return 0
+
+
+def views_problem(args: argparse.Namespace, spec: dict) -> str | None:
+    """What is wrong with ``eval push --views`` for a model of ``spec`` (None: nothing)."""
+    if args.views == 1:
+        return None
+    if spec.get("representation") == "pointcloud":
+        return "a point-cloud F_q reads no grid to turn; give --views 1"
+    if args.record or args.pose_fit > 0:
+        return "--record and --pose-fit read the network alone; give --views 1"
+    return None
 
 
 def dynamics_list_problem(kinds: list[str], model: str | None) -> str | None:

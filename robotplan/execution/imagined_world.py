@@ -19,7 +19,7 @@ from robotplan.execution.scene_world import Observation
 from robotplan.execution.sim import PHYSICS, Physics
 from robotplan.functionals.rigid_dynamics import RigidDynamics
 from robotplan.geometry.transforms import planar_to_world
-from robotplan.models.rigid import RigidMotion, transform_points
+from robotplan.models.rigid import RigidMotion, moved_pose
 from robotplan.scene import Scene
 
 __all__ = ["CONTACT_GAP", "ImaginedWorld", "rigid_step"]
@@ -34,8 +34,7 @@ def rigid_step(pose: np.ndarray, delta: np.ndarray, centre: np.ndarray) -> np.nd
     X = torch.as_tensor(pose, dtype=torch.float64)
     d = torch.as_tensor(delta, dtype=torch.float64)[None]
     pivot = planar_to_world(torch.as_tensor(centre, dtype=torch.float64)[None], X)
-    origin = transform_points(X[None, None, :2], pivot, d)[0, 0]
-    return np.array([*origin.tolist(), float(X[2] + d[0, 2])])
+    return moved_pose(X[None], pivot, d)[0].numpy()
 
 
 class ImaginedWorld:

@@ -28,8 +28,8 @@ from robotplan.models.encoder_passes import EncoderPasses
 from robotplan.models.pointnet import cloud_encoder
 from robotplan.models.spec import DynamicsSpec, read_model_folder, write_model_folder
 
-__all__ = ["RigidMotion", "delta_in_frame", "load_rigid", "moved_pivot_delta", "object_frame",
-           "save_rigid", "sdf_pivot", "transform_points"]
+__all__ = ["RigidMotion", "delta_in_frame", "load_rigid", "moved_pivot_delta", "moved_pose",
+           "object_frame", "save_rigid", "sdf_pivot", "transform_points"]
 
 
 def sdf_pivot(phi: Tensor, grid_points: Tensor) -> Tensor:
@@ -79,6 +79,14 @@ def transform_points(points: Tensor, pivot: Tensor, delta: Tensor, inverse: bool
     rel = points - p - shift if inverse else points - p
     rot = torch.stack((c * rel[..., 0] - s * rel[..., 1], s * rel[..., 0] + c * rel[..., 1]), -1)
     return p + rot if inverse else p + rot + shift
+
+
+def moved_pose(X_WB: Tensor, pivot: Tensor, delta: Tensor) -> Tensor:
+    """Poses ``X_WB (B, 3)`` after the steps ``delta (B, 3)``: T(Δq) about ``pivot (B, 2)``
+    (table frame) applied to the body's origin, the heading turned by Δα; the inverse of
+    :func:`moved_pivot_delta`."""
+    origin = transform_points(X_WB[:, None, :2], pivot, delta)[:, 0]
+    return torch.cat((origin, X_WB[:, 2:] + delta[:, 2:]), 1)
 
 
 class RigidMotion(EncoderPasses, nn.Module):

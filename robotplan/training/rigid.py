@@ -13,7 +13,6 @@ permutation per ``(seed, epoch)``, ``checkpoint.pt`` every few minutes and at th
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import asdict
 from pathlib import Path
 
@@ -25,7 +24,6 @@ from robotplan.geometry.transforms import planar_to_world
 from robotplan.models.rigid import (
     RigidMotion,
     delta_in_frame,
-    load_rigid,
     moved_pivot_delta,
     object_frame,
     save_rigid,
@@ -33,11 +31,9 @@ from robotplan.models.rigid import (
     transform_points,
 )
 from robotplan.models.spec import DynamicsSpec
-from robotplan.training.evaluation import pick_samples
-from robotplan.training.footprints import BOX, LSHAPE
+from robotplan.models.symmetry import symmetric_delta_q
 from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
 from robotplan.training.model_card import earlier_stages
-from robotplan.training.push_data import scene_families
 from robotplan.training.samples import PushSamples, SampleBatch
 from robotplan.training.train import (
     WINDOW_AUGMENTS,
@@ -49,7 +45,7 @@ from robotplan.training.train import (
     write_json,
 )
 
-__all__ = ["PLACEMENT_REACH", "WINDOW_AUGMENTS", "delta_q_errors", "evaluate_rigid",
+__all__ = ["PLACEMENT_REACH", "WINDOW_AUGMENTS", "delta_q_errors", "delta_q_predictions",
            "rigid_targets", "sdf_space_loss", "table5_errors", "train_rigid", "turn_gain",
            "window_placements"]
 
@@ -115,21 +111,33 @@ def sdf_space_loss(delta: Tensor, phi_prev_grid: Tensor, pivot: Tensor, phi_now:
 
 
 @torch.no_grad()
-def delta_q_errors(model: RigidMotion, batch: SampleBatch, grid: Tensor,
-                   shape: tuple[int, int], chunk: int = 64) -> tuple[np.ndarray, np.ndarray]:
-    """Predicted and true Δq, each ``(B, 3)`` in m, m, rad, in the table frame."""
-    preds, trues = [], []
+def delta_q_predictions(model: RigidMotion, batch: SampleBatch, grid: Tensor,
+                        shape: tuple[int, int], views: int = 1, chunk: int = 64
+                        ) -> tuple[Tensor, Tensor, Tensor]:
+    """Predicted and true Δq, each ``(B, 3)`` in m, m, rad in the table frame, about the
+    pivots ``(B, 2)`` (table frame) the model's frame defines. With ``views`` 4 or 8 the
+    prediction is averaged over the window's quarter turns (and mirrors)
+    (:func:`~robotplan.models.symmetry.symmetric_delta_q`)."""
+    preds, trues, pivots = [], [], []
     frame = model.spec.frame
     for i in range(0, len(batch.radius), chunk):
         sub = batch.slice(i, i + chunk)
-        inputs, _, true = rigid_targets(sub, grid, shape, frame)
-        pred = model(inputs)
+        inputs, pivot, true = rigid_targets(sub, grid, shape, frame)
+        pred = symmetric_delta_q(model, inputs, views)
         if frame == "object":
             yaw = sub.object_prev[:, 2]
             pred, true = delta_in_frame(pred, yaw), delta_in_frame(true, yaw)
         preds.append(pred)
         trues.append(true)
-    return torch.cat(preds).cpu().numpy(), torch.cat(trues).cpu().numpy()
+        pivots.append(pivot)
+    return torch.cat(preds), torch.cat(trues), torch.cat(pivots)
+
+
+def delta_q_errors(model: RigidMotion, batch: SampleBatch, grid: Tensor,
+                   shape: tuple[int, int], chunk: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    """Predicted and true Δq, each ``(B, 3)`` in m, m, rad, in the table frame."""
+    pred, true, _ = delta_q_predictions(model, batch, grid, shape, chunk=chunk)
+    return pred.cpu().numpy(), true.cpu().numpy()
 
 
 def turn_gain(pred: np.ndarray, true: np.ndarray) -> float:
@@ -213,42 +221,3 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
     out.mkdir(parents=True, exist_ok=True)
     return run_steps(cfg, run, model, opt, ckpt_path, step_loss, validate, per_epoch,
                      "train rigid", ("rms", lambda v: v**0.5, ".3f"), progress)
-
-
-@torch.no_grad()
-def evaluate_rigid(model_dir: str | Path, data_dir: str | Path, scenes: int | None = None,
-                   per_scene: int | None = None, seed: int = 0,
-                   device: str | torch.device = "cpu") -> dict:
-    """F_q's one-step Δq errors on held-out data in the paper's Tab. 5 terms (contact and
-    free samples), the turn gain per shape, and the no-motion baseline (Δq = 0)."""
-    t0 = time.time()
-    model = load_rigid(model_dir, device)
-    ws = model.spec.workspace()
-    grid = ws.points().reshape(-1, 2).to(device)
-    samples = PushSamples(data_dir, scenes)
-    idx = pick_samples(samples, per_scene, seed)
-    pred, true = delta_q_errors(model, samples.batch(idx, device=device), grid, ws.shape)
-    contact = samples.contact[idx]
-    code = samples.data["shape_type"][samples.scene[idx]]
-    c = contact
-    kinds = {"box": code == BOX, "lshape": code == LSHAPE, "other": code > LSHAPE}
-    family = scene_families(samples.folder, samples.data)[samples.scene[idx]]
-    by_footprint = {}
-    for name in dict.fromkeys(family):  # in the order the scenes draw them
-        m = c & (family == name)
-        if m.any():
-            by_footprint[str(name)] = {"samples": int(m.sum()),
-                                       "delta_q_error": table5_errors(pred[m], true[m]),
-                                       "turn_gain": round(turn_gain(pred[m], true[m]), 3)}
-    return {
-        "model": str(model_dir), "kind": "rigid", "data": str(data_dir),
-        "scenes": samples.num_scenes,
-        "samples": {"contact": int(c.sum()), "free": int((~c).sum())},
-        "delta_q_error": table5_errors(pred[c], true[c]),
-        "delta_q_error_free": table5_errors(pred[~c], true[~c]),
-        "baseline_delta_q_error": table5_errors(np.zeros_like(true[c]), true[c]),
-        "turn_gain": {k: round(turn_gain(pred[c & m], true[c & m]), 3)
-                      for k, m in kinds.items() if (c & m).any()},
-        "by_footprint": by_footprint,
-        "seconds": round(time.time() - t0, 1), "device": str(device),
-    }

@@ -124,3 +124,27 @@ def test_train_push_refuses_what_an_object_frame_cannot_use(tiny_push_data, tmp_
         assert (capsys.readouterr().err.strip()
                 == f"error: --augment {window}: only with --frame object")
         assert not (tmp_path / "fq").exists()
+
+
+def test_eval_push_averages_over_the_views_it_is_given(tiny_push_data, tmp_path, capsys):
+    """``--views 4`` scores the model averaged over the quarter turns (F_q in Tab. 5 and
+    Tab. 2 terms); ``--views`` with ``--record`` would store what the network alone does not
+    do, and is refused in one line, exit 2, nothing recorded."""
+    assert _train(tiny_push_data, tmp_path / "fq") == 0
+    capsys.readouterr()
+    eval_push = ["eval", "push", "--model", str(tmp_path / "fq"), "--data",
+                 str(tiny_push_data), "--per-scene", "2", "--threads", "1", "--device", "cpu",
+                 "--json"]
+    results = {}
+    for views in ("1", "4"):
+        assert main([*eval_push, "--views", views]) == 0
+        results[views] = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert results["4"]["views"] == 4 and results["1"]["views"] == 1
+    assert results["4"]["samples"] == results["1"]["samples"]
+    assert results["4"]["delta_q_error"] != results["1"]["delta_q_error"]
+    assert results["4"]["rmse_mm"]["contact"] > 0
+    before = sorted(p.name for p in (tmp_path / "fq").iterdir())
+    assert main([*eval_push, "--views", "8", "--record"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--views" in err[0] and str(tmp_path / "fq") in err[0]
+    assert sorted(p.name for p in (tmp_path / "fq").iterdir()) == before

@@ -10,6 +10,7 @@ from robotplan.models.rigid import (
     RigidMotion,
     load_rigid,
     moved_pivot_delta,
+    moved_pose,
     save_rigid,
     sdf_pivot,
     transform_points,
@@ -43,6 +44,15 @@ def test_delta_q_moves_every_point_of_the_body_as_the_poses_do(poses):
     back = transform_points(moved, pivot, delta, inverse=True)
     assert torch.allclose(back, _to_world(prev, body), atol=1e-12)
     assert torch.all(delta[:, 2].abs() <= math.pi)
+
+
+def test_moved_pose_undoes_moved_pivot_delta(poses):
+    prev, now = poses
+    pivot = prev[:, :2] + torch.tensor([-0.04, 0.02], dtype=torch.float64)
+    moved = moved_pose(prev, pivot, moved_pivot_delta(pivot, prev, now))
+    assert (moved[:, :2] - now[:, :2]).abs().max() < 1e-12
+    turn = torch.remainder(moved[:, 2] - now[:, 2] + math.pi, 2 * math.pi) - math.pi
+    assert turn.abs().max() < 1e-12
 
 
 def test_the_next_sdf_is_the_previous_one_through_the_inverse_transform(poses):

@@ -10,7 +10,8 @@ import pytest
 import torch
 
 from robotplan.models.rigid import load_rigid
-from robotplan.training.rigid import evaluate_rigid, train_rigid
+from robotplan.training.rigid import train_rigid
+from robotplan.training.rigid_evaluation import evaluate_rigid
 from robotplan.training.train import TrainConfig
 from tests.conftest import TINY_SPEC
 
@@ -67,6 +68,43 @@ def test_evaluation_reports_the_papers_columns(tiny_push_data, tmp_path):
                          capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stderr[-2000:]
     assert "delta_q_error" in json.loads(res.stdout)
+
+
+def test_f_q_is_scored_in_tab_2_terms_beside_f_flow(tiny_push_data, tiny_ood_push_data,
+                                                    tmp_path):
+    """F_q's SDF error over the table's X_h: φ1_{t−1} moved by the true Δq is φ1_t, by no
+    step the no-motion baseline; evaluate_rigid's baseline is evaluate_push's on the same
+    samples, so the two models stand in one table."""
+    from robotplan.models.spec import DynamicsSpec
+    from robotplan.training.evaluation import evaluate_push
+    from robotplan.training.rigid import rigid_targets
+    from robotplan.training.rigid_evaluation import moved_sdf_rmse
+    from robotplan.training.samples import PushSamples
+    from robotplan.training.train import train
+
+    ws = DynamicsSpec().workspace()
+    table = ws.points(torch.float64).reshape(-1, 2)
+    for folder in (tiny_push_data, tiny_ood_push_data):
+        samples = PushSamples(folder)
+        batch = samples.batch(list(range(0, len(samples), 7)), dtype=torch.float64)
+        _, pivot, true = rigid_targets(batch, table, ws.shape)
+        exact, base = moved_sdf_rmse(batch, true, pivot, table)
+        assert exact.max() < 1e-9
+        still, base_again = moved_sdf_rmse(batch, torch.zeros_like(true), pivot, table)
+        assert torch.equal(still, base) and torch.equal(base_again, base)
+        assert base[batch.contact].min() > 1e-4  # pushed objects do move
+    train_rigid(config(tiny_push_data, tmp_path / "fq", 2), progress=False)
+    rigid = evaluate_rigid(tmp_path / "fq", tiny_push_data, per_scene=3)
+    flow_cfg = replace(config(tiny_push_data, tmp_path / "ff", 2), kind="flow",
+                       spec=dict(TINY_SPEC))
+    train(flow_cfg, progress=False)
+    flow = evaluate_push(tmp_path / "ff", tiny_push_data, per_scene=3, progress=False)
+    assert rigid["samples"] == flow["samples"]
+    for side in ("contact", "free"):
+        assert rigid["baseline_rmse_mm"][side] == pytest.approx(
+            flow["baseline_rmse_mm"][side], abs=2e-3)
+        assert rigid["rmse_mm"][side] >= 0
+    assert rigid["views"] == 1
 
 
 def test_the_sdf_space_loss_has_the_gradient_of_its_finite_differences():
