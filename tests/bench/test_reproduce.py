@@ -133,6 +133,7 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
         assert item in text, item
     assert "Not run yet" not in text, "every item of the paper has its code"
     assert "| F_flow | " in text and "| 3.40 ± 1.60 | 1.40 ± 1.80 |" in text
+    assert "| F_q, T(Δq)[φ1_{t−1}] | " in text  # F_q scored in Tab. 2's terms beside F_flow
     run = json.loads((tmp_path / "run.json").read_text())
     assert "| F_q on occupancy ψ_s (b = 100), 2 steps |" in text
     # data, training and evaluation of six representations: 1 + 6 + 12 steps; Figs. 5, 6: 1;
