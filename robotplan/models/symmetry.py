@@ -83,6 +83,8 @@ def symmetric_delta_q(model: Callable[[Tensor], Tensor], inputs: Tensor, count: 
     """F_q averaged over ``count`` views: ``inputs (B, C, H, W)`` → Δq ``(B, 3)``, about the
     pivot the grid defines (a point every view maps along with the scene)."""
     views = grid_views(count)
+    if count == 1:  # the network alone
+        return model(inputs)
     return torch.stack([v.delta_q_back(model(v.images(inputs))) for v in views]).mean(0)
 
 
@@ -90,7 +92,9 @@ def symmetric_field(model: Callable[[Tensor], Tensor], inputs: Tensor, count: in
     """A field model (F_flow, F) averaged over ``count`` views, on X_h's own points:
     ``inputs (B, C, H, W)`` → the field ``(B, H · W)`` in the grid's point order, where
     ``model`` maps inputs to the field at those points, ``(B, H · W)``."""
+    views = grid_views(count)
+    if count == 1:  # the network alone
+        return model(inputs)
     B, _, H, W = inputs.shape
-    fields = [v.images_back(model(v.images(inputs)).reshape(B, H, W))
-              for v in grid_views(count)]
+    fields = [v.images_back(model(v.images(inputs)).reshape(B, H, W)) for v in views]
     return torch.stack(fields).mean(0).reshape(B, H * W)
