@@ -45,7 +45,7 @@ from robotplan.training.train import (
     write_json,
 )
 
-__all__ = ["PLACEMENT_REACH", "WINDOW_AUGMENTS", "delta_q_errors", "delta_q_predictions",
+__all__ = ["PLACEMENT_REACH", "WINDOW_AUGMENTS", "delta_q_predictions",
            "rigid_targets", "sdf_space_loss", "table5_errors", "train_rigid", "turn_gain",
            "window_placements"]
 
@@ -133,13 +133,6 @@ def delta_q_predictions(model: RigidMotion, batch: SampleBatch, grid: Tensor,
     return torch.cat(preds), torch.cat(trues), torch.cat(pivots)
 
 
-def delta_q_errors(model: RigidMotion, batch: SampleBatch, grid: Tensor,
-                   shape: tuple[int, int], chunk: int = 64) -> tuple[np.ndarray, np.ndarray]:
-    """Predicted and true Δq, each ``(B, 3)`` in m, m, rad, in the table frame."""
-    pred, true, _ = delta_q_predictions(model, batch, grid, shape, chunk=chunk)
-    return pred.cpu().numpy(), true.cpu().numpy()
-
-
 def turn_gain(pred: np.ndarray, true: np.ndarray) -> float:
     """The least-squares slope of predicted on true turns (1: turns as much as the world)."""
     t = true[:, 2]
@@ -185,7 +178,8 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
 
     def validate() -> dict:
         model.eval()
-        pred, true = delta_q_errors(model, val_batch, grid, ws.shape)
+        pred, true, _ = (v.cpu().numpy() for v in
+                         delta_q_predictions(model, val_batch, grid, ws.shape))
         model.train()
         c = val_batch.contact.cpu().numpy()
         row = {"step": run.step, "epoch": round(run.step / per_epoch, 3),
