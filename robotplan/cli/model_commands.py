@@ -149,6 +149,8 @@ def views_problem(args: argparse.Namespace, spec: dict) -> str | None:
         return "a point-cloud F_q reads no grid to turn; give --views 1"
     if args.record or args.pose_fit > 0:
         return "--record and --pose-fit read the network alone; give --views 1"
+    if spec.get("frame", "table") == "object" and spec.get("kind") != "rigid":
+        return "an object-frame F_flow or F turns its grid with the object; give --views 1"
     return None
 
 

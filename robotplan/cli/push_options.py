@@ -30,11 +30,15 @@ def architecture_problem(args: argparse.Namespace) -> str | None:
     from robotplan.training.train import WINDOW_AUGMENTS
 
     if args.frame == "object":
-        if args.model != "rigid":
-            return "--frame object: only with --model rigid (F_q)"
-        if args.rigid_loss != "delta" or args.augment == "turns":
-            return ("--frame object: trains with --rigid-loss delta and without --augment "
-                    "turns (they leave an object-frame model's inputs unchanged)")
+        if args.augment == "turns":
+            return ("--frame object: trains without --augment turns (they leave an "
+                    "object-frame model's inputs unchanged)")
+        if args.model == "rigid" and args.rigid_loss != "delta":
+            return "--frame object: an F_q trains with --rigid-loss delta"
+        if args.model != "rigid" and args.augment in WINDOW_AUGMENTS:
+            return f"--augment {args.augment}: only with --model rigid (F_q)"
+        if args.representation == "pointcloud":
+            return "--frame object: not with --representation pointcloud"
     elif args.augment in WINDOW_AUGMENTS:
         return f"--augment {args.augment}: only with --frame object"
     if args.placement_reach is not None:

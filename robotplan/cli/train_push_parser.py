@@ -34,9 +34,10 @@ def add_train_push_parser(tsub) -> None:
     tp.add_argument("--hidden", type=positive_ints, default=None, metavar="H1,H2",
                     help="the MLP's hidden widths (default 300,300)")
     tp.add_argument("--frame", choices=["table", "object"], default="table",
-                    help="F_q's grid X_h: table, fixed on the table (the paper's); object, "
-                         "64 x 64 cm attached to the object (origin at its footprint's "
-                         "centroid, the body's axes), Δq in that frame (--model rigid only)")
+                    help="the encoder's grid X_h: table, fixed on the table (the paper's); "
+                         "object, 64 x 64 cm attached to the object (origin at its "
+                         "footprint's centroid, the body's axes): F_q's Δq and F_flow's / "
+                         "F's query points in that frame")
     add_representation_options(tp, 100.0, "the boundary's marching-squares vertices through "
                                "a PointNet (eq. 12; --model rigid only)")
     tp.add_argument("--steps", type=int, default=60_000, help="total optimiser steps")

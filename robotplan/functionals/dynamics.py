@@ -95,6 +95,10 @@ class LearnedDynamics:
             raise ValueError("H_F needs an F_flow or F on SDFs: a model on occupancy "
                              f"measures (representation {model.spec.representation!r}) "
                              "predicts ψ, not φ")
+        if model.spec.frame != "table":
+            raise ValueError("H_F needs a table-frame F_flow or F: this model reads X_h "
+                             "attached to the object (spec frame 'object'); score it with "
+                             "`robotplan eval push`, plan with a table-frame model or F_q")
         self.model, self.obj, self.pusher = model.eval(), obj, pusher
         keep_freed_memory()  # its short-lived ~MB tensors would page-fault on every call
         for p in model.parameters():

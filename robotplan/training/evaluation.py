@@ -11,6 +11,7 @@ import torch
 from robotplan.models.dynamics import load_model
 from robotplan.models.symmetry import symmetric_field
 from robotplan.training.samples import PushSamples, SampleBatch
+from robotplan.training.train import framed, scored_workspace
 
 __all__ = ["evaluate_push", "pick_samples"]
 
@@ -46,20 +47,26 @@ def evaluate_push(model_dir: str | Path, data_dir: str | Path, scenes: int | Non
         chunk = 8 if torch.device(device).type == "cpu" else 128
     model = load_model(model_dir, device)
     spec = model.spec
+    if views != 1 and spec.frame != "table":
+        raise ValueError("views: an object-frame model's grid turns with the object; "
+                         "only a table-frame model is averaged over views")
     ws = spec.workspace()
     grid = ws.points().reshape(-1, 2).to(device)
-    point_term = model.point_term(grid[None])  # the same for every sample: computed once
+    table = scored_workspace(spec).points().reshape(1, -1, 2).to(device)
+    # a table-frame model reads the scored points as they are: their term computed once
+    point_term = model.point_term(table) if spec.frame == "table" else None
     samples = PushSamples(data_dir, scenes)
     idx = pick_samples(samples, per_scene, seed)
     errs, bases = [], []
     for i in tqdm(range(0, len(idx), chunk), desc="eval", unit="batch", disable=not progress):
         b: SampleBatch = samples.batch(idx[i:i + chunk], device=device)
-        inputs = b.inputs(grid, ws.shape)
+        inputs, points = framed(spec, b, grid, table)
+        terms = point_term if point_term is not None else model.point_term(points)
         out = symmetric_field(
-            lambda x: model.from_terms(model.sdf_term(model.features(x)), point_term),
+            lambda x, terms=terms: model.from_terms(model.sdf_term(model.features(x)), terms),
             inputs, views)
-        prev = model.values_read(inputs[:, 0].reshape(len(b.radius), -1))
-        now = model.values_read(b.phi1_now(grid[None]))
+        prev = model.values_read(b.phi1_prev(table))
+        now = model.values_read(b.phi1_now(table))
         pred = prev + out if spec.kind == "flow" else out
         errs.append((pred - now).pow(2).mean(1).sqrt())
         bases.append((prev - now).pow(2).mean(1).sqrt())
@@ -77,7 +84,7 @@ def evaluate_push(model_dir: str | Path, data_dir: str | Path, scenes: int | Non
 
     return {
         "model": str(model_dir), "kind": spec.kind, "data": str(data_dir),
-        "representation": spec.representation,
+        "representation": spec.representation, "frame": spec.frame,
         "scenes": samples.num_scenes,
         "samples": {"contact": int(contact.sum()), "free": int((~contact).sum())},
         "rmse_mm": stats(err), "rmse_std_mm": spread(err),

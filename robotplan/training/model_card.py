@@ -63,6 +63,17 @@ def record_heldout(model_dir: Path, result: dict) -> None:
     write_model_card(model_dir)
 
 
+def _grid_words(spec: dict) -> str:
+    """Where a model's X_h lies, in words for its card."""
+    n, m = spec.get("grid", (140, 140))
+    size = spec.get("workspace_size", (1.4, 1.4))[0]
+    if spec.get("frame", "table") == "object":
+        return (f"a {n} × {m} grid X_h over {size:g} m attached to the object at t−1 (origin "
+                "at its footprint's centroid, the body's axes; the query points are read in "
+                "that frame; H_F does not plan with it, `robotplan eval push` scores it)")
+    return f"the {n} × {m} table grid X_h"
+
+
 def write_model_card(model_dir: Path) -> None:
     """(Re)write ``metrics.json`` (validation part) and ``MODEL_CARD.md`` in ``model_dir``."""
     training = _read(model_dir / "training.json")
@@ -81,8 +92,8 @@ def write_model_card(model_dir: Path) -> None:
     lines = [
         f"# {model_dir.name}: learned pushing dynamics {name}",
         "",
-        "Predicts the SDF φ1_t of a pushed object from φ1_{t−1}, φ2_{t−1}, φ2_t (pusher) on the",
-        "140 × 140 table grid X_h, queryable at any point (paper §5.1, appendix I.1).",
+        "Predicts the SDF φ1_t of a pushed object from φ1_{t−1}, φ2_{t−1}, φ2_t (pusher) on "
+        + _grid_words(spec) + ", queryable at any point (paper §5.1, appendix I.1).",
         "Load with `robotplan.models.dynamics.load_model(folder)` (weights_only).",
         "",
         "## Data",

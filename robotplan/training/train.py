@@ -21,14 +21,17 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from robotplan.geometry.transforms import planar_to_body
 from robotplan.models.dynamics import DynamicsSpec, PushDynamics, save_model
+from robotplan.models.rigid import object_frame
 from robotplan.sdf import Workspace
 from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
 from robotplan.training.model_card import earlier_stages
 from robotplan.training.samples import PushSamples, SampleBatch
 
-__all__ = ["AUGMENTS", "WINDOW_AUGMENTS", "TrainConfig", "augmented", "grid_rmse", "hardware",
-           "query_points", "train", "validation_indices", "write_json"]
+__all__ = ["AUGMENTS", "WINDOW_AUGMENTS", "TrainConfig", "augmented", "framed", "grid_rmse",
+           "hardware", "query_points", "scored_workspace", "train", "validation_indices",
+           "write_json"]
 
 AUGMENTS = ("none", "turns", "headings", "placements")
 WINDOW_AUGMENTS = ("headings", "placements")
@@ -106,29 +109,54 @@ def augmented(batch: SampleBatch, cfg: TrainConfig, ws: Workspace, step: int) ->
     return batch.turned(torch.as_tensor(k, device=batch.radius.device), tuple(ws.center))
 
 
+def scored_workspace(spec: DynamicsSpec) -> Workspace:
+    """The X_h that Tab. 2 scores a model on: a table-frame model's own grid; for an
+    object-frame one, the table's default 140 × 140 grid over 1.4 m, the grid every other
+    model is scored on (its own window only feeds the encoder)."""
+    return spec.workspace() if spec.frame == "table" else DynamicsSpec().workspace()
+
+
+def framed(spec: DynamicsSpec, batch: SampleBatch, grid: torch.Tensor,
+           points: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """The model inputs ``(B, 3, H, W)`` on the model's X_h (``grid (N, 2)`` in its frame)
+    and the query ``points (B or 1, P, 2)`` (table frame) as the model reads them: as they
+    are for a table-frame model; for an object-frame one (``spec.frame == "object"``) X_h
+    is attached to the object at t−1 (origin at the footprint's centroid, the body's axes,
+    :func:`~robotplan.models.rigid.object_frame`) and the points are given in that frame.
+    The predicted field is a function on the table either way: the frame moves with the
+    object, the points with it."""
+    shape = tuple(spec.grid)
+    if spec.frame != "object":
+        return batch.inputs(grid, shape), points
+    X_F = object_frame(batch.object_prev, batch.centroid)
+    return batch.inputs(grid, shape, X_F), planar_to_body(points, X_F)
+
+
 def _target(model: PushDynamics, batch: SampleBatch, pts: torch.Tensor) -> torch.Tensor:
     now = model.values_read(batch.phi1_now(pts))
     return now - model.values_read(batch.phi1_prev(pts)) if model.spec.kind == "flow" else now
 
 
 @torch.no_grad()
-def grid_rmse(model: PushDynamics, batch: SampleBatch, ws: Workspace, stride: int = 1,
-              chunk: int = 16) -> tuple[np.ndarray, np.ndarray]:
-    """Per-sample RMSE (m; of ψ for a model on an occupancy measure) over X_h (eq. 20) of
-    the model and of the "no motion" baseline.
+def grid_rmse(model: PushDynamics, batch: SampleBatch, stride: int = 1, chunk: int = 16
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Per-sample RMSE (m; of ψ for a model on an occupancy measure) over X_h (eq. 20,
+    :func:`scored_workspace`) of the model and of the "no motion" baseline.
 
     ``stride`` > 1 evaluates every stride-th grid point in each direction (for quick checks).
     """
-    grid = ws.points(batch.params.dtype).to(batch.params.device)
-    pts = grid[::stride, ::stride].reshape(1, -1, 2)
-    full = grid.reshape(-1, 2)
+    spec = model.spec
+    device = batch.params.device
+    grid = spec.workspace().points(batch.params.dtype).to(device).reshape(-1, 2)
+    table = scored_workspace(spec).points(batch.params.dtype).to(device)
+    pts = table[::stride, ::stride].reshape(1, -1, 2)
     model_err, base_err = [], []
     for i in range(0, len(batch.radius), chunk):
         sub = batch.slice(i, i + chunk)
-        inputs = sub.inputs(full, ws.shape)
+        inputs, model_pts = framed(spec, sub, grid, pts)
         prev = model.values_read(sub.phi1_prev(pts))
         now = model.values_read(sub.phi1_now(pts))
-        pred = model.predict_next(inputs, pts, prev)
+        pred = model.predict_next(inputs, model_pts, prev)
         model_err.append((pred - now).pow(2).mean(1).sqrt())
         base_err.append((prev - now).pow(2).mean(1).sqrt())
     return torch.cat(model_err).cpu().numpy(), torch.cat(base_err).cpu().numpy()
@@ -156,6 +184,9 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
         spec = DynamicsSpec(**{**asdict(spec), "out_scale": 1.0})
     elif cfg.kind == "direct" and "out_scale" not in cfg.spec:
         spec = DynamicsSpec(**{**asdict(spec), "out_scale": 0.1})
+    if spec.frame == "object" and cfg.augment != "none":
+        raise ValueError(f"augment {cfg.augment!r}: an object-frame F_flow or F trains "
+                         "without (its inputs are the same wherever the push happens)")
     model = PushDynamics(spec).to(device)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
     if cfg.init_weights and not resume:
@@ -167,7 +198,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
     train_idx, val_idx = samples.split_by_scene(cfg.val_fraction, cfg.seed)
     val_batch = samples.batch(validation_indices(samples, val_idx, cfg.val_samples, cfg.seed),
                               device=device)
-    ws = spec.workspace()
+    ws, table = spec.workspace(), scored_workspace(spec)
     grid = ws.points().reshape(-1, 2).to(device)
     per_epoch = len(train_idx) // cfg.batch
     train_contact = train_idx[samples.contact[train_idx]]
@@ -175,7 +206,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
 
     def validate() -> dict:
         model.eval()
-        err, base = grid_rmse(model, val_batch, ws, stride=2)
+        err, base = grid_rmse(model, val_batch, stride=2)
         model.train()
         c = val_batch.contact.cpu().numpy()
         row = {"step": run.step, "epoch": round(run.step / per_epoch, 3),
@@ -205,9 +236,9 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
                                      rng.choice(train_free, cfg.batch - n_contact)])
         batch = augmented(samples.batch(chosen, device=device), cfg, ws, step)
         gen = torch.Generator().manual_seed(cfg.seed * 1_000_003 + step)
-        pts = query_points(batch, cfg.points, cfg.near_share, ws, gen).to(device)
-        inputs = batch.inputs(grid, ws.shape)
-        return (model(inputs, pts) - _target(model, batch, pts)).pow(2).mean()
+        pts = query_points(batch, cfg.points, cfg.near_share, table, gen).to(device)
+        inputs, model_pts = framed(spec, batch, grid, pts)
+        return (model(inputs, model_pts) - _target(model, batch, pts)).pow(2).mean()
 
     out.mkdir(parents=True, exist_ok=True)
     return run_steps(cfg, run, model, opt, ckpt_path, step_loss, validate, per_epoch,

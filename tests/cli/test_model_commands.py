@@ -7,6 +7,7 @@ import json
 import sys
 
 from robotplan.cli.main import main
+from tests.conftest import TASKS
 
 
 def _train(data, out, *extra: str) -> int:
@@ -111,8 +112,10 @@ def test_train_push_refuses_what_an_object_frame_cannot_use(tiny_push_data, tmp_
         assert err.startswith("error: --frame object:") and why in err and "\n" not in err
         assert not (tmp_path / "fq").exists()
     assert main(["train", "push", "--data", str(tiny_push_data), "--out", str(tmp_path / "m"),
-                 "--model", "flow", "--frame", "object"]) == 2
-    assert capsys.readouterr().err.strip() == "error: --frame object: only with --model rigid (F_q)"
+                 "--model", "flow", "--frame", "object", "--augment", "headings"]) == 2
+    assert (capsys.readouterr().err.strip()
+            == "error: --augment headings: only with --model rigid (F_q)")
+    assert not (tmp_path / "m").exists()
     for extra, why in ((("--placement-reach", "0.1"), "only with --augment placements"),
                        (("--augment", "placements", "--placement-reach", "nan"), "0 to 0.2 m")):
         assert _train(tiny_push_data, tmp_path / "fq", "--frame", "object", *extra) == 2
@@ -148,3 +151,34 @@ def test_eval_push_averages_over_the_views_it_is_given(tiny_push_data, tmp_path,
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--views" in err[0] and str(tmp_path / "fq") in err[0]
     assert sorted(p.name for p in (tmp_path / "fq").iterdir()) == before
+
+
+def test_an_object_frame_f_flow_is_scored_and_refused_where_h_f_plans(tiny_push_data, tmp_path,
+                                                                       capsys):
+    """``--model flow --frame object`` trains; ``eval push`` scores it on the table's X_h
+    and fits poses to it; planning through H_F, or turning its grid (``--views``), is
+    refused in one line naming the model, exit 2."""
+    out = tmp_path / "flow"
+    assert main(["train", "push", "--data", str(tiny_push_data), "--out", str(out),
+                 "--model", "flow", "--frame", "object", "--steps", "2", "--batch", "4",
+                 "--points", "16", "--val-every", "100", "--threads", "1"]) == 0
+    spec = json.loads((out / "spec.json").read_text())
+    assert spec["kind"] == "flow" and spec["frame"] == "object" and spec["grid"] == [64, 64]
+    capsys.readouterr()
+    eval_push = ["eval", "push", "--model", str(out), "--data", str(tiny_push_data),
+                 "--per-scene", "1", "--threads", "1", "--json"]
+    assert main(eval_push) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert result["frame"] == "object" and result["baseline_rmse_mm"]["contact"] > 1.0
+    assert main([*eval_push, "--pose-fit", "3"]) == 0
+    fitted = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert fitted["pose_fit"]["samples"] == 3 and set(fitted["delta_q_error"]) == {
+        "x_mm", "y_mm", "alpha_deg"}
+    assert main([*eval_push, "--views", "4"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"error: {out}") and "--views" in err and "\n" not in err
+    assert main(["solve", str(TASKS / "box_push.yaml"), "--model", str(out), "--out",
+                 str(tmp_path / "plan")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "spec.json: frame:" in err and "\n" not in err
+    assert not (tmp_path / "plan").exists()

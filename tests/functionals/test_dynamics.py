@@ -164,3 +164,13 @@ def test_h_f_refuses_a_model_on_an_occupancy_measure():
     obj = Body("obj", "object", Box((0.2, 0.12)), (0, 0, 0), 0.0, 0.06)
     with pytest.raises(ValueError, match="occupancy"):
         LearnedDynamics(model, obj, PUSHER, Quadrature.grid(Workspace()))
+
+
+def test_h_f_refuses_an_object_frame_model():
+    """H_F renders X_h on the table; an object-frame F_flow reads its grid about the object."""
+    from robotplan.models.spec import OBJECT_WINDOW
+
+    spec = DynamicsSpec(kind="flow", frame="object", **{**SPEC, **OBJECT_WINDOW})
+    obj = Body("obj", "object", Box((0.2, 0.12)), (0, 0, 0), 0.0, 0.06)
+    with pytest.raises(ValueError, match="table-frame"):
+        LearnedDynamics(PushDynamics(spec), obj, PUSHER, Quadrature.grid(Workspace()))

@@ -65,3 +65,29 @@ def test_evaluate_pose_fit_reports_both_shapes():
     assert set(table) == {"x_mm", "y_mm", "alpha_deg"}
     for mean, std in table.values():
         assert 0 <= mean < 30 and std >= 0
+
+
+def test_fitting_the_prediction_once_finds_the_pose_h_f_finds():
+    """The object-frame path (the model's φ̂1_t computed once on the lattice, then fitted) is
+    the fit through H_F: on a table-frame model both end at the same pose."""
+    from robotplan.training.pose_fit import fit_to_prediction, framed_prediction
+
+    model = load_model(FLOW)
+    data = PushSamples(DATA / "push_sample")
+    d = data.data
+    rng = np.random.default_rng(1)
+    for i in rng.choice(np.flatnonzero(data.contact), 2, replace=False):
+        s, now = data.scene[i], data.now[i]
+        hw, hh, th = data.params[s]
+        shape = LShape((2 * hw, 2 * hh), float(th)) if th < 2 * hh - 1e-9 else Box((2 * hw, 2 * hh))
+        q1p = d["object_pose"][now - 1].astype(float)
+        q2p, q2n = d["pusher_xy"][now - 1].astype(float), d["pusher_xy"][now].astype(float)
+        obj = Body("o", "object", shape, tuple(q1p), 0.0, 0.06)
+        tool = Body("p", "pusher", Circle(float(d["pusher_radius"][s])), (*q2p, 0.0), 0.0, 0.06)
+        through_h_f = fit_step(model, obj, tool, q1p, q2p, q2n)
+        quad = _local_quadrature(q1p, torch.float64)
+        once = fit_to_prediction(obj, quad, framed_prediction(
+            model, data.batch(np.array([i])), obj, quad, q1p), q1p)
+        assert np.linalg.norm(once - q1p) > 1e-4  # a real step, not the start
+        assert np.abs(once[:2] - through_h_f[:2]).max() < 2e-5
+        assert abs(once[2] - through_h_f[2]) < 1e-4

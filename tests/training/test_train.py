@@ -1,6 +1,7 @@
 """The real training loop on tiny real data with a tiny model: learns, resumes exactly."""
 
 import json
+import math
 
 import pytest
 import torch
@@ -143,3 +144,80 @@ def test_a_flow_on_an_occupancy_measure_predicts_it(tiny_push_data, tmp_path, re
     assert result["baseline_rmse_mm"]["contact"] == pytest.approx(
         float(base[torch.as_tensor(contact)].mean()), rel=1e-3)
     assert 0 < result["baseline_rmse_mm"]["contact"] <= 2000
+
+
+def test_an_object_frame_field_moves_with_the_scene(tiny_push_data):
+    """An object-frame F_flow reads the same grids and the same query points when the whole
+    scene and the points are moved and turned together, so its predicted field moves with
+    the scene (exact, float64); a table-frame model's field does not."""
+    from dataclasses import replace as with_fields
+
+    import numpy as np
+
+    from robotplan.models.dynamics import DynamicsSpec, PushDynamics
+    from robotplan.models.spec import OBJECT_WINDOW
+    from robotplan.training.samples import PushSamples
+    from robotplan.training.train import framed, scored_workspace
+
+    samples = PushSamples(tiny_push_data)
+    batch = samples.batch(np.arange(0, len(samples), 9), dtype=torch.float64)
+    angle, shift = 0.7, torch.tensor([-0.05, 0.09], dtype=torch.float64)
+    c, s = math.cos(angle), math.sin(angle)
+
+    def moved(p):
+        xy = torch.stack((c * p[..., 0] - s * p[..., 1], s * p[..., 0] + c * p[..., 1]), -1)
+        return torch.cat((xy + shift, p[..., 2:] + angle), -1) if p.shape[-1] == 3 else xy + shift
+
+    other = with_fields(batch, object_prev=moved(batch.object_prev),
+                        object_now=moved(batch.object_now),
+                        pusher_prev=moved(batch.pusher_prev), pusher_now=moved(batch.pusher_now))
+    fields = {}
+    for frame, window in (("object", OBJECT_WINDOW), ("table", {})):
+        torch.manual_seed(0)
+        spec = DynamicsSpec(kind="flow", frame=frame, **window, **TINY_SPEC)
+        model = PushDynamics(spec).double()
+        grid = spec.workspace().points(torch.float64).reshape(-1, 2)
+        pts = scored_workspace(spec).points(torch.float64)[::9, ::9].reshape(1, -1, 2)
+        with torch.no_grad():
+            fields[frame] = (model(*framed(spec, batch, grid, pts)),
+                             model(*framed(spec, other, grid, moved(pts))))
+    here, there = fields["object"]
+    assert here.abs().max() > 0 and (there - here).abs().max() < 1e-9
+    here, there = fields["table"]
+    assert (there - here).abs().max() > 1e-4
+
+
+def test_an_object_frame_flow_learns_and_is_scored_on_the_tables_grid(tiny_push_data,
+                                                                       tmp_path):
+    """Trained in the object's frame, F_flow is scored on the table's 140 × 140 X_h, as
+    every other model is: the same samples give the same no-motion baseline as a
+    table-frame model's evaluation, and its own error equals the training's full-grid
+    RMSE; turns and views are refused."""
+    from dataclasses import replace
+
+    from robotplan.models.spec import OBJECT_WINDOW
+    from robotplan.training.evaluation import pick_samples
+    from robotplan.training.samples import PushSamples
+    from robotplan.training.train import grid_rmse
+
+    cfg = config(tiny_push_data, tmp_path / "obj", 60)
+    cfg.spec = {**cfg.spec, "frame": "object", **OBJECT_WINDOW}
+    last = train(cfg, progress=False)
+    history = json.loads((tmp_path / "obj" / "training.json").read_text())["history"]
+    # in contact, where the pushed object's SDF changes, it learns the change
+    assert last["val_rmse_mm"]["contact"] < 0.95 * history[0]["val_rmse_mm"]["contact"]
+    result = evaluate_push(tmp_path / "obj", tiny_push_data, per_scene=3, progress=False)
+    assert result["frame"] == "object"
+    train(config(tiny_push_data, tmp_path / "table", 1), progress=False)
+    table = evaluate_push(tmp_path / "table", tiny_push_data, per_scene=3, progress=False)
+    assert table["samples"] == result["samples"]
+    assert table["baseline_rmse_mm"] == result["baseline_rmse_mm"]
+    samples = PushSamples(tiny_push_data)
+    idx = pick_samples(samples, 3, 0)
+    err, _ = grid_rmse(load_model(tmp_path / "obj"), samples.batch(idx))
+    c = samples.contact[idx]
+    assert abs(1e3 * float(err[c].mean()) - result["rmse_mm"]["contact"]) < 2e-3
+    with pytest.raises(ValueError, match="object-frame"):
+        train(replace(cfg, out=str(tmp_path / "b"), augment="turns"), progress=False)
+    with pytest.raises(ValueError, match="views"):
+        evaluate_push(tmp_path / "obj", tiny_push_data, per_scene=1, progress=False, views=4)
