@@ -22,10 +22,12 @@ from robotplan.functionals.dynamics import (
     LearnedDynamics,
     phase_quadrature,
 )
+from robotplan.functionals.framed_dynamics import FramedDynamics
 from robotplan.functionals.rigid_dynamics import RigidDynamics
-from robotplan.models.dynamics import load_model
+from robotplan.models.dynamics import DynamicsSpec, load_model
 from robotplan.models.loading import dynamics_kind
 from robotplan.models.rigid import load_rigid
+from robotplan.models.spec import read_spec
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, Workspace
 from robotplan.training.push_data import simulate_scene
@@ -124,12 +126,29 @@ def bench_rigid(model_dir: str | Path, repeats: int = 20) -> dict:
                                             repeats), 2)}
 
 
+def bench_framed(model_dir: str | Path, repeats: int = 20) -> dict:
+    """H_F with an object-frame F_flow or F (:class:`FramedDynamics`, autograd) on a
+    10-step phase of a real push, on the planner's phase quadrature: value + Jacobian,
+    value only."""
+    model = load_model(model_dir)
+    obj, pusher, X1, X2 = realistic_pushes(1)[0]
+    quad = phase_quadrature_for(obj, X1, DynamicsSpec().workspace())
+    H = FramedDynamics(model, obj, pusher, quad)
+    return {"model": str(model_dir), "threads": torch.get_num_threads(), "frame": "object",
+            "steps": X1.shape[0] - 1, "quadrature_points": len(quad.points),
+            "hf_phase_ms": round(_time(lambda: H.evaluate(X1, X2), repeats), 2),
+            "hf_value_only_ms": round(_time(lambda: H.evaluate(X1, X2, jacobian=False),
+                                            repeats), 2)}
+
+
 def bench_functional(model_dir: str | Path = DEFAULT_MODEL, configurations: int = 24,
                      repeats: int = 20, naive: bool = True) -> dict:
     """H_F's speed and its quadrature's accuracy (or H_q's speed for an F_q folder), and
     the analytic functionals' speed."""
     if dynamics_kind(model_dir) == "rigid":
         return {**bench_rigid(model_dir, repeats), **bench_analytic(repeats)}
+    if read_spec(model_dir).frame == "object":
+        return {**bench_framed(model_dir, repeats), **bench_analytic(repeats)}
     model = load_model(model_dir)
     ws = model.spec.workspace()
     # memory first, while the process's high-water mark is still low: 40 steps in one call

@@ -96,9 +96,9 @@ class LearnedDynamics:
                              f"measures (representation {model.spec.representation!r}) "
                              "predicts ψ, not φ")
         if model.spec.frame != "table":
-            raise ValueError("H_F needs a table-frame F_flow or F: this model reads X_h "
-                             "attached to the object (spec frame 'object'); score it with "
-                             "`robotplan eval push`, plan with a table-frame model or F_q")
+            raise ValueError("LearnedDynamics renders X_h on the table: it needs a "
+                             "table-frame F_flow or F; an object-frame one is "
+                             "robotplan.functionals.framed_dynamics.FramedDynamics's")
         self.model, self.obj, self.pusher = model.eval(), obj, pusher
         keep_freed_memory()  # its short-lived ~MB tensors would page-fault on every call
         for p in model.parameters():

@@ -2,7 +2,9 @@
 actor (a disc or another object), a cost on its mean squared residual or a bound on it.
 
 The model decides the functional: F_flow or F give H_F, the SDF residual over the table
-(:class:`~robotplan.functionals.dynamics.LearnedDynamics`); F_q gives H_q, the footprint's
+(:class:`~robotplan.functionals.dynamics.LearnedDynamics`, or
+:class:`~robotplan.functionals.framed_dynamics.FramedDynamics` for a model that reads its
+grid in the object's frame); F_q gives H_q, the footprint's
 displacement from the predicted rigid step
 (:class:`~robotplan.functionals.rigid_dynamics.RigidDynamics`). Both enter the program as
 mean squares in mm² per step."""
@@ -13,6 +15,7 @@ import numpy as np
 import torch
 
 from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
+from robotplan.functionals.framed_dynamics import FramedDynamics
 from robotplan.functionals.rigid_dynamics import RigidDynamics
 from robotplan.models.dynamics import PushDynamics
 from robotplan.models.rigid import RigidMotion
@@ -22,7 +25,7 @@ from robotplan.program.rows import ProgramRows
 
 __all__ = ["DynamicsRows", "mm2_per_unit"]
 
-Dynamics = LearnedDynamics | RigidDynamics
+Dynamics = LearnedDynamics | FramedDynamics | RigidDynamics
 
 
 def mm2_per_unit(dynamics: Dynamics, scene) -> float:
@@ -56,7 +59,9 @@ class DynamicsRows(ProgramRows):
             quad = phase_quadrature(torch.as_tensor(path[:, :2], dtype=torch.float32),
                                     obj.shape.bound_radius, self.scene.workspace,
                                     coarse=s.quad_coarse)
-            dynamics = LearnedDynamics(model, obj, actor, quad)
+            # an object-frame F_flow or F reads its grid about the object: H_F by autograd
+            framed = model.spec.frame == "object"
+            dynamics = (FramedDynamics if framed else LearnedDynamics)(model, obj, actor, quad)
         N, d = self.N, Q_actor.shape[1]
         scale = mm2_per_unit(dynamics, self.scene)
 

@@ -13,10 +13,6 @@ The ``turn_gain`` (least-squares slope of the fitted turn against the true one, 
 says how much of the object's turning the model predicts: 1 is all of it, 0 none. The fitted
 and the true step are also read as F_q's Δq (a turn about the footprint's centroid, then a
 shift) for the paper's Tab. 5 columns (``delta_q_error``).
-
-A table-frame model is read through H_F itself (:class:`LearnedDynamics`). An object-frame
-one, which H_F does not read, is fitted to its prediction of φ1_t on the same lattice,
-computed once (it does not depend on q1_t): the same minimiser of the same H_t.
 """
 
 from __future__ import annotations
@@ -30,7 +26,7 @@ from scipy.optimize import minimize
 
 from robotplan.functionals.base import Quadrature
 from robotplan.functionals.dynamics import LearnedDynamics
-from robotplan.functionals.grid_render import grid_with_tangents
+from robotplan.functionals.framed_dynamics import FramedDynamics
 from robotplan.geometry.transforms import wrap_angle
 from robotplan.models.dynamics import PushDynamics, load_model
 from robotplan.models.rigid import moved_pivot_delta
@@ -40,10 +36,9 @@ from robotplan.sdf.footprint import footprint_centroid
 from robotplan.training.footprints import BOX, LSHAPE
 from robotplan.training.push_data import scene_footprint
 from robotplan.training.rigid import table5_errors
-from robotplan.training.samples import PushSamples, SampleBatch
-from robotplan.training.train import framed
+from robotplan.training.samples import PushSamples
 
-__all__ = ["evaluate_pose_fit", "fit_step", "fit_to_prediction", "framed_prediction"]
+__all__ = ["evaluate_pose_fit", "fit_step"]
 
 LATTICE_HALF = 0.30  # m: the fit integrates H_t on a square of this half-side around q1_{t−1}
 LATTICE_STEP = 0.01  # m
@@ -62,8 +57,10 @@ def fit_step(model: PushDynamics, obj: Body, pusher: Body, q1_prev: np.ndarray,
              q2_prev: np.ndarray, q2_now: np.ndarray) -> np.ndarray:
     """The pose ``(3,)`` (x, y, yaw) that minimises H_t for the pusher's move
     ``q2_prev → q2_now`` from the object pose ``q1_prev``."""
-    dyn = LearnedDynamics(model, obj, pusher,
-                          _local_quadrature(q1_prev, next(model.parameters()).dtype))
+    # the planner's H_F, which reads an object-frame model's grid about the object
+    functional = FramedDynamics if model.spec.frame == "object" else LearnedDynamics
+    dyn = functional(model, obj, pusher,
+                     _local_quadrature(q1_prev, next(model.parameters()).dtype))
     X2 = torch.tensor(np.stack([q2_prev, q2_now]), dtype=torch.float64)
     scale = np.array([1.0, 1.0, 1.0 / YAW_SCALE])
     q1_prev = np.asarray(q1_prev, dtype=float)
@@ -74,40 +71,6 @@ def fit_step(model: PushDynamics, obj: Body, pusher: Body, q1_prev: np.ndarray,
         return 1e6 * float(H[0]), 1e6 * J1[0, 1].double().numpy() * scale  # mm²·m²
 
     return q1_prev + minimize(fun, np.zeros(3), jac=True, method="L-BFGS-B").x * scale
-
-
-def fit_to_prediction(obj: Body, quadrature: Quadrature, predicted: torch.Tensor,
-                      q1_prev: np.ndarray) -> np.ndarray:
-    """The pose ``(3,)`` that minimises H_t = Σ_n w_n (φ1(x_n; q1_t) − φ̂1_t(x_n))² for a
-    model's prediction ``predicted (N,)`` of φ1_t at the quadrature points, which does not
-    depend on q1_t: the fit of :func:`fit_step` with the prediction computed once (float64,
-    exact gradients of the object's SDF)."""
-    x, w = quadrature.points.double(), quadrature.weights.double()
-    target = predicted.double()
-    scale = np.array([1.0, 1.0, 1.0 / YAW_SCALE])
-    q1_prev = np.asarray(q1_prev, dtype=float)
-
-    def fun(z: np.ndarray) -> tuple[float, np.ndarray]:
-        X1 = torch.tensor(q1_prev + z * scale)[None]
-        phi, dphi = grid_with_tangents(obj, X1, x, position_only=False)
-        r = phi[0] - target
-        return 1e6 * float((r * r) @ w), 1e6 * (dphi[0] @ (2 * r * w)).numpy() * scale
-
-    return q1_prev + minimize(fun, np.zeros(3), jac=True, method="L-BFGS-B").x * scale
-
-
-@torch.no_grad()
-def framed_prediction(model: PushDynamics, sample: SampleBatch, obj: Body,
-                      quadrature: Quadrature, q1_prev: np.ndarray) -> torch.Tensor:
-    """φ̂1_t at the quadrature points ``(N,)`` by a model of any frame, for one
-    ``sample``: φ1_{t−1} + F_flow for a flow model, F itself for a direct one."""
-    spec, dtype = model.spec, next(model.parameters()).dtype
-    grid = spec.workspace().points(dtype).reshape(-1, 2)
-    points = quadrature.points.to(dtype)[None]
-    out = model(*framed(spec, sample, grid, points))[0].double()
-    if spec.kind != "flow":
-        return out
-    return obj.sdf(quadrature.points.double(), torch.tensor(q1_prev)[None])[0] + out
 
 
 def evaluate_pose_fit(model_dir: str | Path, data_dir: str | Path, samples: int = 100,
@@ -135,13 +98,7 @@ def evaluate_pose_fit(model_dir: str | Path, data_dir: str | Path, samples: int 
         obj = Body("object", "object", shape, tuple(q1p), 0.0, 0.06)
         tool = Body("pusher", "pusher", Circle(float(d["pusher_radius"][s])),
                     (q2p[0], q2p[1], 0.0), 0.0, 0.06)
-        if model.spec.frame == "table":  # through H_F, as the planner reads the model
-            fit = fit_step(model, obj, tool, q1p, q2p, q2n)
-        else:
-            quad = _local_quadrature(q1p, torch.float64)
-            sample = data.batch(np.array([i]), dtype=next(model.parameters()).dtype)
-            fit = fit_to_prediction(obj, quad, framed_prediction(model, sample, obj, quad, q1p),
-                                    q1p)
+        fit = fit_step(model, obj, tool, q1p, q2p, q2n)
         true, pred = q1n - q1p, fit - q1p
         true[2], pred[2] = wrap_angle(true[2]), wrap_angle(pred[2])
         rows.append((kind, *true, *pred))

@@ -7,7 +7,6 @@ import json
 import sys
 
 from robotplan.cli.main import main
-from tests.conftest import TASKS
 
 
 def _train(data, out, *extra: str) -> int:
@@ -153,11 +152,10 @@ def test_eval_push_averages_over_the_views_it_is_given(tiny_push_data, tmp_path,
     assert sorted(p.name for p in (tmp_path / "fq").iterdir()) == before
 
 
-def test_an_object_frame_f_flow_is_scored_and_refused_where_h_f_plans(tiny_push_data, tmp_path,
-                                                                       capsys):
+def test_an_object_frame_f_flow_trains_scores_and_fits(tiny_push_data, tmp_path, capsys):
     """``--model flow --frame object`` trains; ``eval push`` scores it on the table's X_h
-    and fits poses to it; planning through H_F, or turning its grid (``--views``), is
-    refused in one line naming the model, exit 2."""
+    and fits poses to it through its H_F; turning its grid (``--views``) is refused in one
+    line naming the model, exit 2."""
     out = tmp_path / "flow"
     assert main(["train", "push", "--data", str(tiny_push_data), "--out", str(out),
                  "--model", "flow", "--frame", "object", "--steps", "2", "--batch", "4",
@@ -177,8 +175,3 @@ def test_an_object_frame_f_flow_is_scored_and_refused_where_h_f_plans(tiny_push_
     assert main([*eval_push, "--views", "4"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"error: {out}") and "--views" in err and "\n" not in err
-    assert main(["solve", str(TASKS / "box_push.yaml"), "--model", str(out), "--out",
-                 str(tmp_path / "plan")]) == 2
-    err = capsys.readouterr().err.strip()
-    assert "spec.json: frame:" in err and "\n" not in err
-    assert not (tmp_path / "plan").exists()

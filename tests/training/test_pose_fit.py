@@ -67,27 +67,30 @@ def test_evaluate_pose_fit_reports_both_shapes():
         assert 0 <= mean < 30 and std >= 0
 
 
-def test_fitting_the_prediction_once_finds_the_pose_h_f_finds():
-    """The object-frame path (the model's φ̂1_t computed once on the lattice, then fitted) is
-    the fit through H_F: on a table-frame model both end at the same pose."""
-    from robotplan.training.pose_fit import fit_to_prediction, framed_prediction
+def test_an_object_frame_model_is_fitted_through_its_own_h_f():
+    """An object-frame F_flow is read as the planner reads it (H_F with the grid about the
+    object): the fitted pose has a lower H_t than the start and than small moves around it."""
+    from robotplan.functionals.framed_dynamics import FramedDynamics
+    from robotplan.models.dynamics import DynamicsSpec, PushDynamics
+    from robotplan.models.spec import OBJECT_WINDOW
 
-    model = load_model(FLOW)
-    data = PushSamples(DATA / "push_sample")
-    d = data.data
-    rng = np.random.default_rng(1)
-    for i in rng.choice(np.flatnonzero(data.contact), 2, replace=False):
-        s, now = data.scene[i], data.now[i]
-        hw, hh, th = data.params[s]
-        shape = LShape((2 * hw, 2 * hh), float(th)) if th < 2 * hh - 1e-9 else Box((2 * hw, 2 * hh))
-        q1p = d["object_pose"][now - 1].astype(float)
-        q2p, q2n = d["pusher_xy"][now - 1].astype(float), d["pusher_xy"][now].astype(float)
-        obj = Body("o", "object", shape, tuple(q1p), 0.0, 0.06)
-        tool = Body("p", "pusher", Circle(float(d["pusher_radius"][s])), (*q2p, 0.0), 0.0, 0.06)
-        through_h_f = fit_step(model, obj, tool, q1p, q2p, q2n)
-        quad = _local_quadrature(q1p, torch.float64)
-        once = fit_to_prediction(obj, quad, framed_prediction(
-            model, data.batch(np.array([i])), obj, quad, q1p), q1p)
-        assert np.linalg.norm(once - q1p) > 1e-4  # a real step, not the start
-        assert np.abs(once[:2] - through_h_f[:2]).max() < 2e-5
-        assert abs(once[2] - through_h_f[2]) < 1e-4
+    torch.manual_seed(2)
+    spec = DynamicsSpec(kind="flow", frame="object", channels=(2, 3, 3), sdf_features=16,
+                        point_features=8, hidden=(24, 24), **OBJECT_WINDOW)
+    model = PushDynamics(spec).double()
+    q1p, q2p, q2n = np.array([0.02, 0.01, 0.3]), np.array([-0.14, 0.02]), np.array([-0.12, 0.02])
+    obj = Body("o", "object", LShape((0.2, 0.16), 0.07), tuple(q1p), 0.0, 0.06)
+    tool = Body("p", "pusher", Circle(0.025), (*q2p, 0.0), 0.0, 0.06)
+    fit = fit_step(model, obj, tool, q1p, q2p, q2n)
+    H = FramedDynamics(model, obj, tool, _local_quadrature(q1p, torch.float64))
+    X2 = torch.tensor(np.stack([q2p, q2n]))
+
+    def h(q1) -> float:
+        return float(H.evaluate(torch.tensor(np.stack([q1p, q1])), X2, jacobian=False)[0][0])
+
+    assert np.linalg.norm(fit - q1p) > 1e-5 and h(fit) < h(q1p)
+    for k, eps in ((0, 1e-3), (1, 1e-3), (2, 1e-2)):
+        for sign in (-1, 1):
+            moved = fit.copy()
+            moved[k] += sign * eps
+            assert h(fit) <= h(moved) * (1 + 1e-6)
