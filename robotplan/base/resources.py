@@ -10,8 +10,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-__all__ = ["DYNAMICS_FOLDERS", "REHEARSAL_FOLDERS", "data_root", "learned_dir",
-           "robots_dir", "skeletons_dir", "tasks_dir"]
+__all__ = ["DYNAMICS_FOLDERS", "OBJECT_FRAME_FOLDERS", "REHEARSAL_FOLDERS", "data_root",
+           "learned_dir", "robots_dir", "skeletons_dir", "tasks_dir"]
 
 _PACKAGE = Path(__file__).resolve().parents[1]
 
@@ -35,6 +35,8 @@ def skeletons_dir() -> Path:
 
 # the shipped model of each kind of learned dynamics (``--dynamics``), under learned/
 DYNAMICS_FOLDERS = {"flow": "push_flow", "rigid": "push_rigid", "direct": "push_direct"}
+# F_flow and F with X_h attached to the object (``train push --frame object``), beside them
+OBJECT_FRAME_FOLDERS = {"flow": "push_flow_object", "direct": "push_direct_object"}
 # the F_q a plan is rehearsed in before the open loop, by footprint type: the object-frame one
 # where it was trained (it follows pybullet closest over whole plans); any other footprint in
 # the plan's own F_q (the object-frame one errs 3x as much on footprints never trained on)

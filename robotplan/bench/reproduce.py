@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from robotplan.base.files import write_atomically
-from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
+from robotplan.base.resources import DYNAMICS_FOLDERS, OBJECT_FRAME_FOLDERS, learned_dir
 from robotplan.bench.hang import METHODS, PAPER_HANG
 from robotplan.bench.paper import FLOW_REPRESENTATIONS, REPRESENTATIONS, spec_flags
 from robotplan.bench.report import write_report
@@ -191,6 +191,15 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
                 lambda f, k=kind, d=folder: evaluate_push(models[k], d, per_scene=per,
                                                           progress=False),
                 f"robotplan eval push --model learned/push_{kind} --data DATA --per-scene {per}")
+            framed = learned_dir(OBJECT_FRAME_FOLDERS[kind])
+            if (framed / "spec.json").is_file():
+                results[f"rmse_{kind}_object_{set_name}"] = steps.run(
+                    f"eval_{kind}_object_{set_name}",
+                    {"per_scene": per, "data": folder.parent.name},
+                    lambda f, m=framed, d=folder: evaluate_push(m, d, per_scene=per,
+                                                                progress=False),
+                    f"robotplan eval push --model learned/{framed.name} --data DATA "
+                    f"--per-scene {per}")
         results[f"rigid_{set_name}"] = steps.run(
             f"eval_rigid_{set_name}", {"per_scene": per, "data": folder.parent.name},
             lambda f, d=folder: evaluate_rigid(models["rigid"], d, per_scene=per),

@@ -37,11 +37,15 @@ def _ms(pair) -> str:
 def _tab2(results: dict, set_name: str) -> list:
     rows = []
     for label, kind in (("F_flow", "flow"), ("F", "direct")):
-        r = results[f"rmse_{kind}_{set_name}"]["result"]
         paper = TAB2[label]
-        rows.append([label, _ms((r["rmse_mm"]["contact"], r["rmse_std_mm"]["contact"])),
-                     _ms((r["rmse_mm"]["free"], r["rmse_std_mm"]["free"])),
-                     _ms(paper["contact"]), _ms(paper["free"])])
+        for name, key in ((label, f"rmse_{kind}_{set_name}"),
+                          (f"{label}, object frame", f"rmse_{kind}_object_{set_name}")):
+            if key not in results:  # no object-frame model shipped
+                continue
+            r = results[key]["result"]
+            rows.append([name, _ms((r["rmse_mm"]["contact"], r["rmse_std_mm"]["contact"])),
+                         _ms((r["rmse_mm"]["free"], r["rmse_std_mm"]["free"])),
+                         _ms(paper["contact"]), _ms(paper["free"])])
     r = results[f"rigid_{set_name}"]["result"]
     if "rmse_mm" in r:  # F_q's φ1_t = T(Δq)[φ1_{t−1}]; the paper gives no Tab. 2 row for it
         rows.append(["F_q, T(Δq)[φ1_{t−1}]",

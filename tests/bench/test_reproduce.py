@@ -19,7 +19,7 @@ from robotplan.bench.reproduce import (
     reproduce,
 )
 from robotplan.bench.reproduce_hang import HANG_REPRESENTATIONS, hang_representations
-from robotplan.bench.reproduce_report import _analytic_rows, _tab4, _tab56
+from robotplan.bench.reproduce_report import _analytic_rows, _tab2, _tab4, _tab56
 from robotplan.bench.steps import Steps
 from robotplan.cli.main import main
 
@@ -57,6 +57,22 @@ def test_fig6_sets_the_analytic_model_beside_the_learned_one_for_each_shape():
                                      ["L-shapes", "learned (Fig. 3's run)"],
                                      ["L-shapes", "analytic"]]
     assert rows[1][3:5] == ["0.500 (0.250)", "0.500 (0.250)"] and rows[2][5] == "9.0"
+
+
+def test_tab2_sets_each_object_frame_model_below_its_table_frame_one():
+    def scored(contact: float, free: float) -> dict:
+        return {"result": {"rmse_mm": {"contact": contact, "free": free},
+                           "rmse_std_mm": {"contact": 1.0, "free": 2.0},
+                           "baseline_rmse_mm": {"contact": 10.0, "free": 0.0},
+                           "baseline_std_mm": {"contact": 4.0, "free": 0.0}}}
+
+    results = {"rmse_flow_test": scored(3.9, 1.3), "rmse_direct_test": scored(7.0, 8.9),
+               "rmse_flow_object_test": scored(2.1, 0.9), "rigid_test": {"result": {}}}
+    rows = _tab2(results, "test")
+    assert [r[0] for r in rows] == ["F_flow", "F_flow, object frame", "F", "no motion"]
+    assert rows[1][1:] == ["2.10 ± 1.00", "0.90 ± 2.00", "3.40 ± 1.60", "1.40 ± 1.80"]
+    del results["rmse_flow_object_test"]
+    assert [r[0] for r in _tab2(results, "test")] == ["F_flow", "F", "no motion"]
 
 
 def test_reproduce_refuses_a_folder_of_other_files(tmp_path, capsys):
