@@ -221,3 +221,20 @@ def test_an_object_frame_flow_learns_and_is_scored_on_the_tables_grid(tiny_push_
         train(replace(cfg, out=str(tmp_path / "b"), augment="turns"), progress=False)
     with pytest.raises(ValueError, match="views"):
         evaluate_push(tmp_path / "obj", tiny_push_data, per_scene=1, progress=False, views=4)
+
+
+def test_an_evaluation_on_unseen_footprints_is_recorded_beside_the_held_out_one(
+        tiny_push_data, tiny_ood_push_data, tmp_path):
+    """``eval push --record`` on a ``--shapes ood`` folder stores the result as ``unseen``
+    and the card gets its row; the held-out result stays where it was."""
+    out = tmp_path / "m"
+    train(config(tiny_push_data, out, 2), progress=False)
+    held = evaluate_push(out, tiny_push_data, per_scene=1, progress=False)
+    unseen = evaluate_push(out, tiny_ood_push_data, per_scene=1, progress=False)
+    record_heldout(out, held)
+    record_heldout(out, unseen)
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["heldout"] == held and metrics["unseen"] == unseen
+    card = (out / "MODEL_CARD.md").read_text()
+    assert f"| held-out `{tiny_push_data}`" in card
+    assert f"| unseen footprints `{tiny_ood_push_data}`" in card
