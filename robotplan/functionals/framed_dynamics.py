@@ -58,6 +58,13 @@ class FramedDynamics:
             self.phi1_window = obj.sdf(self.window_points, at_origin)  # (H·W,)
         self.quadrature = Quadrature(quadrature.points.to(self.dtype),
                                      quadrature.weights.to(self.dtype))
+        # the query point's encoder and the head's point part are both linear: one map
+        # from the window's normalised coordinates to the first layer (2 → H1)
+        with torch.no_grad():
+            lin, first = model.point_encoder, model.first_point
+            self.point_weight = (first.weight @ lin.weight).T / model.half_size[:, None]
+            self.point_bias = first.weight @ (lin.bias - lin.weight @ (model.center
+                                                                       / model.half_size))
 
     def _frames(self, X1_prev: Tensor) -> Tensor:
         """F_t ``(T, 3)``: the object frames at the states ``X1_prev (T, 3)``."""
@@ -71,7 +78,9 @@ class FramedDynamics:
         inputs = torch.stack((self.phi1_window.expand(T, -1), self.pusher.sdf(placed, q2p),
                               self.pusher.sdf(placed, q2n)), 1).reshape(T, 3, *self.shape)
         x, w = self.quadrature.points, self.quadrature.weights
-        out = self.model(inputs, planar_to_body(x[None], frames))  # (T, N)
+        m = self.model
+        point_term = planar_to_body(x[None], frames) @ self.point_weight + self.point_bias
+        out = m.from_terms(m.sdf_term(m.features(inputs)), point_term)  # (T, N)
         predicted = self.obj.sdf(x[None], q1p) + out if self.model.spec.kind == "flow" else out
         residual = self.obj.sdf(x[None], q1n) - predicted
         return (residual * residual) @ w
