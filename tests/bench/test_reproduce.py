@@ -150,11 +150,13 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     assert "Not run yet" not in text, "every item of the paper has its code"
     assert "| F_flow | " in text and "| 3.40 ± 1.60 | 1.40 ± 1.80 |" in text
     assert "| F_q, T(Δq)[φ1_{t−1}] | " in text  # F_q scored in Tab. 2's terms beside F_flow
+    assert "| F_flow, object frame | " in text and "| F, object frame | " in text
     run = json.loads((tmp_path / "run.json").read_text())
     assert "| F_q on occupancy ψ_s (b = 100), 2 steps |" in text
     # data, training and evaluation of six representations: 1 + 6 + 12 steps; Figs. 5, 6: 1;
-    # Tab. 4's four F_flow: 4 + 4; Tab. 3's two H_hang: 2 data, 2 trainings, 2 benches
-    assert len(run["steps"]) == 50 and run["sizes"]["test_scenes"] == 3
+    # Tab. 4's four F_flow: 4 + 4; Tab. 3's two H_hang: 2 data, 2 trainings, 2 benches;
+    # Tab. 2's object-frame F_flow and F on both sets: 4
+    assert len(run["steps"]) == 54 and run["sizes"]["test_scenes"] == 3
     reproduce(tmp_path, tiny, workers=1, progress=False)
     again = json.loads((tmp_path / "run.json").read_text())
     assert [s["folder"] for s in again["steps"]] == [s["folder"] for s in run["steps"]]
