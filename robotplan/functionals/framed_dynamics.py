@@ -20,12 +20,14 @@ import torch
 from torch import Tensor
 
 from robotplan.functionals.base import Quadrature
+from robotplan.functionals.dynamics import LearnedDynamics
 from robotplan.geometry.transforms import planar_to_body, planar_to_world
 from robotplan.models.dynamics import PushDynamics
+from robotplan.models.rigid import object_frame
 from robotplan.scene.bodies import Body
 from robotplan.sdf.footprint import footprint_centroid
 
-__all__ = ["FramedDynamics"]
+__all__ = ["FramedDynamics", "field_dynamics"]
 
 
 class FramedDynamics:
@@ -58,29 +60,15 @@ class FramedDynamics:
             self.phi1_window = obj.sdf(self.window_points, at_origin)  # (H·W,)
         self.quadrature = Quadrature(quadrature.points.to(self.dtype),
                                      quadrature.weights.to(self.dtype))
-        # the query point's encoder and the head's point part are both linear: one map
-        # from the window's normalised coordinates to the first layer (2 → H1)
-        with torch.no_grad():
-            lin, first = model.point_encoder, model.first_point
-            self.point_weight = (first.weight @ lin.weight).T / model.half_size[:, None]
-            self.point_bias = first.weight @ (lin.bias - lin.weight @ (model.center
-                                                                       / model.half_size))
-
-    def _frames(self, X1_prev: Tensor) -> Tensor:
-        """F_t ``(T, 3)``: the object frames at the states ``X1_prev (T, 3)``."""
-        origin = planar_to_world(self.centroid[None, None], X1_prev)[:, 0]
-        return torch.cat((origin, X1_prev[:, 2:]), 1)
 
     def _values(self, q1p: Tensor, q1n: Tensor, q2p: Tensor, q2n: Tensor) -> Tensor:
         T = q1p.shape[0]
-        frames = self._frames(q1p)
+        frames = object_frame(q1p, self.centroid.expand(T, 2))
         placed = planar_to_world(self.window_points[None], frames)  # (T, H·W, 2)
         inputs = torch.stack((self.phi1_window.expand(T, -1), self.pusher.sdf(placed, q2p),
                               self.pusher.sdf(placed, q2n)), 1).reshape(T, 3, *self.shape)
         x, w = self.quadrature.points, self.quadrature.weights
-        m = self.model
-        point_term = planar_to_body(x[None], frames) @ self.point_weight + self.point_bias
-        out = m.from_terms(m.sdf_term(m.features(inputs)), point_term)  # (T, N)
+        out = self.model(inputs, planar_to_body(x[None], frames))  # (T, N)
         predicted = self.obj.sdf(x[None], q1p) + out if self.model.spec.kind == "flow" else out
         residual = self.obj.sdf(x[None], q1n) - predicted
         return (residual * residual) @ w
@@ -98,3 +86,12 @@ class FramedDynamics:
         # step's own derivatives row by row
         g1p, g1n, g2p, g2n = torch.autograd.grad(H.sum(), parts)
         return H.detach(), torch.stack((g1p, g1n), 1), torch.stack((g2p, g2n), 1)
+
+
+def field_dynamics(model: PushDynamics, obj: Body, pusher: Body, quadrature: Quadrature
+                   ) -> LearnedDynamics | FramedDynamics:
+    """H_F for an F_flow or F of either frame: the table-frame fast path
+    (:class:`LearnedDynamics`), or :class:`FramedDynamics` for a model that reads its grid
+    about the object."""
+    functional = FramedDynamics if model.spec.frame == "object" else LearnedDynamics
+    return functional(model, obj, pusher, quadrature)

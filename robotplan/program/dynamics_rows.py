@@ -15,7 +15,7 @@ import numpy as np
 import torch
 
 from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
-from robotplan.functionals.framed_dynamics import FramedDynamics
+from robotplan.functionals.framed_dynamics import FramedDynamics, field_dynamics
 from robotplan.functionals.rigid_dynamics import RigidDynamics
 from robotplan.models.dynamics import PushDynamics
 from robotplan.models.rigid import RigidMotion
@@ -59,9 +59,7 @@ class DynamicsRows(ProgramRows):
             quad = phase_quadrature(torch.as_tensor(path[:, :2], dtype=torch.float32),
                                     obj.shape.bound_radius, self.scene.workspace,
                                     coarse=s.quad_coarse)
-            # an object-frame F_flow or F reads its grid about the object: H_F by autograd
-            framed = model.spec.frame == "object"
-            dynamics = (FramedDynamics if framed else LearnedDynamics)(model, obj, actor, quad)
+            dynamics = field_dynamics(model, obj, actor, quad)
         N, d = self.N, Q_actor.shape[1]
         scale = mm2_per_unit(dynamics, self.scene)
 

@@ -25,8 +25,7 @@ import torch
 from scipy.optimize import minimize
 
 from robotplan.functionals.base import Quadrature
-from robotplan.functionals.dynamics import LearnedDynamics
-from robotplan.functionals.framed_dynamics import FramedDynamics
+from robotplan.functionals.framed_dynamics import field_dynamics
 from robotplan.geometry.transforms import wrap_angle
 from robotplan.models.dynamics import PushDynamics, load_model
 from robotplan.models.rigid import moved_pivot_delta
@@ -58,9 +57,8 @@ def fit_step(model: PushDynamics, obj: Body, pusher: Body, q1_prev: np.ndarray,
     """The pose ``(3,)`` (x, y, yaw) that minimises H_t for the pusher's move
     ``q2_prev → q2_now`` from the object pose ``q1_prev``."""
     # the planner's H_F, which reads an object-frame model's grid about the object
-    functional = FramedDynamics if model.spec.frame == "object" else LearnedDynamics
-    dyn = functional(model, obj, pusher,
-                     _local_quadrature(q1_prev, next(model.parameters()).dtype))
+    dyn = field_dynamics(model, obj, pusher,
+                         _local_quadrature(q1_prev, next(model.parameters()).dtype))
     X2 = torch.tensor(np.stack([q2_prev, q2_now]), dtype=torch.float64)
     scale = np.array([1.0, 1.0, 1.0 / YAW_SCALE])
     q1_prev = np.asarray(q1_prev, dtype=float)
