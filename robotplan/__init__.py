@@ -11,11 +11,20 @@ from robotplan.base.arith import pin_arithmetic
 pin_arithmetic()  # before any module of ours imports torch
 
 from robotplan.scene import Body, Scene, SceneError, load_scene  # noqa: E402
+from robotplan.scene.task import (  # noqa: E402
+    HangTask,
+    PushTask,
+    Task,
+    UnsupportedScene,
+    load_task,
+    make_task,
+)
 
-__all__ = ["Body", "Execution", "Plan", "Scene", "SceneError", "execute", "load_scene", "plan",
-           "solve", "write_playback"]
+__all__ = ["Body", "Execution", "HangPlan", "HangTask", "PushPlan", "PushTask", "Scene",
+           "SceneError", "Task", "UnsupportedScene", "execute", "load_scene", "load_task",
+           "make_task", "plan", "solve", "write_playback"]
 
-_FACADE = {"Execution", "Plan", "execute", "plan", "solve", "write_playback"}
+_FACADE = {"Execution", "HangPlan", "PushPlan", "execute", "plan", "solve", "write_playback"}
 
 
 def __getattr__(name: str) -> object:

@@ -1,5 +1,6 @@
-"""The facade: plan() without a simulator, from a scene at observed poses and from an
-earlier plan; execute() and write_playback() on its result."""
+"""The facade: plan() without a simulator, of a task or of a scene (classified first), from
+a scene at observed poses and from an earlier plan; execute() and write_playback() on its
+result."""
 
 import numpy as np
 import pytest
@@ -11,13 +12,16 @@ from tests.conftest import TASKS
 
 @pytest.fixture(scope="module")
 def box_plan():
-    scene = load_scene(TASKS / "box_push.yaml")
-    return scene, robotplan.plan(scene, skeleton="push@0", workers=1, progress=False,
-                                 quiet=True)
+    task = robotplan.load_task(TASKS / "box_push.yaml")
+    return task.scene, robotplan.plan(task, skeleton="push@0", workers=1, progress=False,
+                                      quiet=True)
 
 
 def test_plan_needs_no_simulator_and_execute_runs_it(box_plan, tmp_path):
-    _scene, planned = box_plan
+    scene, planned = box_plan
+    assert isinstance(planned, robotplan.PushPlan)
+    assert planned.task == robotplan.make_task(scene) and planned.scene is scene
+    assert planned.obj == "box"
     assert planned.best is not None and planned.solved
     summary = planned.summary()
     assert summary["status"] == "solved" and summary["skeleton"][0]["mode"] == "reach"
@@ -38,7 +42,8 @@ def test_a_scene_at_observed_poses_and_a_warm_start(box_plan):
     with pytest.raises(KeyError, match="no body"):
         scene.with_state({"nothing": (0, 0, 0)})
     again = robotplan.plan(observed, warm_start=planned, workers=1, max_pushes=1,
-                           progress=False, quiet=True)
+                           progress=False, quiet=True)  # a scene: classified first
+    assert again.task == planned.task.at(observed) and again.scene is observed
     first = again.candidates[0]
     assert first.skeleton == planned.best.skeleton  # the old skeleton, tried first
     # the kinematic stage repairs the earlier plan re-anchored at the observed start

@@ -2,19 +2,52 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 
+from robotplan.base.files import write_atomically
 from robotplan.execution.execute import Execution, plan_substeps
 from robotplan.execution.perturb import Perturbation
 from robotplan.execution.sim import PHYSICS
+from robotplan.functionals.clearance import OBSTACLE_MARGIN
 from robotplan.program.solution import Solution
-from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
+from robotplan.search.planner import FEASIBLE, PLAUSIBLE_RMS_MM
+from robotplan.search.scene_search import metres
 
-__all__ = ["execution_summary"]
+__all__ = ["candidate_summary", "execution_summary", "thresholds", "write_json"]
 
 
-def _track_doc(sol: Solution, scene: Scene, obj: str) -> dict:
-    times = np.concatenate(([0.0], np.cumsum(plan_substeps(scene, sol)))) * PHYSICS.timestep
+def candidate_summary(s: Solution) -> dict:
+    """One solved candidate's entry of ``result.json``."""
+    return {"skeleton": s.skeleton.describe(), "violation": s.violation, "cost": s.cost,
+            "seconds": round(s.seconds, 2), "dynamics_rms_mm": round(s.dynamics_rms_mm, 3),
+            "obstacle_clearance": metres(s.clearance), "timings": s.timings,
+            "status": s.status}
+
+
+def thresholds() -> dict:
+    """The thresholds a push plan is judged by, recorded beside it."""
+    return {"feasibility_threshold": FEASIBLE, "plausible_dynamics_rms_mm": PLAUSIBLE_RMS_MM,
+            "obstacle_margin": OBSTACLE_MARGIN}
+
+
+def _json(x: object) -> object:
+    if isinstance(x, np.generic):
+        return x.item()
+    raise TypeError(type(x))
+
+
+def write_json(path: Path, doc: dict) -> None:
+    """``doc`` as ``path``, whole or not at all (numpy scalars as numbers)."""
+    write_atomically(path, lambda tmp: tmp.write_text(json.dumps(doc, indent=1, default=_json)))
+
+
+def _track_doc(sol: Solution, task: PushTask) -> dict:
+    obj = task.obj
+    times = np.concatenate(([0.0], np.cumsum(plan_substeps(task, sol)))) * PHYSICS.timestep
     doc = {"t": [round(float(v), 6) for v in times], "skeleton": sol.skeleton.describe(),
            "pusher": sol.q_pusher.tolist(),
            "objects": {obj: sol.q_obj.tolist(), **{k: v.tolist() for k, v in sol.q_others.items()}},
@@ -34,7 +67,7 @@ def execution_summary(planned, executed: Execution,
     plans = ex.plans or [(0, planned.best)]
     tracks = []
     for step, sol in plans:
-        track = _track_doc(sol, planned.scene, obj)
+        track = _track_doc(sol, planned.task)
         tracks.append({"step": step, "time": round(float(ex.times[step]), 4), **track})
     doc = {"execution": {"simulator": "pybullet", "mode": ex.mode,
                          "coverage": ex.coverage,

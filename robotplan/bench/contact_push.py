@@ -21,13 +21,14 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from robotplan.api import Plan, execute
+from robotplan.api import PushPlan, execute
 from robotplan.geometry.transforms import planar_to_world
 from robotplan.models.loading import load_dynamics
 from robotplan.program.push_program import PushProgram
 from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings
 from robotplan.program.skeleton import Phase, Skeleton, space_for
 from robotplan.scene import Scene, parse_scene
+from robotplan.scene.task import make_task
 from robotplan.sdf import Box
 
 __all__ = ["CONTACT_PUSH_SETTINGS", "contact_push_scene", "plan_from_contact",
@@ -83,16 +84,17 @@ def plan_from_contact(model_dir: str | Path,
     coverage of the goal footprint, the program's violation and dynamics residual, and
     seconds."""
     scene = contact_push_scene()
-    space = space_for(scene)
+    task = make_task(scene)
+    space = space_for(task)
     # one push phase (init 0: straight behind the box, as it starts)
     skeleton = Skeleton((Phase("push", "pusher", "box", init=0),))
     model = load_dynamics(model_dir).double()
     t0 = time.perf_counter()
-    program = PushProgram(scene, skeleton, model, space, settings,
+    program = PushProgram(task, skeleton, model, space, settings,
                           guess=still_guess(scene, space.steps_per_phase))
     sol = program.solve()
     seconds = time.perf_counter() - t0
-    executed = execute(Plan(scene, "box", sol, sol.success), mode="open_loop")
+    executed = execute(PushPlan(task, sol, sol.success), mode="open_loop")
     goal = np.array([TRAVEL, 0.0])
     return {"model": str(model_dir), "violation": float(sol.violation),
             "solved": bool(sol.success), "dynamics_rms_mm": float(sol.dynamics_rms_mm),

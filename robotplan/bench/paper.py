@@ -3,9 +3,7 @@ as printed there), and the parts of its evaluation that robotplan does not run y
 
 from __future__ import annotations
 
-from robotplan.bench.hang import PAPER_TAB3
-
-__all__ = ["FIG3", "FIG5", "FIG8", "FLOW_REPRESENTATIONS", "NOT_RUN", "PAPER_TAB3",
+__all__ = ["FIG3", "FIG5", "FIG8", "FLOW_REPRESENTATIONS", "NOT_RUN",
            "PAPER_TAB3_BASELINES",
            "REPRESENTATIONS", "SPEC_FLAGS", "TAB2", "TAB4", "TAB5", "TAB6", "spec_flags"]
 

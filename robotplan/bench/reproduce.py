@@ -14,12 +14,12 @@ from pathlib import Path
 
 from robotplan.base.files import write_atomically
 from robotplan.base.resources import DYNAMICS_FOLDERS, OBJECT_FRAME_FOLDERS, learned_dir
-from robotplan.bench.hang import METHODS, PAPER_HANG
 from robotplan.bench.paper import FLOW_REPRESENTATIONS, REPRESENTATIONS, spec_flags
 from robotplan.bench.report import write_report
-from robotplan.bench.reproduce_hang import HANG_REPRESENTATIONS, hang_representations
 from robotplan.bench.reproduce_report import report_blocks
 from robotplan.bench.steps import Steps, inputs_digest
+from robotplan.hanging.bench.bench import METHODS, PAPER_HANG
+from robotplan.hanging.bench.reproduce import HANG_REPRESENTATIONS, hang_representations
 
 __all__ = ["ABLATIONS", "ANALYTIC", "FULL", "QUICK", "ReproduceSizes", "inputs_digest", "reproduce"]
 
@@ -161,8 +161,8 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
     ``out/report.html``; returns the Markdown report's path. ``workers`` and ``ray`` as for
     ``data push`` and ``bench push``."""
     from robotplan.bench.contact_push import plan_from_contact, plot_contact_pushes
-    from robotplan.bench.hang import run_bench_hang
     from robotplan.bench.push import run_bench_push
+    from robotplan.hanging.bench.bench import run_bench_hang
     from robotplan.training.evaluation import evaluate_push
     from robotplan.training.pose_fit import evaluate_pose_fit
     from robotplan.training.push_data import PushDataSpec, generate

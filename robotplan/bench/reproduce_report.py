@@ -19,7 +19,7 @@ from robotplan.bench.paper import (
     TAB6,
 )
 from robotplan.bench.report import Block
-from robotplan.bench.report_hang import tab3_blocks
+from robotplan.hanging.bench.report import tab3_blocks
 
 __all__ = ["report_blocks"]
 

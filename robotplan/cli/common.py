@@ -32,10 +32,10 @@ def load_footprint_scene(path: str, command: str):
     """A scene for a command that works on footprints (table-top SDFs on X_h); a hang scene is
     refused with SceneError naming the goal (exit 2 through ``main``)."""
     from robotplan.scene import SceneError, load_scene
-    from robotplan.scene.schema import HangGoal
+    from robotplan.scene.task import family_of
 
     scene = load_scene(path)
-    if isinstance(scene.goal, HangGoal):
+    if family_of(scene) == "hang":
         raise SceneError(path, "goal", f"{command} works on table-top footprints; the mug and "
                          "hook of a hang scene are 3D (robotplan solve plans it and writes its "
                          "playback)")

@@ -17,9 +17,9 @@ from robotplan.cli.common import (
     print_result,
     program_overrides,
 )
-from robotplan.cli.hang_commands import solve_hang_scene
+from robotplan.hanging.cli.commands import solve_hang_scene
 from robotplan.scene import SceneError, load_scene
-from robotplan.scene.schema import HangGoal
+from robotplan.scene.task import UnsupportedScene, family_of, make_task
 
 __all__ = ["cmd_check", "cmd_diagnose", "cmd_render", "cmd_solve", "cmd_view"]
 
@@ -38,13 +38,13 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
-    from robotplan.api.hang import write_hang_scene_picture
+    from robotplan.hanging.api.planner import write_hang_scene_picture
     from robotplan.viz.render import render_scene_sdf
 
     # refuse bad input before writing anything
     scenes = [load_scene(f) for f in args.files]
     out = Path(args.out)
-    targets = [out / f"{Path(f).stem}_{'scene' if isinstance(s.goal, HangGoal) else 'sdf'}.png"
+    targets = [out / f"{Path(f).stem}_{'scene' if family_of(s) == 'hang' else 'sdf'}.png"
                for f, s in zip(args.files, scenes, strict=True)]
     if not args.overwrite:
         existing = [str(t) for t in targets if t.exists()]
@@ -53,7 +53,7 @@ def cmd_render(args: argparse.Namespace) -> int:
                   file=sys.stderr)
             return EXIT_BAD_INPUT
     for scene, target in zip(scenes, targets, strict=False):
-        if isinstance(scene.goal, HangGoal):  # 3D shapes: a picture of the scene
+        if family_of(scene) == "hang":  # 3D shapes: a picture of the scene
             write_hang_scene_picture(scene, target)
         else:
             render_scene_sdf(scene, target)
@@ -62,9 +62,14 @@ def cmd_render(args: argparse.Namespace) -> int:
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
-    from robotplan.api import UnsupportedScene, solve
+    from robotplan.api import solve
 
     scene = load_scene(args.scene)
+    try:
+        task = make_task(scene)
+    except UnsupportedScene as err:
+        print(f"error: {args.scene}: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     loop, program = loop_overrides(args), program_overrides(args)
     if loop is None or program is None:
         return EXIT_BAD_INPUT
@@ -73,22 +78,19 @@ def cmd_solve(args: argparse.Namespace) -> int:
         print(f"error: {out}: --out: the folder is not empty; pass --overwrite to replace "
               "its result", file=sys.stderr)
         return EXIT_BAD_INPUT
-    if isinstance(scene.goal, HangGoal):
-        return solve_hang_scene(scene, out, args.model, args.open_loop)
+    if task.family == "hang":
+        return solve_hang_scene(task, out, args.model, args.open_loop)
     args.model = model_folder(args)
     if not_a_model(args.model):
         return EXIT_BAD_INPUT
     out.mkdir(parents=True, exist_ok=True)
     try:
-        doc = solve(scene, out, args.model, solver=args.solver, workers=args.workers,
+        doc = solve(task, out, args.model, solver=args.solver, workers=args.workers,
                     skeleton=args.skeleton, max_pushes=args.max_pushes,
                     exhaustive=args.exhaustive, time_budget=args.time_budget,
                     mode="open_loop" if args.open_loop else "closed_loop",
                     perturb=perturbation(args.perturb), loop=loop, program=program,
                     rehearse_plan=not args.no_rehearse)
-    except UnsupportedScene as err:
-        print(f"error: {args.scene}: {err}", file=sys.stderr)
-        return EXIT_BAD_INPUT
     except ValueError as err:  # a bad --skeleton
         print(f"error: --skeleton: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -112,7 +114,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     scene = load_footprint_scene(args.scene, "diagnose")
     try:
-        checks = check_steps(scene, json.loads(path.read_text()), args.model)
+        checks = check_steps(make_task(scene), json.loads(path.read_text()), args.model)
     except (ValueError, KeyError, StopIteration) as err:
         print(f"error: {path}: {err!s} (is {args.scene} the scene it was solved for?)",
               file=sys.stderr)

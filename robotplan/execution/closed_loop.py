@@ -52,7 +52,7 @@ from robotplan.execution.steering import follow_object, steer_actor, steer_pushe
 from robotplan.geometry.transforms import wrap_angle
 from robotplan.program.solution import Solution
 from robotplan.program.tail import solution_tail
-from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 from robotplan.search.planner import adoptable
 
 __all__ = ["LOOP_CLASSES", "LoopSettings", "Replan", "departure", "execute_closed_loop",
@@ -82,11 +82,11 @@ class Replan:
         return out
 
 
-# a re-planner: (observed scene, tail of the current plan to start from or None, whether a
-# fresh search may follow when the tail does not solve, the violation within which the loop
-# adopts an unsolved plan or None) → an object with ``best`` (Solution | None) and
-# ``solved`` (robotplan.api.Plan)
-Replanner = Callable[[Scene, "Solution | None", bool, "float | None"], object]
+# a re-planner: (the task in the observed scene, tail of the current plan to start from or
+# None, whether a fresh search may follow when the tail does not solve, the violation within
+# which the loop adopts an unsolved plan or None) → an object with ``best`` (Solution | None)
+# and ``solved`` (robotplan.api.PushPlan)
+Replanner = Callable[[PushTask, "Solution | None", bool, "float | None"], object]
 
 
 def departure(planned: dict[str, np.ndarray], seen: dict[str, np.ndarray], far: float,
@@ -101,31 +101,31 @@ def departure(planned: dict[str, np.ndarray], seen: dict[str, np.ndarray], far: 
     return None
 
 
-def _observed_scene(scene: Scene, seen: Observation) -> Scene:
+def _observed(task: PushTask, seen: Observation) -> PushTask:
+    """The task in the scene as observed."""
     poses = {name: tuple(p) for name, p in seen.poses.items()}
     if seen.pusher is not None:
-        poses[scene.pushers[0].name] = (*seen.pusher, 0.0)
-    return scene.with_state(poses, {k: tuple(v) for k, v in seen.joints.items()})
+        poses[task.actors[0]] = (*seen.pusher, 0.0)
+    return task.at(task.scene.with_state(poses, {k: tuple(v) for k, v in seen.joints.items()}))
 
 
-def _goal_met(scene: Scene, obj: str, seen: Observation, settings: LoopSettings) -> bool:
-    goal_obj = getattr(scene.goal, "object", obj)
-    body = scene.bodies[goal_obj]
-    if scene.goal.type == "touch":
-        tip = seen.tips[scene.goal.actor][:2]
-        _, gap = outcome(scene, body, seen.poses[goal_obj], tip, scene.bodies[
-            scene.goal.actor].shape.radius)
+def _goal_met(task: PushTask, seen: Observation, settings: LoopSettings) -> bool:
+    goal_obj, bodies = task.goal_object, task.scene.bodies
+    body = bodies[goal_obj]
+    if task.touch_actor is not None:
+        tip = seen.tips[task.touch_actor][:2]
+        _, gap = outcome(task, body, seen.poses[goal_obj], tip,
+                         bodies[task.touch_actor].shape.radius)
         return gap <= settings.touch_gap
-    cov, _ = outcome(scene, body, seen.poses[goal_obj], np.zeros(2), 0.0)
-    return cov >= (settings.pose_coverage if scene.goal.type == "pose"
-                   else settings.goal_coverage)
+    cov, _ = outcome(task, body, seen.poses[goal_obj], np.zeros(2), 0.0)
+    return cov >= (settings.pose_coverage if task.goal == "pose" else settings.goal_coverage)
 
 
 class _Loop:
     """The state of one closed-loop run (see :func:`execute_closed_loop`)."""
 
-    def __init__(self, scene: Scene, obj: str, sol: Solution, physics: Physics) -> None:
-        self.scene, self.obj, self.physics = scene, obj, physics
+    def __init__(self, task: PushTask, sol: Solution, physics: Physics) -> None:
+        self.task, self.obj, self.physics = task, task.obj, physics
         self.replans: list[Replan] = []
         self.plans: list[tuple[int, Solution]] = []
         self.executed: list[int] = []  # simulation steps of each executed step
@@ -133,8 +133,8 @@ class _Loop:
 
     def adopt(self, sol: Solution) -> None:
         self.plan, self.t = sol, 0
-        self.drive = actuation(self.scene, sol.q_pusher, sol.q_joints)
-        self.substeps = plan_substeps(self.scene, sol, self.physics)
+        self.drive = actuation(self.task, sol.q_pusher, sol.q_joints)
+        self.substeps = plan_substeps(self.task, sol, self.physics)
         self.T = (len(sol.q_obj) - 1) // len(sol.skeleton.phases)
         self.calm_until = 0  # no mid-phase re-plan before this state
         self.plans.append((len(self.executed), sol))
@@ -151,31 +151,31 @@ class _Loop:
         return sum(self.executed) * self.physics.timestep
 
 
-def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner,
+def execute_closed_loop(task: PushTask, sol: Solution, replan: Replanner,
                         settings: LoopSettings | None = None, physics: Physics = PHYSICS,
                         observe: Callable[[Observation], Observation] | None = None,
                         report: Callable[[str], None] | None = None,
-                        world_of: Callable[[Scene, str, Physics], SceneWorld] = SceneWorld
+                        world_of: Callable[[PushTask, Physics], SceneWorld] = SceneWorld
                         ) -> Execution:
-    """Execute ``sol`` in ``scene`` closing the loop through ``replan`` (see the module
+    """Execute ``sol`` in ``task.scene`` closing the loop through ``replan`` (see the module
     docstring). ``observe`` turns the true state into the perceived one (default: exact);
-    ``report`` gets a line per re-plan. ``settings``: default those of the scene's
-    classes (:func:`loop_settings_for`). ``world_of(scene, obj, physics)``: the world it
+    ``report`` gets a line per re-plan. ``settings``: default those of the task's
+    classes (:func:`loop_settings_for`). ``world_of(task, physics)``: the world it
     runs in (default pybullet's; :class:`~robotplan.execution.imagined_world.ImaginedWorld`
     to rehearse the plan in the learned model)."""
-    settings = settings or loop_settings_for(scene)
+    settings = settings or loop_settings_for(task)
     observe = observe or (lambda seen: seen)
-    loop = _Loop(scene, obj, sol, physics)
-    stopped = None
-    with world_of(scene, obj, physics) as world:
+    loop = _Loop(task, sol, physics)
+    obj, stopped = task.obj, None
+    with world_of(task, physics) as world:
         truth = [world.observe()]
         seen = observe(truth[-1])
         command = {k: v[0] for k, v in loop.drive.items()}
         while True:
             if loop.t == len(loop.substeps):
                 redo = _last_push(loop) if settings.redo_last_push else None
-                if _goal_met(scene, obj, seen, settings) or not _ask(
-                        loop, scene, seen, redo, "goal not met at the plan's end",
+                if _goal_met(task, seen, settings) or not _ask(
+                        loop, seen, redo, "goal not met at the plan's end",
                         replan, settings, report, fresh=True,
                         last_resort=settings.adopt_feasible_at_end):
                     break
@@ -207,7 +207,7 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
                 beyond = departure(loop.planned_poses(), seen.poses, settings.drift,
                                    settings.drift_yaw) if at_boundary else reason
                 gross = at_boundary and settings.fresh_beyond_drift and beyond is not None
-                if not _ask(loop, scene, seen, tail, f"{reason} {where}", replan, settings,
+                if not _ask(loop, seen, tail, f"{reason} {where}", replan, settings,
                             report, fresh=settings.fresh_after_miss or gross,
                             last_resort=settings.last_resort_beyond_drift and gross):
                     if (settings.stop_when_lost and beyond is not None
@@ -217,7 +217,7 @@ def execute_closed_loop(scene: Scene, obj: str, sol: Solution, replan: Replanner
                             report(f"stopped at step {len(loop.executed)}: {stopped}")
                         break
                     loop.calm_until = (loop.t // loop.T + 1) * loop.T
-        ex = recorded(scene, obj, truth, world.obstacle_contact, sorted(world.forbidden),
+        ex = recorded(task, truth, world.obstacle_contact, sorted(world.forbidden),
                       loop.executed, physics)
     ex.mode, ex.replans, ex.plans, ex.stopped = "closed_loop", loop.replans, loop.plans, stopped
     return ex
@@ -231,7 +231,7 @@ def _last_push(loop: _Loop) -> Solution | None:
     return solution_tail(loop.plan, (len(phases) - 2) * loop.T)
 
 
-def _ask(loop: _Loop, scene: Scene, seen: Observation, tail: Solution | None, reason: str,
+def _ask(loop: _Loop, seen: Observation, tail: Solution | None, reason: str,
          replan: Replanner, settings: LoopSettings, report, fresh: bool = False,
          last_resort: bool = False) -> bool:
     """Re-plan from ``seen`` (a fresh search after ``tail`` only if ``fresh``); adopt the
@@ -241,7 +241,7 @@ def _ask(loop: _Loop, scene: Scene, seen: Observation, tail: Solution | None, re
         return False
     t0 = time.perf_counter()
     bound = settings.last_resort_violation if last_resort else None
-    result = replan(_observed_scene(scene, seen), tail, fresh, bound)
+    result = replan(_observed(loop.task, seen), tail, fresh, bound)
     best = getattr(result, "best", None)
     solved = bool(getattr(result, "solved", False)) and best is not None
     adopted = solved or adoptable(best, bound)

@@ -20,7 +20,7 @@ from robotplan.execution.sim import PHYSICS, Physics
 from robotplan.functionals.coverage import coverage
 from robotplan.program.settings import ARM_PROGRAM_SETTINGS
 from robotplan.program.solution import Solution
-from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 
 __all__ = ["REACH_SPEED", "STEP_SECONDS", "Execution", "execute_arms", "execute_push",
            "obstacle_bodies", "outcome", "plan_substeps", "reach_substeps", "recorded",
@@ -63,82 +63,84 @@ def reach_substeps(q_pusher: np.ndarray, push_step: np.ndarray, physics: Physics
             for push, k in zip(push_step, slow, strict=True)]
 
 
-def plan_substeps(scene: Scene, sol: Solution, physics: Physics = PHYSICS) -> list[int]:
+def plan_substeps(task: PushTask, sol: Solution, physics: Physics = PHYSICS) -> list[int]:
     """Simulation steps of each planned step of ``sol``: a push step as the data
     (``keep_every``); a free pusher's reach step slowed to ``REACH_SPEED``, an arm's
     ``reach_slowdown`` times (the program lets its joints move that much more)."""
     steps = len(sol.q_pusher) - 1
     T = steps // len(sol.skeleton.phases)
     push = np.array([sol.skeleton.phases[t // T].mode == "push" for t in range(steps)])
-    if scene.robots:
+    if task.arms:
         slow = round(ARM_PROGRAM_SETTINGS.reach_slowdown)
         return [physics.keep_every * (1 if p else slow) for p in push]
     return reach_substeps(sol.q_pusher, push, physics)
 
 
-def run_open_loop(scene: Scene, obj: str, drive: dict[str, np.ndarray], substeps: list[int],
+def run_open_loop(task: PushTask, drive: dict[str, np.ndarray], substeps: list[int],
                   physics: Physics = PHYSICS) -> Execution:
     """Drive the actors along ``drive`` (actor → ``(N+1, d)`` states: the free pusher's
     positions or each arm's joints) open loop, step t over ``substeps[t−1]`` simulation
-    steps, with every object of the scene in the world (``obj`` first)."""
-    with SceneWorld(scene, obj, physics) as world:
+    steps, with every object of the scene in the world (the task's object first)."""
+    with SceneWorld(task, physics) as world:
         seen = [world.observe()]
         for t, n in enumerate(substeps, start=1):
             world.run_step({k: v[t - 1] for k, v in drive.items()},
                            {k: v[t] for k, v in drive.items()}, n)
             seen.append(world.observe())
-        return recorded(scene, obj, seen, world.obstacle_contact, sorted(world.forbidden),
+        return recorded(task, seen, world.obstacle_contact, sorted(world.forbidden),
                         substeps, physics)
 
 
-def execute_push(scene: Scene, obj: str, pusher: str, q_pusher: np.ndarray,
-                 physics: Physics = PHYSICS, substeps: list[int] | None = None) -> Execution:
+def execute_push(task: PushTask, q_pusher: np.ndarray, physics: Physics = PHYSICS,
+                 substeps: list[int] | None = None) -> Execution:
     """Run the planned pusher positions ``q_pusher (N+1, 2)`` open loop; coverage is the
     goal object's. Step t takes ``substeps[t−1]`` simulation steps (default
     ``keep_every`` each; see :func:`reach_substeps`)."""
     if substeps is None:
         substeps = [physics.keep_every] * (len(q_pusher) - 1)
-    return run_open_loop(scene, obj, {pusher: np.asarray(q_pusher)[:, :2]}, substeps, physics)
+    return run_open_loop(task, {task.actors[0]: np.asarray(q_pusher)[:, :2]}, substeps,
+                         physics)
 
 
-def execute_arms(scene: Scene, obj: str, q_joints: dict[str, np.ndarray],
+def execute_arms(task: PushTask, q_joints: dict[str, np.ndarray],
                  step_substeps: list[int], physics: Physics = PHYSICS) -> Execution:
     """Run planned joint trajectories ``q_joints[robot] (N+1, dof)`` open loop: every arm's
     joint targets move linearly from state t−1 to t over ``step_substeps[t−1]`` simulation
     steps (20 for a push step, as the data)."""
-    return run_open_loop(scene, obj, {k: np.asarray(v, dtype=float) for k, v in q_joints.items()},
+    return run_open_loop(task, {k: np.asarray(v, dtype=float) for k, v in q_joints.items()},
                          step_substeps, physics)
 
 
-def recorded(scene: Scene, obj: str, seen: list[Observation], obstacle_contact: bool,
+def recorded(task: PushTask, seen: list[Observation], obstacle_contact: bool,
              forbidden: list[str], substeps: list[int], physics: Physics = PHYSICS
              ) -> Execution:
     """The execution of the observed states ``seen`` (one per executed step, the start
     first). ``pusher_positions`` are the free pusher's, or the tips of the arm that touches
     the goal's object last (the touch goal's, else the one nearest at the end)."""
+    scene, obj = task.scene, task.obj
     poses = np.array([s.poses[obj] for s in seen])
     others = {name: np.array([s.poses[name] for s in seen])
               for name in seen[0].poses if name != obj}
     tips = {name: np.array([s.tips[name] for s in seen]) for name in seen[0].tips}
     joints = {name: np.array([s.joints[name] for s in seen]) for name in seen[0].joints}
-    goal_obj = getattr(scene.goal, "object", obj)
+    goal_obj = task.goal_object
     final = seen[-1].poses[goal_obj]
     body = scene.bodies[goal_obj]
     if seen[0].pusher is not None:
         pusher = np.array([s.pusher for s in seen])
-        radius = scene.pushers[0].radius
+        radius = task.pusher.radius
     else:
-        last = _last_arm(scene, body, final, tips)
+        last = _last_arm(task, body, final, tips)
         pusher, radius = tips[last][:, :2], scene.bodies[last].shape.radius
-    cov, touch = outcome(scene, body, final, pusher[-1], radius)
+    cov, touch = outcome(task, body, final, pusher[-1], radius)
     steps = np.asarray(substeps, dtype=float) * physics.timestep
     return Execution(poses, pusher, poses[-1], cov, touch, tips, joints, obstacle_contact,
                      others, forbidden, np.concatenate(([0.0], np.cumsum(steps))))
 
 
-def _last_arm(scene: Scene, body, final: np.ndarray, tips: dict[str, np.ndarray]) -> str:
-    if scene.goal.type == "touch":
-        return scene.goal.actor
+def _last_arm(task: PushTask, body, final: np.ndarray, tips: dict[str, np.ndarray]) -> str:
+    if task.touch_actor is not None:
+        return task.touch_actor
     import torch
 
     gaps = {k: float(body.sdf(torch.tensor(v[-1:, :2]), torch.tensor(final))[0])
@@ -146,11 +148,11 @@ def _last_arm(scene: Scene, body, final: np.ndarray, tips: dict[str, np.ndarray]
     return min(gaps, key=gaps.get)
 
 
-def outcome(scene: Scene, body, final: np.ndarray, tip_xy: np.ndarray, radius: float
+def outcome(task: PushTask, body, final: np.ndarray, tip_xy: np.ndarray, radius: float
             ) -> tuple[float | None, float | None]:
     """Coverage of the goal region, or the gap (m) between the touching tip and the object."""
-    if scene.goal_region is not None:
-        return coverage(body, final, scene.goal_region), None
+    if task.region is not None:
+        return coverage(body, final, task.region), None
     import torch
 
     gap = body.sdf(torch.tensor(np.asarray(tip_xy, dtype=float)[None]),

@@ -20,7 +20,7 @@ from robotplan.execution.sim import PHYSICS, Physics
 from robotplan.functionals.rigid_dynamics import RigidDynamics
 from robotplan.geometry.transforms import planar_to_world
 from robotplan.models.rigid import RigidMotion, moved_pose
-from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 
 __all__ = ["CONTACT_GAP", "ImaginedWorld", "rigid_step"]
 
@@ -38,14 +38,14 @@ def rigid_step(pose: np.ndarray, delta: np.ndarray, centre: np.ndarray) -> np.nd
 
 
 class ImaginedWorld:
-    """``scene`` with its one object driven by F_q (see the module docstring)."""
+    """``task.scene`` with its one object driven by F_q (see the module docstring)."""
 
-    def __init__(self, scene: Scene, obj: str, model: RigidMotion,
-                 physics: Physics = PHYSICS) -> None:
-        if scene.robots or len(scene.objects) != 1 or len(scene.pushers) != 1:
+    def __init__(self, task: PushTask, model: RigidMotion, physics: Physics = PHYSICS) -> None:
+        if not task.single:
             raise ValueError("a rehearsal needs one free pusher and one object")
+        scene, obj = task.scene, task.obj
         self.scene, self.obj, self.physics = scene, obj, physics
-        self.pusher = scene.pushers[0]
+        self.pusher = task.pusher
         self.body = scene.bodies[obj]
         self.dynamics = RigidDynamics(model, self.body, scene.bodies[self.pusher.name])
         self.centre = self.dynamics.centre.double().numpy()

@@ -12,8 +12,7 @@ from pathlib import Path
 
 from robotplan.base.overlays import apply_overlays, parse_overrides, read_overlays
 from robotplan.base.resources import skeletons_dir
-from robotplan.scene import Scene
-from robotplan.search.scene_classes import scene_classes
+from robotplan.scene.task import PushTask
 
 __all__ = ["LOOP_CLASSES", "LoopSettings", "load_loop_overlays", "loop_settings_for",
            "parse_loop_overrides"]
@@ -92,12 +91,12 @@ def load_loop_overlays(path: Path | None = None) -> dict[str, dict]:
                          "closed-loop setting")
 
 
-def loop_settings_for(scene: Scene, base: LoopSettings | None = None,
+def loop_settings_for(task: PushTask, base: LoopSettings | None = None,
                       overrides: Mapping[str, object] | None = None) -> LoopSettings:
-    """``base`` (default :class:`LoopSettings`) with the overlays of the classes ``scene``
-    belongs to (:func:`~robotplan.search.scene_classes.scene_classes`), then ``overrides``
-    (a user's settings win over the scene class's)."""
-    classes = tuple(c for c in scene_classes(scene) if c in LOOP_CLASSES)
+    """``base`` (default :class:`LoopSettings`) with the overlays of the classes ``task``
+    belongs to (:attr:`~robotplan.scene.task.PushTask.classes`), then ``overrides`` (a
+    user's settings win over the task class's)."""
+    classes = tuple(c for c in task.classes if c in LOOP_CLASSES)
     settings = apply_overlays(base or LoopSettings(), load_loop_overlays(), classes)
     return replace(settings, **overrides) if overrides else settings
 

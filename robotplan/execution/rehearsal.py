@@ -26,7 +26,7 @@ from robotplan.execution.loop_settings import LoopSettings
 from robotplan.execution.sim import PHYSICS, Physics
 from robotplan.models.rigid import RigidMotion
 from robotplan.program.solution import Solution
-from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 
 __all__ = ["REHEARSAL_BUDGET", "Rehearsal", "rehearsable", "rehearsal_world", "rehearse"]
 
@@ -66,26 +66,26 @@ class Rehearsal:
                 "pusher": self.pusher.tolist(), "object": self.object_poses.tolist()}
 
 
-def rehearsable(scene: Scene) -> bool:
+def rehearsable(task: PushTask) -> bool:
     """Whether F_q can stand in for the simulator: one free pusher, one object, no
     obstacles (F_q does not see them), a region or pose goal."""
-    return (not scene.robots and len(scene.pushers) == 1 and len(scene.objects) == 1
-            and not scene.obstacles and scene.goal.type in ("region", "pose"))
+    return task.single and not task.obstacles and task.goal in ("region", "pose")
 
 
-def rehearsal_world(scene: Scene, obj: str, model_dir: str | Path,
+def rehearsal_world(task: PushTask, model_dir: str | Path,
                     rehearsal_model: str | Path | None = None) -> Path:
-    """The F_q folder a plan of ``obj`` made with ``model_dir`` is rehearsed in: the one
-    given, else ``REHEARSAL_FOLDERS``' for the object's footprint type, else the plan's own."""
+    """The F_q folder a plan of the task's object made with ``model_dir`` is rehearsed in:
+    the one given, else ``REHEARSAL_FOLDERS``' for the object's footprint type, else the
+    plan's own."""
     if rehearsal_model is not None:
         return Path(rehearsal_model)
-    footprint = scene.bodies[obj].shape.type
+    footprint = task.scene.bodies[task.obj].shape.type
     if footprint in REHEARSAL_FOLDERS:
         return learned_dir(REHEARSAL_FOLDERS[footprint])
     return Path(model_dir)
 
 
-def rehearse(scene: Scene, obj: str, sol: Solution, replan: Replanner, model: RigidMotion,
+def rehearse(task: PushTask, sol: Solution, replan: Replanner, model: RigidMotion,
              settings: LoopSettings | None = None, physics: Physics = PHYSICS,
              folder: str = "", budget: float = REHEARSAL_BUDGET) -> Rehearsal:
     """Run ``sol`` closed loop in F_q (``model``, read from ``folder``), re-planning through
@@ -93,14 +93,14 @@ def rehearse(scene: Scene, obj: str, sol: Solution, replan: Replanner, model: Ri
     to ``budget`` seconds, then on with the plan in hand; see the module docstring."""
     t0 = time.perf_counter()
 
-    def within_budget(observed: Scene, tail: Solution | None, fresh: bool,
+    def within_budget(observed: PushTask, tail: Solution | None, fresh: bool,
                       last_resort: float | None = None):
         if time.perf_counter() - t0 > budget:
             return None  # nothing planned: the loop goes on with its plan
         return replan(observed, tail, fresh, last_resort)
 
-    ex = execute_closed_loop(scene, obj, sol, within_budget, settings, physics,
-                             world_of=lambda s, o, p: ImaginedWorld(s, o, model, p))
+    ex = execute_closed_loop(task, sol, within_budget, settings, physics,
+                             world_of=lambda t, p: ImaginedWorld(t, model, p))
     substeps = [int(n) for n in np.rint(np.diff(ex.times) / physics.timestep)]
     return Rehearsal(ex.pusher_positions, ex.object_poses, substeps, float(ex.coverage),
                      ex.replans, ex.plans, time.perf_counter() - t0, folder)

@@ -17,6 +17,7 @@ import numpy as np
 from robotplan.execution.sim import PHYSICS, Physics, PushWorld
 from robotplan.execution.sim_arms import add_arm
 from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 
 __all__ = ["OBSTACLE_GAP", "Observation", "SceneWorld", "actuation", "obstacle_bodies"]
 
@@ -27,13 +28,13 @@ def obstacle_bodies(scene: Scene) -> list:
     return [(o.shape, o.height, o.pose) for o in scene.obstacles]
 
 
-def actuation(scene: Scene, q_pusher: np.ndarray, q_joints: dict[str, np.ndarray]
+def actuation(task: PushTask, q_pusher: np.ndarray, q_joints: dict[str, np.ndarray]
               ) -> dict[str, np.ndarray]:
-    """The states the actors are driven along: the arms' joints when the scene has arms,
-    else the free pusher's positions ``(N+1, 2)``."""
-    if scene.robots:
+    """The states the actors are driven along: the arms' joints when arms push, else the
+    free pusher's positions ``(N+1, 2)``."""
+    if task.arms:
         return {name: np.asarray(q, dtype=float) for name, q in q_joints.items()}
-    return {scene.pushers[0].name: np.asarray(q_pusher, dtype=float)[:, :2]}
+    return {task.actors[0]: np.asarray(q_pusher, dtype=float)[:, :2]}
 
 
 @dataclass
@@ -48,17 +49,18 @@ class Observation:
 
 
 class SceneWorld:
-    """``scene`` in a :class:`PushWorld`: ``obj`` first, the other objects movable, the
-    obstacles fixed, and either the one free pusher or every arm."""
+    """``task.scene`` in a :class:`PushWorld`: the task's object first, the other objects
+    movable, the obstacles fixed, and either the one free pusher or every arm."""
 
-    def __init__(self, scene: Scene, obj: str, physics: Physics = PHYSICS) -> None:
+    def __init__(self, task: PushTask, physics: Physics = PHYSICS) -> None:
+        scene, obj = task.scene, task.obj
         self.scene, self.obj = scene, obj
         self.world = world = PushWorld(physics)
         spec = next(o for o in scene.objects if o.name == obj)
         self.others = [o for o in scene.objects if o.name != obj]
         movable = [(scene.bodies[o.name].shape, o.height, scene.bodies[o.name].pose)
                    for o in self.others]
-        self.pusher = None if scene.robots else scene.pushers[0]
+        self.pusher = task.pusher
         radius = self.pusher.radius if self.pusher is not None else None
         xy = self.pusher.position if self.pusher is not None else (0.0, 0.0)
         world.reset(scene.bodies[obj].shape, spec.height, scene.bodies[obj].pose, radius, xy,

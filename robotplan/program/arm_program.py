@@ -36,6 +36,7 @@ from robotplan.program.settings import ARM_PROGRAM_SETTINGS, ProgramSettings
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import Solution
 from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 
 __all__ = ["ArmPushProgram", "reach_check"]
 
@@ -55,12 +56,13 @@ class ArmPushProgram(PushProgram):
 
     planar_pusher = False  # a tip may pass over the object while reaching
 
-    def __init__(self, scene: Scene, skeleton: Skeleton, model, space: SkeletonSpace,
+    def __init__(self, task: PushTask, skeleton: Skeleton, model, space: SkeletonSpace,
                  settings: ProgramSettings = ARM_PROGRAM_SETTINGS,
                  guess: dict[str, np.ndarray] | None = None) -> None:
+        scene = task.scene
         self.kin = {r.name: arm_kinematics(r) for r in scene.robots}
         self.QJ: dict[str, np.ndarray] = {}
-        super().__init__(scene, skeleton, model, space, settings, guess)
+        super().__init__(task, skeleton, model, space, settings, guess)
         N = self.N
         radii = {scene.bodies[name].shape.radius for name in self.kin}
         if len(radii) > 1:
@@ -95,8 +97,7 @@ class ArmPushProgram(PushProgram):
         for k, ph in enumerate(self.skeleton.phases):
             if ph.mode == "push" and ph.actor == name:
                 out.update(range(k * T, (k + 1) * T + 1))
-        goal = self.scene.goal
-        if goal.type == "touch" and goal.actor == name:
+        if self.task.touch_actor == name:
             out.add(self.N)
         return sorted(t for t in out if t >= 1)
 
@@ -196,7 +197,7 @@ class ArmPushProgram(PushProgram):
         return {**super().as_guess(sol), "q_joints": sol.q_joints}
 
 
-def reach_check(scene: Scene, skeleton: Skeleton, space: SkeletonSpace,
+def reach_check(task: PushTask, skeleton: Skeleton, space: SkeletonSpace,
                 settings: ProgramSettings = ARM_PROGRAM_SETTINGS, slack: float = 0.03
                 ) -> str | None:
     """Cheap pruning before any program is solved: the circle-and-push guess of the
@@ -207,24 +208,24 @@ def reach_check(scene: Scene, skeleton: Skeleton, space: SkeletonSpace,
 
     from robotplan.program.guess import initial_guess
 
-    T = space.steps_per_phase
+    scene, T = task.scene, space.steps_per_phase
     first = skeleton.phases[0]
     push_steps = np.array([k * T + s + 1 for k, ph in enumerate(skeleton.phases)
                            if ph.mode == "push" for s in range(T)], dtype=int)
-    view = SimpleNamespace(scene=scene, skeleton=skeleton, space=space, settings=settings,
-                           T=T, N=T * len(skeleton.phases), obj=scene.bodies[first.object],
-                           pusher=scene.bodies[first.actor], region=scene.goal_region,
-                           push_steps=push_steps)
+    view = SimpleNamespace(task=task, scene=scene, skeleton=skeleton, space=space,
+                           settings=settings, T=T, N=T * len(skeleton.phases),
+                           obj=scene.bodies[first.object], pusher=scene.bodies[first.actor],
+                           region=task.region, push_steps=push_steps)
     guess = initial_guess(view)
     tips = guess["q_pusher"]
     checks: list[tuple[np.ndarray, str]] = []
     pushes = [k for k, ph in enumerate(skeleton.phases) if ph.mode == "push"]
     for k in pushes:
         checks += [(tips[t], skeleton.phases[k].actor) for t in range(k * T, (k + 1) * T + 1)]
-    if scene.goal.type == "touch":
+    if task.goal == "touch":
         checks.append((tips[-1], skeleton.phases[-1].actor))
     elif pushes:  # the last push ends with its tip behind the object in the goal
-        goal = np.array(scene.goal_region.pose[:2])
+        goal = np.array(task.region.pose[:2])
         last = pushes[-1]
         away = goal - guess["q_obj"][last * T, :2]
         away /= max(float(np.linalg.norm(away)), 1e-9)
@@ -237,9 +238,9 @@ def reach_check(scene: Scene, skeleton: Skeleton, space: SkeletonSpace,
         dist = float(np.linalg.norm(point - np.array(robot.base[:2])))
         if not lo - slack <= dist <= hi + slack:
             return f"{name} cannot reach {point.round(2).tolist()} ({dist:.2f} m from its base)"
-    if space.init_frame == "object" and scene.goal_region is not None and skeleton.pushes:
+    region = task.region
+    if space.init_frame == "object" and region is not None and skeleton.pushes:
         # the guess's straight pushes (from faces, init_frame: object) must end near the goal
-        region = scene.goal_region
         inradius = -float(region.shape.sdf(torch.zeros(1, 2, dtype=torch.float64))[0])
         gap = float(np.linalg.norm(guess["q_obj"][-1, :2] - np.array(region.pose[:2])))
         if gap > inradius + GOAL_GAP_SLACK:

@@ -62,7 +62,7 @@ class ChainPushProgram(PushProgram):
                                     dtype=int)
         self.Q3 = self.prog.NewContinuousVariables(self.N + 1, 3, "q_chain")
         self.P3 = self.prog.NewContinuousVariables(len(self.chain_steps), 2, "p_chain")
-        if getattr(self.scene.goal, "object", None) == name:
+        if self.task.goal_object == name:
             self.goal_body, self.goal_Q = self.target, self.Q3
 
     def _initial_guess(self) -> dict[str, np.ndarray]:

@@ -93,8 +93,7 @@ def guess_goal(prog: PushProgram, start: np.ndarray) -> np.ndarray:
     an arm, towards that arm until it is ``TOUCH_DISTANCE`` from its base."""
     if prog.region is not None:
         return np.array(prog.region.pose[:2], dtype=float)
-    goal = prog.scene.goal
-    robot = next((r for r in prog.scene.robots if r.name == getattr(goal, "robot", None)), None)
+    robot = next((r for r in prog.scene.robots if r.name == prog.task.touch_actor), None)
     if robot is None or not prog.skeleton.pushes:
         return start
     away = start - np.array(robot.base[:2])
@@ -200,7 +199,7 @@ def initial_guess(prog: PushProgram, ends: np.ndarray | None = None
         center = q1[a, :2]
         target = init_point(prog, ph.init, center)
         touching = (ph.mode == "reach" and k == len(prog.skeleton.phases) - 1
-                    and prog.scene.goal.type == "touch")
+                    and prog.task.goal == "touch")
         if touching:  # the touch goal's reach ends on the object, not at the init point
             target = center + contact_offset(prog, q1[a], target - center)
             unit = (target - center) / max(float(np.linalg.norm(target - center)), 1e-9)

@@ -39,7 +39,7 @@ from robotplan.program.row_table import rows_for_stage
 from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import FEASIBLE, SNOPT_MINOR_DEFAULT, WARM_USABLE, Solution, rank
-from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 
 __all__ = ["PushProgram"]
 
@@ -50,16 +50,18 @@ class PushProgram(PushRows):
     # moves in 3-D and may pass over the object while reaching (ArmPushProgram)
     planar_pusher = True
 
-    def __init__(self, scene: Scene, skeleton: Skeleton, model: PushDynamics | None,
+    def __init__(self, task: PushTask, skeleton: Skeleton, model: PushDynamics | None,
                  space: SkeletonSpace, settings: ProgramSettings = DEFAULT_SETTINGS,
                  guess: dict[str, np.ndarray] | None = None) -> None:
         """``model=None`` builds the kinematic program (sticking contact and pushing
         direction instead of H_F); ``guess`` replaces the circle-and-push initial guess."""
-        self.scene, self.skeleton, self.settings, self.space = scene, skeleton, settings, space
+        self.task, self.scene = task, task.scene
+        self.skeleton, self.settings, self.space = skeleton, settings, space
+        scene = task.scene
         first = skeleton.phases[0]
         self.obj = scene.bodies[first.object]
         self.pusher = scene.bodies[first.actor]
-        self.region = scene.goal_region
+        self.region = task.region
         T = space.steps_per_phase
         self.T, self.N = T, T * len(skeleton.phases)
         N = self.N

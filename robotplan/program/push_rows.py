@@ -121,7 +121,7 @@ class PushRows(DynamicsRows):
         touch = max(s.coll_area, face_contact_overlap(self.pusher, s.a_coll, s.coll_depth))
         ub = np.full(self.N, self._clear_overlap())
         ub[self.push_steps - 1] = touch
-        if self.scene.goal.type == "touch":
+        if self.task.goal == "touch":
             ub[-1] = touch  # the touch goal's last state is a contact, not a reach
         self._add_rows(H, [self.Q1[1:], self.Q2[1:]], 1, k, 0.0, ub * k, spec.row)
 
@@ -247,14 +247,14 @@ class PushRows(DynamicsRows):
                            1, spec.scale, 0.0, np.inf, spec.row)
 
     def _add_goal(self, spec: RowSpec) -> None:
-        if self.scene.goal.type == "touch":
+        if self.task.goal == "touch":
             # the touching tip is the last phase's actor; it ends on the object (H_PoC)
             self.P_touch = self.prog.NewContinuousVariables(1, 2, "p_touch")
-            H = ContactPoint(self.obj, self.scene.bodies[self.scene.goal.actor])
+            H = ContactPoint(self.obj, self.scene.bodies[self.task.touch_actor])
             self._add_rows(H, [self.Q1[-1:], self.Q2[-1:], self.P_touch], 2, 100, 0.0, 0.0,
                            "H_touch")  # cm, as H_PoC
             return
-        if self.scene.goal.type == "pose":
+        if self.task.goal == "pose":
             # the object's own footprint at the target pose: each component of the pose
             # error within tol/√3 (cm), so that at most goal_tol of the area is off target
             outline = self.goal_body.shape.outline()

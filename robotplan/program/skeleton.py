@@ -11,11 +11,14 @@ import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import yaml
 
 from robotplan.base.resources import skeletons_dir
+
+if TYPE_CHECKING:
+    from robotplan.scene.task import PushTask
 
 __all__ = ["Phase", "Skeleton", "SkeletonSpace", "actor_candidates", "chain_candidates",
            "load_skeleton_space", "parse_skeleton", "space_for"]
@@ -167,10 +170,10 @@ def load_skeleton_space(path: Path = SKELETONS_DIR / "push.yaml") -> SkeletonSpa
                          float(data["init_clearance"]), data.get("init_frame", "table"))
 
 
-def space_for(scene) -> SkeletonSpace:
-    """The skeleton choices of a scene: ``arms.yaml`` when robot arms push, else
+def space_for(task: PushTask) -> SkeletonSpace:
+    """The skeleton choices of a task: ``arms.yaml`` when robot arms push, else
     ``push.yaml``."""
-    return load_skeleton_space(SKELETONS_DIR / ("arms.yaml" if scene.robots else "push.yaml"))
+    return load_skeleton_space(SKELETONS_DIR / ("arms.yaml" if task.arms else "push.yaml"))
 
 
 def parse_skeleton(text: str, actor: str, obj: str) -> Skeleton:

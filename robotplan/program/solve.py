@@ -11,24 +11,24 @@ from robotplan.program.push_program import PushProgram
 from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import WARM_USABLE, Solution
-from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 
 __all__ = ["TURN_LENGTH", "program_class", "solve_skeleton", "warm_guess"]
 
 TURN_LENGTH = 0.1  # m of travel a radian of turn counts as when a re-anchored plan fades
 
 
-def program_class(scene: Scene, skeleton: Skeleton) -> type[PushProgram]:
-    """The program of a scene's actors: arm tips (joints), an object that pushes another
+def program_class(task: PushTask, skeleton: Skeleton) -> type[PushProgram]:
+    """The program of a task's actors: arm tips (joints), an object that pushes another
     (a chain), or a free pusher."""
-    if scene.robots:
+    if task.arms:
         return ArmPushProgram
     if skeleton.chained:
         return ChainPushProgram
     return PushProgram
 
 
-def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space: SkeletonSpace,
+def solve_skeleton(task: PushTask, skeleton: Skeleton, model: PushDynamics, space: SkeletonSpace,
                    settings: ProgramSettings = DEFAULT_SETTINGS,
                    guess: dict[str, np.ndarray] | None = None) -> Solution:
     """Solve one skeleton: the kinematic program first (``warm_start``), then the learned
@@ -37,17 +37,17 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
     program (``warm_from_guess``) and starts the learned program, which is not run when
     the start is kept (:func:`_kept_start`). Without ``learned_stage`` the kinematic
     program's solution is the plan."""
-    program = program_class(scene, skeleton)
+    program = program_class(task, skeleton)
     states = len(skeleton.phases) * space.steps_per_phase + 1
     if guess is not None and len(guess["q_obj"]) != states:
         raise ValueError(f"a guess of {len(guess['q_obj'])} states for {skeleton.describe()} "
                          f"at {space.steps_per_phase} steps per phase ({states} states)")
     if not settings.learned_stage:
-        return program(scene, skeleton, None, space, settings, guess=guess).solve()
+        return program(task, skeleton, None, space, settings, guess=guess).solve()
     warm_seconds = 0.0
     given = guess is not None
     if settings.warm_start and guess is None:
-        kin = program(scene, skeleton, None, space, settings)
+        kin = program(task, skeleton, None, space, settings)
         warm = kin.solve()
         warm_seconds = warm.seconds
         if warm.violation > WARM_USABLE:
@@ -59,12 +59,12 @@ def solve_skeleton(scene: Scene, skeleton: Skeleton, model: PushDynamics, space:
     elif settings.warm_start and guess is not None and settings.warm_from_guess:
         # an earlier plan re-anchored at a moved start: the kinematic program repairs it
         # first, where it can (measured: docs/experiments.md#closed-loop)
-        kin = program(scene, skeleton, None, space, settings, guess=guess)
+        kin = program(task, skeleton, None, space, settings, guess=guess)
         warm = kin.solve()
         warm_seconds = warm.seconds
         if warm.violation <= WARM_USABLE:
             guess = kin.as_guess(warm)
-    learned = program(scene, skeleton, model, space, settings, guess=guess)
+    learned = program(task, skeleton, model, space, settings, guess=guess)
     sol = None
     if given and (settings.accept_good_start or settings.learned_start_violation is not None):
         sol = _kept_start(learned.start_solution(), settings)
@@ -113,15 +113,15 @@ def _step_rows(sol: Solution, chained: bool = False) -> np.ndarray:
                      for s in range(T)], dtype=int)
 
 
-def warm_guess(scene: Scene, sol: Solution) -> dict[str, np.ndarray]:
+def warm_guess(task: PushTask, sol: Solution) -> dict[str, np.ndarray]:
     """An earlier solution of a skeleton as the initial guess of its learned program in
-    ``scene``, whose bodies may have moved since. The rigid motion that takes the earlier
+    ``task.scene``, whose bodies may have moved since. The rigid motion that takes the earlier
     start of the pushed object to its present pose carries the whole plan (object, actor,
     contact points) at its start and fades out linearly to nothing at its end, so the
     guess starts at the present state and still ends where the earlier plan did. The fade
     follows the object's planned travel (metres, a radian counting ``TURN_LENGTH``), so the
     object still holds where the plan holds it (reach phases)."""
-    first = sol.skeleton.phases[0]
+    scene, first = task.scene, sol.skeleton.phases[0]
     now = np.asarray(scene.bodies[first.object].pose, dtype=float)
     moves = np.abs(np.diff(sol.q_obj, axis=0))
     travel = np.concatenate(([0.0], np.cumsum(np.hypot(moves[:, 0], moves[:, 1])
@@ -142,7 +142,7 @@ def warm_guess(scene: Scene, sol: Solution) -> dict[str, np.ndarray]:
     q_obj[0] = now
     q_pusher = sol.q_pusher.copy()
     q_pusher[:, :2] = carry(sol.q_pusher[:, :2], every)
-    if not scene.robots:
+    if not task.arms:
         q_pusher[0] = scene.bodies[first.actor].pose[:2]
     rows = _step_rows(sol)
     guess = {"q_obj": q_obj, "q_pusher": q_pusher,

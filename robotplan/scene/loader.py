@@ -10,8 +10,8 @@ from pathlib import Path
 from typing import Any
 
 from robotplan.scene.files import read_data
-from robotplan.scene.hang_check import check_hang_scene
 from robotplan.scene.limits import check_counts, check_grid
+from robotplan.scene.mug_hook_checks import check_hang_scene
 from robotplan.scene.placement import check_placement
 from robotplan.scene.reader import SchemaError, read, show
 from robotplan.scene.robots import available_models, load_robot_model

@@ -159,6 +159,10 @@ def _convert(tp: Any, value: Any, where: str, meta: dict[str, Any]) -> Any:
         if meta.get("positive") and value <= 0:
             raise SchemaError(where, f"must be positive, got {value:g}")
         return value
+    if tp is bool:
+        if not isinstance(value, bool):
+            raise SchemaError(where, f"must be true or false, got {show(value)}")
+        return value
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
             raise SchemaError(where, f"must be an integer, got {show(value)}")

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
 from robotplan.sdf import Box, Circle, LShape, Polygon, Workspace
-from robotplan.sdf.hang_shapes import Hook, Mug
+from robotplan.sdf.mug_hook import Hook, Mug
 
 if TYPE_CHECKING:
     from robotplan.scene.bodies import Body
@@ -41,7 +41,7 @@ DEFAULT_HEIGHT = 0.06
 
 @dataclass(frozen=True)
 class MugShape:
-    """A procedural mug (:class:`robotplan.sdf.hang_shapes.Mug`): its frame at the centre
+    """A procedural mug (:class:`robotplan.sdf.mug_hook.Mug`): its frame at the centre
     of the bottom, the handle towards +x. ``handle_height`` is a fraction of ``height``."""
 
     radius: float = field(metadata=POSITIVE)
@@ -70,7 +70,7 @@ class MugShape:
 
 @dataclass(frozen=True)
 class HookShape:
-    """A hook (:class:`robotplan.sdf.hang_shapes.Hook`): a post on the table and an arm of one
+    """A hook (:class:`robotplan.sdf.mug_hook.Hook`): a post on the table and an arm of one
     to three straight parts (lengths, and angles in rad above the horizontal) towards +x."""
 
     post_height: float = field(metadata=POSITIVE)

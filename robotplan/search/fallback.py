@@ -13,45 +13,38 @@ the tail's when it solves, else both merged.
 from __future__ import annotations
 
 from multiprocessing import get_context
-from pathlib import Path
 
-from robotplan.program.skeleton import Skeleton, SkeletonSpace
-from robotplan.scene import Scene
+from robotplan.program.skeleton import SkeletonSpace
 from robotplan.search.planner import SearchResult, merge_results
+from robotplan.search.request import SearchRequest
 from robotplan.search.scene_search import search_scene
 
 __all__ = ["side_by_side", "tail_and_fresh"]
 
 
-def side_by_side(scene: Scene, workers: int, guesses: dict | None) -> bool:
+def side_by_side(request: SearchRequest) -> bool:
     """Whether a re-plan runs its tail and its fresh search side by side: a free pusher's
     pose goal warm started from a tail, with a core for each."""
-    return (guesses is not None and workers >= 2 and scene.goal.type == "pose"
-            and not scene.robots)
+    return (request.guesses is not None and request.workers >= 2
+            and request.task.goal == "pose" and not request.task.arms)
 
 
-def _fresh(args: tuple) -> tuple[SearchResult, list[SkeletonSpace]]:
+def _fresh(request: SearchRequest) -> tuple[SearchResult, list[SkeletonSpace]]:
     """The fresh search in a helper process; the spaces in the candidates' order (ids do
     not survive the pipe)."""
-    scene, model_dir, solver, max_pushes, progress, quiet, time_budget, program = args
-    result, spaces = search_scene(scene, model_dir, solver, 1, None, max_pushes, progress,
-                                  False, quiet, time_budget, program=program, replan=True)
+    result, spaces = search_scene(request)
     return result, [spaces[id(s)] for s in result.candidates]
 
 
-def tail_and_fresh(scene: Scene, model_dir: Path, solver: str, skeleton: Skeleton,
-                   guesses: dict, max_pushes: int, progress: bool, exhaustive: bool,
-                   quiet: bool, time_budget: float | None, program: dict | None
-                   ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
-    """The tail (``skeleton`` from ``guesses``) in this process and the fresh search in a
-    forked helper, one program at a time each; the tail's result when it solves, else both
-    merged, and each candidate's space (by ``id`` of its solution)."""
-    args = (scene, model_dir, solver, max_pushes, progress, quiet, time_budget, program)
+def tail_and_fresh(request: SearchRequest) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
+    """The tail (``request.skeleton`` from ``request.guesses``) in this process and the
+    fresh search in a forked helper, one program at a time each; the tail's result when it
+    solves, else both merged, and each candidate's space (by ``id`` of its solution)."""
+    tail = request.but(workers=1, replan=True)
+    fresh = tail.but(skeleton=None, guesses=None, exhaustive=False, last_resort=None)
     with get_context("fork").Pool(1) as helper:
-        pending = helper.apply_async(_fresh, (args,))
-        result, spaces = search_scene(scene, model_dir, solver, 1, skeleton, max_pushes,
-                                      progress, exhaustive, quiet, time_budget, guesses,
-                                      program, replan=True)
+        pending = helper.apply_async(_fresh, (fresh,))
+        result, spaces = search_scene(tail.but(last_resort=None))
         if result.solved:
             return result, spaces
         again, again_spaces = pending.get()

@@ -29,6 +29,8 @@ from robotplan.program.skeleton import Skeleton, SkeletonSpace, space_for
 from robotplan.program.solution import FEASIBLE, Solution
 from robotplan.program.solve import solve_skeleton
 from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
+from robotplan.search.request import SearchRequest
 
 __all__ = ["PATIENCE_S", "SearchResult", "adoptable", "is_solved", "meets_constraints",
            "merge_results", "past_budget", "run_in_pool", "search_push", "stops_search"]
@@ -82,18 +84,18 @@ def _dynamics(model_dir: str):
     return _models[key]
 
 
-def _init_worker(scene: Scene, model_dir: str, settings: ProgramSettings,
+def _init_worker(task: PushTask, model_dir: str, settings: ProgramSettings,
                  space: SkeletonSpace, guesses: dict[Skeleton, dict] | None = None) -> None:
     one_thread()  # one process per core (robotplan.base.threads)
-    _worker.update(scene=scene, model=_dynamics(model_dir), settings=settings,
+    _worker.update(task=task, model=_dynamics(model_dir), settings=settings,
                    space=space, guesses=guesses or {})
 
 
 def _solve(skeleton: Skeleton) -> Solution:
     w = _worker
-    sol = solve_skeleton(w["scene"], skeleton, w["model"], w["space"], w["settings"],
+    sol = solve_skeleton(w["task"], skeleton, w["model"], w["space"], w["settings"],
                          guess=w["guesses"].get(skeleton))
-    sol.clearance = plan_clearance(w["scene"], sol)
+    sol.clearance = plan_clearance(w["task"].scene, sol)
     return sol
 
 
@@ -187,12 +189,11 @@ def run_in_pool(solve: Callable, items: list, workers: int, initializer: Callabl
                 return
 
 
-def order_candidates(scene: Scene, skeletons: list[Skeleton],
+def order_candidates(task: PushTask, skeletons: list[Skeleton],
                      space: SkeletonSpace | None = None) -> list[Skeleton]:
     """Most promising first: pushes from init points behind the object (seen from the goal),
     then fewer pushes. Stable for ties."""
-    space = space or space_for(scene)
-    region = scene.goal_region
+    scene, space, region = task.scene, space or space_for(task), task.region
     if region is None:
         return list(skeletons)
 
@@ -209,32 +210,30 @@ def order_candidates(scene: Scene, skeletons: list[Skeleton],
     return sorted(skeletons, key=score)
 
 
-def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
-                settings: ProgramSettings | None = None, workers: int = 2,
-                progress: bool = True, exhaustive: bool = False,
-                time_budget: float | None = None,
-                space: SkeletonSpace | None = None,
-                patience: float = PATIENCE_S,
-                guesses: dict[Skeleton, dict] | None = None,
+def search_push(request: SearchRequest, skeletons: list[Skeleton],
+                settings: ProgramSettings | None = None, space: SkeletonSpace | None = None,
                 ordered: bool = False) -> SearchResult:
-    """Solve the skeletons (a process per core), most promising first, and pick the best;
-    unless ``exhaustive``, stop at the first good-enough plan (``settings.good_rms_mm``)
-    or, after ``patience`` seconds, at the first program collected while a solved plan is in
-    hand; start no program after ``time_budget`` seconds once one has been collected, and
-    stop there once a solved plan is in hand, else when the programs running end (the best
-    so far wins).
-    ``guesses``: the learned program's initial guess by skeleton (a warm start skips the
-    kinematic stage). ``ordered``: the skeletons come most promising first already."""
+    """Solve the skeletons (``request.workers`` processes), most promising first, and pick
+    the best; unless ``request.exhaustive``, stop at the first good-enough plan
+    (``settings.good_rms_mm``) or, after ``PATIENCE_S`` seconds, at the first program
+    collected while a solved plan is in hand; start no program after
+    ``request.time_budget`` seconds once one has been collected, and stop there once a
+    solved plan is in hand, else when the programs running end (the best so far wins).
+    ``request.guesses``: the learned program's initial guess by skeleton (a warm start skips
+    the kinematic stage). ``ordered``: the skeletons come most promising first already."""
     from tqdm import tqdm
 
     settings = settings or ProgramSettings()
     t0 = time.time()
-    space = space or space_for(scene)
-    args = (scene, str(model_dir), settings, space, guesses)
-    queue = list(skeletons) if ordered else order_candidates(scene, skeletons, space)
+    task, model_dir, workers = request.task, str(request.model_dir), request.workers
+    time_budget, exhaustive = request.time_budget, request.exhaustive
+    space = space or space_for(task)
+    args = (task, model_dir, settings, space, dict(request.guesses or {}))
+    queue = list(skeletons) if ordered else order_candidates(task, skeletons, space)
     solutions: list[Solution] = []
     holds_solved = False
-    bar = tqdm(total=len(queue), unit="program", desc="skeletons", disable=not progress)
+    bar = tqdm(total=len(queue), unit="program", desc="skeletons",
+               disable=not request.progress)
 
     def collect(sol: Solution) -> bool:
         nonlocal holds_solved
@@ -242,7 +241,7 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
         bar.update()
         bar.set_postfix(best_violation=f"{min(s.violation for s in solutions):.3g}")
         holds_solved = holds_solved or is_solved(sol)
-        return stops_search(sol, holds_solved, time.time() - t0, time_budget, patience,
+        return stops_search(sol, holds_solved, time.time() - t0, time_budget, PATIENCE_S,
                             exhaustive, settings.good_rms_mm)
 
     def may_start() -> bool:  # past the budget only while nothing has been collected
@@ -254,7 +253,7 @@ def search_push(scene: Scene, model_dir: str | Path, skeletons: list[Skeleton],
             if not may_start() or collect(_solve(sk)):
                 break
     else:
-        _dynamics(str(model_dir))  # loaded here, inherited by the forked workers
+        _dynamics(model_dir)  # loaded here, inherited by the forked workers
         run_in_pool(_solve, queue, workers, _init_worker, args, collect, may_start)
     bar.close()
     order = {sk: i for i, sk in enumerate(queue)}

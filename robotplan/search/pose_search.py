@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import torch
@@ -28,6 +27,7 @@ from robotplan.program.settings import ProgramSettings
 from robotplan.program.settings import settings_for as program_settings
 from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
 from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 from robotplan.search.planner import SearchResult, merge_results, search_push
 from robotplan.search.pose_pushes import (
     FIT_TOLERANCE,
@@ -39,6 +39,7 @@ from robotplan.search.pose_pushes import (
     push_arc,
     rotation,
 )
+from robotplan.search.request import SearchRequest
 
 __all__ = ["pose_candidates", "pose_guess", "region_target", "search_pose", "search_pose_budgets",
            "search_region_fits", "search_region_fits_budgets"]
@@ -48,14 +49,14 @@ YAW_STEP_DEG = 5.0  # the turns tried for a region goal's target
 REGION_SLACK = 0.5  # share of goal_tol that H_g may reach at a region goal's target
 
 
-def region_target(scene: Scene, obj: str, settings: ProgramSettings
+def region_target(task: PushTask, settings: ProgramSettings
                   ) -> tuple[float, float, float] | None:
-    """A target pose ``(x, y, yaw)`` of ``obj`` for the region goal's fitted pushes: its
+    """A target pose ``(x, y, yaw)`` of the task's object for the region goal's fitted pushes: its
     footprint's centroid on the region's, turned from its start yaw by the least multiple
     of YAW_STEP_DEG at which the program's goal row (H_g over the area, eq. 8) is at most
     REGION_SLACK of ``goal_tol`` (else within 10 % of its least); None when at every turn
     half the footprint or more lies outside."""
-    region, body = scene.goal_region, scene.bodies[obj]
+    region, body = task.region, task.scene.bodies[task.obj]
     c_B, c_R = centroid(body.shape.outline()), centroid(region.outline_world())
     yaw0 = float(body.pose[2])
     yaws = yaw0 + np.array(sorted(np.radians(np.arange(-180.0, 180.0, YAW_STEP_DEG)), key=abs))
@@ -145,19 +146,19 @@ def pose_guess(scene: Scene, obj: str, actor: str, fit: PosePushes, T: int,
             "p": np.array(contacts)}
 
 
-def pose_candidates(scene: Scene, obj: str, actor: str, space: SkeletonSpace,
+def pose_candidates(task: PushTask, space: SkeletonSpace,
                     settings: ProgramSettings, max_pushes: int = 2,
                     given: Skeleton | None = None,
                     target: tuple[float, float, float] | None = None
                     ) -> tuple[SkeletonSpace, list[Skeleton], dict[Skeleton, dict]]:
     """Skeletons of the fitted pushes (:func:`fit_pose_pushes`) to ``target`` (default:
-    the scene's pose goal; those that count as reaching it, else those within
+    the task's pose goal; those that count as reaching it, else those within
     FIT_TOLERANCE), their initial guesses, and the space they need (init points at
     the object frame's face normals, enough steps per phase for the longest push at the
     guess's speed and the kinematic stage's turn per step); the turning law of
     ``settings``. A ``given`` skeleton fixes the faces' classes (its pushes' init points,
     object frame) and is fitted as well as it can be."""
-    gain = settings.turn_gain
+    gain, scene, obj, actor = settings.turn_gain, task.scene, task.obj, task.actors[0]
     target = tuple(scene.goal.pose) if target is None else target
     fits: list[PosePushes] = []
     if given is not None:
@@ -191,28 +192,25 @@ def pose_candidates(scene: Scene, obj: str, actor: str, space: SkeletonSpace,
     return posed, skeletons, guesses
 
 
-def search_pose(scene: Scene, obj: str, actor: str, model_dir: Path,
-                settings: ProgramSettings, space: SkeletonSpace, max_pushes: int,
-                workers: int, progress: bool, exhaustive: bool, quiet: bool,
-                time_budget: float | None, given: Skeleton | None = None,
+def search_pose(request: SearchRequest, settings: ProgramSettings, space: SkeletonSpace,
+                given: Skeleton | None = None,
                 target: tuple[float, float, float] | None = None
                 ) -> tuple[SkeletonSpace, SearchResult]:
     """Solve the skeletons fitted to ``target`` (default: the pose goal's pose;
     :func:`pose_candidates`; ``given``: that skeleton's faces only), each from its own
     guess; the space they were solved in and the result."""
-    posed, skeletons, guesses = pose_candidates(scene, obj, actor, space, settings, max_pushes,
-                                                given, target)
-    if not quiet:
-        where = "pose goal" if target is None else (
-            f"pushes fitted to ({target[0]:.3f}, {target[1]:.3f}, "
-            f"{math.degrees(target[2]):.0f}°) in the goal region")
-        print(f"{where}: {len(skeletons)} fitted push sequences "
-              f"({posed.steps_per_phase} steps per phase)")
+    posed, skeletons, guesses = pose_candidates(request.task, space, settings,
+                                                request.max_pushes, given, target)
+    where = "pose goal" if target is None else (
+        f"pushes fitted to ({target[0]:.3f}, {target[1]:.3f}, "
+        f"{math.degrees(target[2]):.0f}°) in the goal region")
+    request.say(f"{where}: {len(skeletons)} fitted push sequences "
+                f"({posed.steps_per_phase} steps per phase)")
     if not skeletons:
         return posed, SearchResult(None)
     # the fits' own order: the least pushing first
-    return posed, search_push(scene, model_dir, skeletons, settings, workers, progress,
-                              exhaustive, time_budget, posed, guesses=guesses, ordered=True)
+    return posed, search_push(request.but(guesses=guesses), skeletons, settings, posed,
+                              ordered=True)
 
 
 def _in_turn(search: Callable[[ProgramSettings, float], tuple[SkeletonSpace, SearchResult]],
@@ -231,47 +229,35 @@ def _in_turn(search: Callable[[ProgramSettings, float], tuple[SkeletonSpace, Sea
     return result, spaces
 
 
-def search_pose_budgets(scene: Scene, obj: str, actor: str, model_dir: Path,
-                        budgets: tuple[ProgramSettings, ...], space: SkeletonSpace,
-                        max_pushes: int, workers: int, progress: bool, exhaustive: bool,
-                        quiet: bool, time_budget: float | None, given: Skeleton | None = None
+def search_pose_budgets(request: SearchRequest, budgets: tuple[ProgramSettings, ...],
+                        space: SkeletonSpace, given: Skeleton | None = None
                         ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
     """:func:`search_pose` with each of ``budgets`` (program settings) in turn until one
-    solves, within ``time_budget`` s in all; the merged result and each candidate's space
-    (by ``id`` of its solution)."""
-    def search(budget: ProgramSettings, spent: float) -> tuple[SkeletonSpace, SearchResult]:
-        left = None if time_budget is None else max(0.0, time_budget - spent)
-        return search_pose(scene, obj, actor, model_dir, budget, space, max_pushes, workers,
-                           progress, exhaustive, quiet, left, given)
-
-    return _in_turn(search, budgets)
+    solves, within ``request.time_budget`` s in all; the merged result and each
+    candidate's space (by ``id`` of its solution)."""
+    return _in_turn(lambda budget, spent: search_pose(
+        request.but(time_budget=request.left(spent)), budget, space, given), budgets)
 
 
-def search_region_fits(scene: Scene, obj: str, actor: str, model_dir: Path,
-                       settings: ProgramSettings, space: SkeletonSpace, max_pushes: int,
-                       workers: int, progress: bool, exhaustive: bool, quiet: bool
-                       ) -> tuple[SkeletonSpace, SearchResult]:
+def search_region_fits(request: SearchRequest, settings: ProgramSettings,
+                       space: SkeletonSpace) -> tuple[SkeletonSpace, SearchResult]:
     """A free pusher's region goal the plain tier did not plan: pushes fitted in closed form
     to a pose inside the region (:func:`region_target`), planned with the turning gain the
     pose goals measured in pybullet (the `pose` overlay's ``turn_gain``). No time budget:
     the tier has at most four programs, and without it nothing plans."""
     fitted = replace(settings, turn_gain=program_settings("pose").turn_gain)
-    target = region_target(scene, obj, fitted)
+    target = region_target(request.task, fitted)
     if target is None:
         return space, SearchResult(None)
-    return search_pose(scene, obj, actor, model_dir, fitted, space, max_pushes, workers,
-                       progress, exhaustive, quiet, None, target=target)
+    return search_pose(request.but(time_budget=None), fitted, space, target=target)
 
 
-def search_region_fits_budgets(scene: Scene, obj: str, actor: str, model_dir: Path,
-                               budgets: tuple[ProgramSettings, ...], space: SkeletonSpace,
-                               max_pushes: int, workers: int, progress: bool,
-                               exhaustive: bool, quiet: bool, last_resort: float | None = None
+def search_region_fits_budgets(request: SearchRequest, budgets: tuple[ProgramSettings, ...],
+                               space: SkeletonSpace
                                ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
     """:func:`search_region_fits` with each of ``budgets`` (program settings) in turn until
-    one solves or, given ``last_resort``, gives a plan that meets the constraints within
-    that violation; the merged result and each candidate's space (by ``id`` of its
+    one solves or, given ``request.last_resort``, gives a plan that meets the constraints
+    within that violation; the merged result and each candidate's space (by ``id`` of its
     solution)."""
-    return _in_turn(lambda budget, _spent: search_region_fits(
-        scene, obj, actor, model_dir, budget, space, max_pushes, workers, progress,
-        exhaustive, quiet), budgets, last_resort)
+    return _in_turn(lambda budget, _spent: search_region_fits(request, budget, space),
+                    budgets, request.last_resort)

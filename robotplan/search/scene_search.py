@@ -6,9 +6,8 @@ candidate (:func:`robotplan.search.planner.search_push`)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator
 from dataclasses import replace
-from pathlib import Path
 
 from robotplan.functionals.clearance import OBSTACLE_MARGIN
 from robotplan.models.loading import dynamics_kind
@@ -25,42 +24,18 @@ from robotplan.program.skeleton import (
     space_for,
 )
 from robotplan.program.solution import Solution
-from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 from robotplan.search.planner import FEASIBLE, SearchResult, merge_results, search_push
 from robotplan.search.pose_search import (
     search_pose_budgets,
-    search_region_fits,
     search_region_fits_budgets,
 )
+from robotplan.search.request import SearchRequest
 from robotplan.search.route import routed_candidates
-from robotplan.search.scene_classes import chain_target, scene_classes
+from robotplan.search.tiers import Tier, load_tiers
 
-__all__ = ["UnsupportedScene", "budget_spent", "candidate_table", "candidate_tiers",
-           "check_supported", "metres", "search_scene", "settings_for"]
-
-
-class UnsupportedScene(ValueError):
-    """The scene is valid but needs a planner feature that is not built yet."""
-
-
-def check_supported(scene: Scene) -> tuple[str, list[str]]:
-    """The object the actors touch and the actors (pushers or arms) of a scene the
-    planner handles."""
-    chain = chain_target(scene)
-    if chain is not None and scene.goal.type != "touch":
-        return chain[0], [scene.pushers[0].name]
-    if len(scene.objects) != 1:
-        raise UnsupportedScene("objects: more than one movable object is planned only when "
-                               "the pusher touches one of two and it pushes the goal's object "
-                               "(pushers[0].touches)")
-    if scene.robots and scene.pushers:
-        raise UnsupportedScene("pushers: free pushers beside robot arms are not planned yet")
-    if not scene.robots and len(scene.pushers) != 1:
-        raise UnsupportedScene("pushers: only one free pusher is planned yet")
-    if scene.goal.type == "touch" and not scene.robots:
-        raise UnsupportedScene("goal: touch goals are planned for robot arms only")
-    actors = [r.name for r in scene.robots] or [scene.pushers[0].name]
-    return scene.objects[0].name, actors
+__all__ = ["budget_spent", "candidate_table", "candidate_tiers", "metres", "search_scene",
+           "settings_for"]
 
 
 def budget_spent(result: SearchResult, time_budget: float | None) -> bool:
@@ -71,72 +46,74 @@ def budget_spent(result: SearchResult, time_budget: float | None) -> bool:
             and result.seconds >= time_budget)
 
 
-def candidate_tiers(scene: Scene, obj: str, actors: list[str], skeleton: str | Skeleton | None,
-                     max_pushes: int, quiet: bool) -> Iterator[tuple[list, SkeletonSpace]]:
+def given_skeleton(task: PushTask, skeleton: str | Skeleton) -> Skeleton:
+    """A skeleton the caller names (the CLI's notation, or a ``Skeleton``), checked against
+    the task's chain."""
+    obj, chain = task.obj, task.chained
+    given = (skeleton if isinstance(skeleton, Skeleton)
+             else parse_skeleton(skeleton, task.actors[0], obj))
+    if given.chained is not None and (chain is None or given.chained != chain):
+        raise ValueError(f"{skeleton!r}: {obj} may push {given.chained!r} only in a scene "
+                         f"where the pusher touches {obj} and not the goal's object")
+    if chain is not None and given.chained is None:
+        raise ValueError(f"{skeleton!r}: the pusher may not touch {chain}: end with a "
+                         f"push in which {obj} pushes it, e.g. 'push@0,push@0>{chain}'")
+    return given
+
+
+def candidate_tiers(request: SearchRequest) -> Iterator[tuple[list, SkeletonSpace]]:
     """The candidates tier by tier, each with its space; the search moves on to the next tier
     only when no candidate of a tier plans. One tier for a given skeleton, a chain or the
     free pusher; for arms one per init frame (the object's faces, then around the object as
     seen from the goal), every choice of arm pruned by reach before any program is solved,
     and a frame with nothing in reach skipped. Lazy: a frame is pruned when it is reached."""
-    space = space_for(scene)
-    chain = chain_target(scene)
-    if skeleton:
-        given = (skeleton if isinstance(skeleton, Skeleton)
-                 else parse_skeleton(skeleton, actors[0], obj))
-        if given.chained is not None and (chain is None or given.chained != chain[1]):
-            raise ValueError(f"{skeleton!r}: {obj} may push {given.chained!r} only in a scene "
-                             f"where the pusher touches {obj} and not the goal's object")
-        if chain is not None and given.chained is None:
-            raise ValueError(f"{skeleton!r}: the pusher may not touch {chain[1]}: end with a "
-                             f"push in which {obj} pushes it, e.g. 'push@0,push@0>{chain[1]}'")
-        yield [given], space
-    elif chain is not None:
+    task, max_pushes = request.task, request.max_pushes
+    space = space_for(task)
+    if request.skeleton:
+        yield [given_skeleton(task, request.skeleton)], space
+    elif task.chained is not None:
         # one push more than max_pushes: the first push alone brings obj to the target
-        apart = not objects_touch(scene.bodies[chain[0]], scene.bodies[chain[1]])
-        yield chain_candidates(space, actors[0], *chain, max_pushes + apart,
-                               min_alone=int(apart)), space
-    elif not scene.robots:
-        yield space.candidates(actors[0], obj, max_pushes), space
+        bodies = task.scene.bodies
+        apart = not objects_touch(bodies[task.obj], bodies[task.chained])
+        yield chain_candidates(space, task.actors[0], task.obj, task.chained,
+                               max_pushes + apart, min_alone=int(apart)), space
+    elif not task.arms:
+        yield space.candidates(task.actors[0], task.obj, max_pushes), space
     else:
         for frame in dict.fromkeys((space.init_frame, "goal")):
             framed = replace(space, init_frame=frame)
-            kept = _arm_candidates(scene, framed, obj, actors, max_pushes, quiet)
+            kept = _arm_candidates(request, framed)
             if kept:
                 yield kept, framed
 
 
-def _arm_candidates(scene: Scene, space: SkeletonSpace, obj: str, actors: list[str],
-                    max_pushes: int, quiet: bool) -> list:
+def _arm_candidates(request: SearchRequest, space: SkeletonSpace) -> list:
     """Every choice of arm per phase and init point in ``space``, pruned by reach."""
-    touch = scene.goal.actor if scene.goal.type == "touch" else None
-    every = actor_candidates(space, actors, obj, max_pushes, touch)
-    kept = [sk for sk in every if reach_check(scene, sk, space) is None]
-    if not quiet:
-        print(f"skeletons: {len(kept)} of {len(every)} within the arms' reach "
-              f"(init points in the {space.init_frame} frame)")
+    task = request.task
+    every = actor_candidates(space, list(task.actors), task.obj, request.max_pushes,
+                             task.touch_actor)
+    kept = [sk for sk in every if reach_check(task, sk, space) is None]
+    request.say(f"skeletons: {len(kept)} of {len(every)} within the arms' reach "
+                f"(init points in the {space.init_frame} frame)")
     return kept
 
 
-def _search_routes(scene: Scene, obj: str, actor: str, model_dir: Path,
-                   settings: ProgramSettings, space: SkeletonSpace, max_pushes: int,
-                   workers: int, progress: bool, exhaustive: bool, quiet: bool,
-                   time_budget: float | None) -> tuple[SkeletonSpace, SearchResult]:
+def _search_routes(request: SearchRequest, settings: ProgramSettings, space: SkeletonSpace
+                   ) -> tuple[SkeletonSpace, SearchResult]:
     """Around obstacles, when the pushes of the plain search fail: straight face pushes
     along routes that keep the object clear of every obstacle to the goal region's centre
     (robotplan.search.route; none for a touch goal)."""
-    region = scene.goal_region
+    task = request.task
     routed, skeletons = space, []
-    if region is not None:
-        routed, skeletons = routed_candidates(scene, actor, obj, space, region,
-                                              settings.guess_speed)
-    if not quiet:
-        print(f"no plan with up to {max_pushes} pushes; trying {len(skeletons)} routes around "
-              f"the obstacles ({routed.steps_per_phase} steps per phase)")
+    if task.region is not None:
+        routed, skeletons = routed_candidates(task.scene, task.actors[0], task.obj, space,
+                                              task.region, settings.guess_speed)
+    request.say(f"no plan with up to {request.max_pushes} pushes; trying {len(skeletons)} "
+                f"routes around the obstacles ({routed.steps_per_phase} steps per phase)")
     if not skeletons:
         return routed, SearchResult(None)
     routes = program_settings("routes", base=settings)
-    return routed, search_push(scene, model_dir, skeletons, routes, workers,
-                               progress, exhaustive, time_budget, routed)
+    return routed, search_push(request.but(guesses=None), skeletons, routes, routed)
 
 
 def _margin_note(s: Solution) -> str:
@@ -164,11 +141,11 @@ def candidate_table(result: SearchResult, dynamics: str = "flow") -> str:
     return "\n".join(lines)
 
 
-def settings_for(scene: Scene, solver: str = "snopt", dynamics: str = "flow"
+def settings_for(task: PushTask, solver: str = "snopt", dynamics: str = "flow"
                  ) -> ProgramSettings:
-    """The program settings of a scene's actors (the arms' overlay, or the free pusher's),
+    """The program settings of a task's actors (the arms' overlay, or the free pusher's),
     goal (the pose goals' overlay) and learned dynamics (F_q's overlay, ``rigid``)."""
-    classes = tuple(c for c in scene_classes(scene) if c in ("arms", "pose")) + (
+    classes = tuple(c for c in task.classes if c in ("arms", "pose")) + (
         ("rigid",) if dynamics == "rigid" else ())
     return program_settings(*classes, solver=solver)
 
@@ -194,73 +171,90 @@ def _settings_of(candidates: list[Skeleton], settings: ProgramSettings) -> Progr
     return settings
 
 
-def search_scene(scene: Scene, model_dir: Path, solver: str = "snopt", workers: int = 2,
-                 skeleton: str | Skeleton | None = None, max_pushes: int = 2,
-                 progress: bool = True, exhaustive: bool = False, quiet: bool = False,
-                 time_budget: float | None = None, guesses: dict[Skeleton, dict] | None = None,
-                 program: Mapping[str, object] | None = None, replan: bool = False,
-                 last_resort: float | None = None
-                 ) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
-    """Search the scene's candidates tier by tier, then routes around obstacles when nothing
-    plans; the result and each candidate's skeleton space (by ``id`` of its solution).
-    ``guesses``: initial guesses of the learned program by skeleton (warm starts). A free
-    pusher's region goal without obstacles that the plain tier does not plan gets the
-    fitted pushes' tier, even past ``time_budget`` (at most four programs). ``program``:
-    a user's program settings (:func:`~robotplan.program.settings.with_overrides`).
-    ``replan``: a fresh search during execution; a pose goal's then runs with the
-    ``replan`` overlay's budget first and its own where that does not solve, and a region
-    goal's starts with the fitted pushes' tier at that budget, then at its own (the object
-    has mostly come near the region by then), the plain tier following, with a
-    ``time_budget`` of its own, where neither solves. ``last_resort``: the violation within
-    which the caller adopts an unsolved plan that meets the constraints (the closed loop's
-    last resort); such a plan from those fitted pushes ends the search there too
-    (docs/experiments.md#replan-last-resort)."""
-    obj, actors = check_supported(scene)
-    settings = with_overrides(settings_for(scene, solver, dynamics_kind(model_dir)), program)
-    replan_budget = program_settings("replan", base=settings)  # the re-plans' solver budget
-    if guesses:  # a re-plan from an earlier plan
-        settings = replan_budget
-    result, spaces = SearchResult(None), {}  # spaces: a skeleton may recur in two tiers
-    space = space_for(scene)
-    if (scene.goal.type == "pose" and not guesses and not scene.robots
-            and chain_target(scene) is None):
-        given = parse_skeleton(skeleton, actors[0], obj) if isinstance(skeleton, str) else skeleton
-        # executing: the re-plans' budget first, faster (docs/experiments.md#close-fits)
-        budgets = (replan_budget, settings) if replan else (settings,)
-        result, spaces = search_pose_budgets(scene, obj, actors[0], model_dir, budgets, space,
-                                             max_pushes, workers, progress, exhaustive, quiet,
-                                             time_budget, given)
-        if result.candidates:  # the plain tier's pushes do not turn: it plans no pose goal
-            return result, spaces
-    fits = (scene.goal.type == "region" and skeleton is None and not guesses
-            and not scene.robots and not scene.obstacles and chain_target(scene) is None)
-    first = SearchResult(None)  # executing, a region goal's fitted pushes
-    if fits and replan:  # (docs/experiments.md#replan-fits)
-        first, spaces = search_region_fits_budgets(scene, obj, actors[0], model_dir,
-                                                   (replan_budget, settings), space,
-                                                   max_pushes, workers, progress, exhaustive,
-                                                   quiet, last_resort)
-        if first.settled(last_resort):
-            return first, spaces
-    for candidates, space in candidate_tiers(scene, obj, actors, skeleton, max_pushes, quiet):
-        left = None if time_budget is None else max(0.0, time_budget - result.seconds)
-        space = _space_of_guesses(space, candidates, guesses)
-        more = search_push(scene, model_dir, candidates, _settings_of(candidates, settings),
-                           workers, progress, exhaustive, left, space, guesses=guesses)
-        spaces.update({id(s): space for s in more.candidates})
+def _pose_fits(request: SearchRequest, budgets: tuple[ProgramSettings, ...],
+               space: SkeletonSpace) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
+    """The pushes fitted to the goal's pose (a given skeleton fixes their faces)."""
+    task, given = request.task, request.skeleton
+    if isinstance(given, str):
+        given = parse_skeleton(given, task.actors[0], task.obj)
+    return search_pose_budgets(request, budgets, space, given)
+
+
+def _region_fits(request: SearchRequest, budgets: tuple[ProgramSettings, ...],
+                 space: SkeletonSpace) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
+    """The pushes fitted to a pose inside the goal region."""
+    return search_region_fits_budgets(request, budgets, space)
+
+
+def _plain(request: SearchRequest, budgets: tuple[ProgramSettings, ...],
+           space: SkeletonSpace) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
+    """The space's candidates sub-tier by sub-tier (:func:`candidate_tiers`), until one
+    solves or the time budget is spent with a plan in hand."""
+    result, spaces = SearchResult(None), {}
+    for candidates, tier_space in candidate_tiers(request):
+        tier_space = _space_of_guesses(tier_space, candidates, request.guesses)
+        more = search_push(request.but(time_budget=request.left(result.seconds)), candidates,
+                           _settings_of(candidates, budgets[0]), tier_space)
+        spaces.update({id(s): tier_space for s in more.candidates})
         result = merge_results(result, more)
-        if result.solved or budget_spent(result, time_budget):
+        if result.solved or budget_spent(result, request.time_budget):
             break
-    if (not result.solved and not budget_spent(result, time_budget) and scene.obstacles
-            and skeleton is None and not scene.robots):
-        left = None if time_budget is None else max(0.0, time_budget - result.seconds)
-        routed, extra = _search_routes(scene, obj, actors[0], model_dir, settings, space,
-                                       max_pushes, workers, progress, exhaustive, quiet, left)
-        spaces.update({id(s): routed for s in extra.candidates})
-        result = merge_results(result, extra)
-    if not result.solved and fits and not replan:  # executing, they came first
-        fitted, extra = search_region_fits(scene, obj, actors[0], model_dir, settings, space,
-                                            max_pushes, workers, progress, exhaustive, quiet)
-        spaces.update({id(s): fitted for s in extra.candidates})
-        result = merge_results(result, extra)
-    return merge_results(first, result), spaces
+    return result, spaces
+
+
+def _routes(request: SearchRequest, budgets: tuple[ProgramSettings, ...],
+            space: SkeletonSpace) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
+    routed, result = _search_routes(request, budgets[0], space)
+    return result, {id(s): routed for s in result.candidates}
+
+
+TIER_SEARCHES = {"pose_fits": _pose_fits, "region_fits": _region_fits, "plain": _plain,
+                 "routes": _routes}
+"""The search of each kind of tier candidates (``skeletons/tiers.yaml``)."""
+
+
+def _runs(tier: Tier, charged: SearchResult, request: SearchRequest) -> bool:
+    """Whether ``tier`` is tried after the charged tiers' result ``charged``."""
+    if not tier.when.holds(request):
+        return False
+    if tier.runs == "always":
+        return True
+    in_budget = not budget_spent(charged, request.time_budget)
+    return not charged.solved and (tier.runs == "unsolved" or in_budget)
+
+
+def _ends(tier: Tier, result: SearchResult, last_resort: float | None) -> bool:
+    """Whether the search ends after ``tier`` gave ``result``."""
+    return {"never": False, "candidates": bool(result.candidates),
+            "settled": result.settled(last_resort), "solved": result.solved}[tier.ends]
+
+
+def search_scene(request: SearchRequest) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
+    """Search the task's tiers in the order of the tier table (``skeletons/tiers.yaml``,
+    :mod:`robotplan.search.tiers`): each tier the task and the request qualify for, while
+    the result so far lets it run, until one ends the search; the result and each
+    candidate's skeleton space (by ``id`` of its solution). A warm start
+    (``request.guesses``) solves with the re-plans' budget (the ``replan`` overlay); a
+    tier's ``replan`` budget is tried only in a re-plan (``request.replan``). The time
+    budget counts the seconds of the charged tiers."""
+    task = request.task
+    own = with_overrides(settings_for(task, request.solver, dynamics_kind(request.model_dir)),
+                         request.program)
+    replan_budget = program_settings("replan", base=own)  # the re-plans' solver budget
+    named = {"own": replan_budget if request.guesses else own, "replan": replan_budget}
+    space = space_for(task)
+    apart, charged, spaces = SearchResult(None), SearchResult(None), {}
+    for tier in load_tiers():
+        if not _runs(tier, charged, request):
+            continue
+        budgets = tuple(named[b] for b in tier.budgets if b != "replan" or request.replan)
+        timed = request.but(time_budget=request.left(charged.seconds))
+        result, more = TIER_SEARCHES[tier.candidates](timed, budgets, space)
+        spaces.update(more)
+        if tier.charged:
+            charged = merge_results(charged, result)
+        else:
+            apart = merge_results(apart, result)
+        if _ends(tier, result if tier.ends != "solved" else charged, request.last_resort):
+            break
+    return merge_results(apart, charged), spaces

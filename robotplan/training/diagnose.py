@@ -27,7 +27,7 @@ from robotplan.execution.execute import obstacle_bodies
 from robotplan.execution.sim import PHYSICS, PushWorld
 from robotplan.geometry.transforms import wrap_angle
 from robotplan.models.dynamics import load_model
-from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 from robotplan.training.pose_fit import fit_step
 
 __all__ = ["StepCheck", "check_steps", "summarize", "table", "to_json"]
@@ -49,10 +49,10 @@ def _delta(a: np.ndarray, b: np.ndarray) -> list[float]:
     return [float(d[0]), float(d[1]), float(wrap_angle(d[2]))]
 
 
-def check_steps(scene: Scene, result: dict, model_dir: str | Path) -> list[StepCheck]:
+def check_steps(task: PushTask, result: dict, model_dir: str | Path) -> list[StepCheck]:
     """One :class:`StepCheck` per push step of a free-pusher plan (``result.json``)."""
-    traj = result.get("trajectory") or {}
-    if "pusher" not in traj or scene.robots or not scene.pushers:
+    traj, scene = result.get("trajectory") or {}, task.scene
+    if "pusher" not in traj or task.arms:
         raise ValueError("result.json has no free-pusher trajectory (arm plans are not "
                          "diagnosed yet)")
     if len(traj.get("objects", {})) > 1:
@@ -60,7 +60,7 @@ def check_steps(scene: Scene, result: dict, model_dir: str | Path) -> list[StepC
     obj_name, poses = next(iter(traj["objects"].items()))
     Q1, Q2 = np.asarray(poses, dtype=float), np.asarray(traj["pusher"], dtype=float)
     body, spec = scene.bodies[obj_name], next(o for o in scene.objects if o.name == obj_name)
-    tool = scene.bodies[scene.pushers[0].name]
+    tool = scene.bodies[task.actors[0]]
     model = load_model(model_dir)  # LearnedDynamics freezes its parameters
     checks = []
     with PushWorld(PHYSICS) as world:

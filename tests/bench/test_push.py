@@ -12,6 +12,7 @@ from robotplan.bench.push_scenes import GOAL_DISTANCE, draw_scene
 from robotplan.functionals.coverage import coverage
 from robotplan.program.skeleton import load_skeleton_space
 from robotplan.scene import parse_scene
+from robotplan.scene.task import make_task
 from robotplan.search.planner import order_candidates
 from tests.cli.test_main import call, run
 
@@ -95,9 +96,9 @@ def test_candidates_behind_the_object_come_first():
     doc = draw_scene(0, 1, "box")
     doc["objects"][0]["pose"] = [0.0, 0.0, 0.0]
     doc["goal"]["region"]["pose"] = [0.35, 0.0, 0.0]  # goal to the east: push from the west
-    scene = parse_scene(doc, "bench.yaml")
+    task = make_task(parse_scene(doc, "bench.yaml"))
     skeletons = load_skeleton_space().candidates("pusher", "object")
-    ordered = order_candidates(scene, skeletons)
+    ordered = order_candidates(task, skeletons)
     assert sorted(map(id, ordered)) == sorted(map(id, skeletons))
     # init 0, measured from the direction away from the goal (the default frame), is west of
     # the object: behind it

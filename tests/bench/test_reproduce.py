@@ -11,17 +11,17 @@ import pytest
 
 from robotplan.bench.paper import FLOW_REPRESENTATIONS, TAB5
 from robotplan.bench.report import write_report
-from robotplan.bench.report_hang import tab3_blocks
 from robotplan.bench.reproduce import (
     QUICK,
     _flow_representations,
     _representations,
     reproduce,
 )
-from robotplan.bench.reproduce_hang import HANG_REPRESENTATIONS, hang_representations
 from robotplan.bench.reproduce_report import _analytic_rows, _tab2, _tab4, _tab56
 from robotplan.bench.steps import Steps
 from robotplan.cli.main import main
+from robotplan.hanging.bench.report import tab3_blocks
+from robotplan.hanging.bench.reproduce import HANG_REPRESENTATIONS, hang_representations
 
 
 def test_report_tables_and_an_embedded_figure(tmp_path):

@@ -25,6 +25,7 @@ from robotplan.execution.perturb import Perturbation
 from robotplan.execution.scene_world import Observation
 from robotplan.execution.sim import PHYSICS
 from robotplan.scene.schema import PoseGoal
+from robotplan.scene.task import PushTask, load_task, make_task
 from robotplan.search.planner import meets_constraints
 from tests.conftest import TASKS, assert_each_refused
 
@@ -65,16 +66,17 @@ def test_chains_re_plan_from_their_own_phase_end_departures(tmp_path):
     """A scene in which an object pushes another takes the ``chains`` overlay of
     skeletons/loop.yaml; a single object's keeps the defaults; a bad overlay names its file
     and field."""
-    single, chain = load_scene(TASKS / "box_push.yaml"), load_scene(TASKS / "three_objects.yaml")
+    single, chain = load_task(TASKS / "box_push.yaml"), load_task(TASKS / "three_objects.yaml")
     overlay = load_loop_overlays()["chains"]
     assert loop_settings_for(single) == LoopSettings()
     chained = loop_settings_for(chain)
     assert chained != LoopSettings()
     assert all(getattr(chained, k) == v for k, v in overlay.items())
-    posed = loop_settings_for(replace(single, goal=PoseGoal("box", (0.3, 0.1, 0.5))))
+    posed = loop_settings_for(make_task(replace(single.scene,
+                                                goal=PoseGoal("box", (0.3, 0.1, 0.5)))))
     assert all(getattr(posed, k) == v for k, v in load_loop_overlays()["pose"].items())
     assert posed.fresh_after_miss and not LoopSettings().fresh_after_miss
-    arms = loop_settings_for(load_scene(TASKS / "two_arm_handover.yaml"))
+    arms = loop_settings_for(load_task(TASKS / "two_arm_handover.yaml"))
     assert chained.max_replans == arms.max_replans < posed.max_replans == LoopSettings().max_replans
     assert_each_refused(load_loop_overlays.__wrapped__, tmp_path / "loop.yaml", (
         ("chains: {no_such: 1}", "loop.yaml: chains.no_such: not a closed-loop"),
@@ -91,7 +93,7 @@ def test_a_users_loop_settings_are_typed_and_win_over_the_scene_class():
     assert overrides == {"last_resort_beyond_drift": True, "last_resort_violation": 0.03,
                          "max_replans": 4, "phase_drift": 0.03}
     assert type(overrides["max_replans"]) is int and type(overrides["phase_drift"]) is float
-    chain = load_scene(TASKS / "three_objects.yaml")
+    chain = load_task(TASKS / "three_objects.yaml")
     settings = loop_settings_for(chain, overrides=overrides)
     assert settings.phase_drift == 0.03 != loop_settings_for(chain).phase_drift
     assert settings.phase_drift_yaw == loop_settings_for(chain).phase_drift_yaw  # the class's
@@ -130,28 +132,35 @@ def box_plan():
 
 
 def _box_moved(planned):
-    """The plan's scene with the box 6 cm back and turned 0.3 rad (17°) from where the plan
-    expects it."""
+    """The plan's task in its scene with the box 6 cm back and turned 0.3 rad (17°) from
+    where the plan expects it."""
     x, y, yaw = planned.scene.bodies["box"].pose
-    return planned.scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+    return planned.task.at(planned.scene.with_state({"box": (x, y - 0.06, yaw + 0.3)}))
+
+
+def _observed_box(observed) -> None:
+    """A re-planner gets the plan's task in the observed scene."""
+    assert isinstance(observed, PushTask)
+    assert (observed.obj, observed.actors) == ("box", ("pusher",))
 
 
 def _implausible_when_fresh(observed, tail, fresh, last_resort=None):
     """A re-planner that plans nothing from a tail alone; asked for a fresh search it returns
     a real plan from the observed scene that meets every constraint, flagged not solved (as
     one the learned dynamics call implausible)."""
+    _observed_box(observed)
     if not fresh:
-        return robotplan.Plan(observed, "box", None, False)
+        return robotplan.PushPlan(observed, None, False)
     real = robotplan.plan(observed, workers=1, progress=False, quiet=True)
     assert real.best is not None and meets_constraints(real.best)
-    return robotplan.Plan(observed, "box", real.best, False)
+    return robotplan.PushPlan(observed, real.best, False)
 
 
 def test_closed_loop_recovers_a_box_that_is_not_where_it_was_planned(box_plan):
     """The box is 6 cm and 17° from where the plan expects it: the plan pushes past it open
     loop; closed loop sees that after the first step and re-plans from there."""
     assert box_plan.solved
-    moved = _box_moved(box_plan)
+    moved = _box_moved(box_plan).scene
     open_loop = robotplan.execute(box_plan, moved, mode="open_loop")
     assert open_loop.coverage < 0.5
     closed = robotplan.execute(box_plan, moved)
@@ -181,7 +190,7 @@ def test_a_departure_whose_tail_does_not_plan_asks_for_a_fresh_search(box_plan,
     calls, nothing_plans = _recording_nothing_plans()
     moved = _box_moved(box_plan)
     settings = LoopSettings(fresh_after_miss=fresh_after_miss, max_replans=3)
-    ex = execute_closed_loop(moved, "box", box_plan.best, nothing_plans, settings)
+    ex = execute_closed_loop(moved, box_plan.best, nothing_plans, settings)
     assert calls[0] == (True, fresh_after_miss)
     assert len(ex.replans) == len(calls) <= 3
     assert not any(r.solved for r in ex.replans) and len(ex.plans) == 1
@@ -195,7 +204,7 @@ def test_an_object_lost_with_no_re_plans_left_ends_the_run_only_when_asked(box_p
     its end."""
     moved = _box_moved(box_plan)
     settings = LoopSettings(stop_when_lost=stop_when_lost, max_replans=1)
-    ex = execute_closed_loop(moved, "box", box_plan.best, _nothing_plans, settings)
+    ex = execute_closed_loop(moved, box_plan.best, _nothing_plans, settings)
     assert len(ex.replans) == 1 and not ex.replans[0].adopted
     planned_steps = len(box_plan.best.q_obj) - 1
     if stop_when_lost:
@@ -206,7 +215,8 @@ def test_an_object_lost_with_no_re_plans_left_ends_the_run_only_when_asked(box_p
 
 
 def _nothing_plans(observed, tail, fresh, last_resort=None):
-    return robotplan.Plan(observed, "box", None, False)
+    _observed_box(observed)
+    return robotplan.PushPlan(observed, None, False)
 
 
 def _recording_nothing_plans():
@@ -268,18 +278,19 @@ def test_at_the_plan_end_a_pose_goal_is_met_from_pose_coverage_on():
     from robotplan.execution.execute import outcome
     from robotplan.scene.loader import parse_scene
 
-    scene = parse_scene(draw_scene(4, 0, "pose"))
-    obj = scene.goal.object
-    settings = loop_settings_for(scene)
+    task = make_task(parse_scene(draw_scene(4, 0, "pose")))
+    scene, obj = task.scene, task.obj
+    assert task.goal == "pose" and obj == scene.goal.object
+    settings = loop_settings_for(task)
     assert 0.95 <= settings.pose_coverage < 1.0
     target = np.array(scene.goal.pose)
     shifted = [target + np.array([dx, 0.0, 0.0]) for dx in np.linspace(0, 0.02, 201)]
-    covered = [outcome(scene, scene.bodies[obj], q, np.zeros(2), 0.0)[0] for q in shifted]
+    covered = [outcome(task, scene.bodies[obj], q, np.zeros(2), 0.0)[0] for q in shifted]
     above = next(q for q, c in zip(shifted[::-1], covered[::-1], strict=True)
                  if c >= settings.pose_coverage)
     below = next(q for q, c in zip(shifted, covered, strict=True) if c < settings.pose_coverage)
-    assert _goal_met(scene, obj, Observation({obj: above}), settings)
-    assert not _goal_met(scene, obj, Observation({obj: below}), settings)
+    assert _goal_met(task, Observation({obj: above}), settings)
+    assert not _goal_met(task, Observation({obj: below}), settings)
 
 
 @pytest.mark.parametrize("fresh_beyond_drift", [True, False])
@@ -292,11 +303,11 @@ def test_a_gross_departure_at_a_phase_end_asks_for_a_fresh_search(box_plan,
 
     def nothing_plans(observed, tail, fresh, last_resort):
         calls.append((len(calls), tail is not None, fresh, last_resort))
-        return robotplan.Plan(observed, "box", None, False)
+        return _nothing_plans(observed, tail, fresh)
 
     moved = _box_moved(box_plan)
     settings = LoopSettings(fresh_beyond_drift=fresh_beyond_drift, max_replans=2)
-    execute_closed_loop(moved, "box", box_plan.best, nothing_plans, settings)
+    execute_closed_loop(moved, box_plan.best, nothing_plans, settings)
     bound = settings.last_resort_violation if fresh_beyond_drift else None
     assert calls == [(0, True, False, None), (1, True, fresh_beyond_drift, bound)]
 
@@ -312,7 +323,7 @@ def test_at_the_plan_end_a_re_plan_that_meets_the_constraints_is_taken(box_plan)
     for adopt in (False, True):
         settings = LoopSettings(fresh_beyond_drift=False, adopt_feasible_at_end=adopt,
                                 last_resort_beyond_drift=False, max_replans=5)
-        ex = execute_closed_loop(moved, "box", box_plan.best, _implausible_when_fresh,
+        ex = execute_closed_loop(moved, box_plan.best, _implausible_when_fresh,
                                  settings)
         end = [r for r in ex.replans if r.reason == "goal not met at the plan's end"]
         assert end and not any(r.solved for r in ex.replans)
@@ -330,7 +341,7 @@ def test_a_gross_phase_end_departure_takes_a_last_resort_plan_only_when_asked(bo
     there only with ``last_resort_beyond_drift``."""
     moved = _box_moved(box_plan)
     settings = LoopSettings(last_resort_beyond_drift=beyond_drift, max_replans=2)
-    ex = execute_closed_loop(moved, "box", box_plan.best, _implausible_when_fresh, settings)
+    ex = execute_closed_loop(moved, box_plan.best, _implausible_when_fresh, settings)
     at_phase_end = [r for r in ex.replans if r.reason.endswith("at the end of a phase")]
     assert at_phase_end and not at_phase_end[0].solved
     assert at_phase_end[0].adopted == beyond_drift
@@ -344,6 +355,6 @@ def test_at_the_plan_end_the_last_push_is_redone_first_only_when_asked(box_plan,
     calls, nothing_plans = _recording_nothing_plans()
     moved = _box_moved(box_plan)
     settings = LoopSettings(redo_last_push=redo_last_push, max_replans=8)
-    ex = execute_closed_loop(moved, "box", box_plan.best, nothing_plans, settings)
+    ex = execute_closed_loop(moved, box_plan.best, nothing_plans, settings)
     assert ex.replans[-1].reason == "goal not met at the plan's end"
     assert calls[-1] == (redo_last_push, True)

@@ -5,10 +5,10 @@ import json
 import numpy as np
 import pytest
 
-from robotplan import load_scene
 from robotplan.execution.execute import REACH_SPEED, execute_push, reach_substeps
 from robotplan.scene import parse_scene
 from robotplan.scene.bodies import Body
+from robotplan.scene.task import load_task, make_task
 from robotplan.sdf import Box, Circle, LShape, Polygon
 from robotplan.viz.viewer import Layer, write_playback
 from tests.conftest import DATA, TASKS, playback_commands
@@ -22,21 +22,22 @@ def hand_made_push() -> np.ndarray:
 
 
 def test_execution_pushes_the_box_into_the_goal():
-    scene = load_scene(TASKS / "box_push.yaml")
+    task = load_task(TASKS / "box_push.yaml")
     q = hand_made_push()
-    ex = execute_push(scene, "box", "pusher", q)
+    ex = execute_push(task, q)
     assert ex.object_poses.shape == (len(q), 3)
     assert np.abs(ex.pusher_positions - q).max() < 0.01  # the pusher tracks its path
     assert ex.final_pose[0] > 0.25 and ex.coverage > 0.9
-    still = execute_push(scene, "box", "pusher", np.tile(q[:1], (5, 1)))
-    assert still.coverage == 0.0 and np.allclose(still.final_pose, scene.bodies["box"].pose,
-                                                 atol=1e-3)
+    still = execute_push(task, np.tile(q[:1], (5, 1)))
+    assert still.coverage == 0.0 and np.allclose(still.final_pose,
+                                                 task.scene.bodies["box"].pose, atol=1e-3)
 
 
 def test_playback_is_one_self_contained_page(tmp_path):
-    scene = load_scene(TASKS / "box_push.yaml")
+    task = load_task(TASKS / "box_push.yaml")
+    scene = task.scene
     q = hand_made_push()
-    ex = execute_push(scene, "box", "pusher", q)
+    ex = execute_push(task, q)
     page = tmp_path / "playback.html"
     write_playback(scene, page, [Layer("plan", ex.times, {"pusher": q}),
                                  Layer("executed", ex.times, {"box": ex.object_poses,
@@ -55,7 +56,8 @@ def test_arm_execution_tracks_the_plan_and_pushes_with_its_tip(tmp_path):
     from robotplan.execution.execute import execute_arms
     from robotplan.functionals.kinematics import arm_kinematics, track_tip_path
 
-    scene = load_scene(TASKS / "two_arm_left_only.yaml")
+    task = load_task(TASKS / "two_arm_left_only.yaml")
+    scene = task.scene
     left, right = (next(r for r in scene.robots if r.name == n) for n in ("left", "right"))
     kin = arm_kinematics(left)
     above = np.array([[-0.45, -0.37, 0.12]])
@@ -65,7 +67,7 @@ def test_arm_execution_tracks_the_plan_and_pushes_with_its_tip(tmp_path):
     Q = np.vstack([kin.q0, Q])
     q_right = np.tile(arm_kinematics(right).q0, (len(Q), 1))
     substeps = [60, 60] + [20] * (len(Q) - 3)
-    ex = execute_arms(scene, "box", {"left": Q, "right": q_right}, substeps)
+    ex = execute_arms(task, {"left": Q, "right": q_right}, substeps)
     planned = np.array([kin.tip(q) for q in Q])
     assert np.abs(ex.tips["left"][:3] - planned[:3]).max() < 2e-3  # before contact
     assert np.abs(ex.joints["right"] - q_right).max() < 1e-3
@@ -91,29 +93,31 @@ def test_arm_execution_tracks_the_plan_and_pushes_with_its_tip(tmp_path):
 def test_obstacles_are_fixed_bodies_and_contact_is_reported():
     """Pushing the box straight east drives it into the wall: the wall holds, the contact
     is reported; a short push that stops 8 cm before it is not."""
-    scene = load_scene(TASKS / "obstacle_push.yaml")
+    task = load_task(TASKS / "obstacle_push.yaml")
     into = np.vstack([np.linspace([-0.40, 0.0], [-0.34, 0.0], 5),
                       np.linspace([-0.34, 0.0], [0.0, 0.0], 16)[1:]])
-    ex = execute_push(scene, "box", "pusher", into)
+    ex = execute_push(task, into)
     assert ex.obstacle_contact
     assert ex.final_pose[0] + 0.06 < 0.02 + 0.005  # the box's face stays at the wall's
-    short = execute_push(scene, "box", "pusher", into[:8])
+    short = execute_push(task, into[:8])
     assert not short.obstacle_contact and short.final_pose[0] > -0.25 + 0.01
 
 
 def test_every_object_is_simulated_and_forbidden_touches_are_reported():
     """three_objects: a straight push of red into blue moves both (blue's coverage is
     reported); driving the pusher into blue, which it may not touch, is reported."""
-    scene = load_scene(TASKS / "three_objects.yaml")
+    task = load_task(TASKS / "three_objects.yaml")
+    scene = task.scene
+    assert (task.obj, task.chained) == ("red", "blue")
     through_red = np.vstack([np.linspace([-0.40, -0.10], [-0.26, 0.02], 8),
                              np.linspace([-0.26, 0.02], [0.10, 0.02], 13)[1:]])
-    ex = execute_push(scene, "red", "pusher", through_red)
+    ex = execute_push(task, through_red)
     assert set(ex.others) == {"blue"} and ex.others["blue"].shape == (len(through_red), 3)
     assert ex.others["blue"][-1, 0] > scene.bodies["blue"].pose[0] + 0.1  # red pushed blue
     assert ex.forbidden_contacts == [] and 0.0 <= ex.coverage < 0.95
     at_blue = np.vstack([np.linspace([-0.40, -0.10], [0.05, -0.10], 10),
                          np.linspace([0.05, -0.10], [0.05, -0.02], 5)[1:]])
-    ex = execute_push(scene, "red", "pusher", at_blue)
+    ex = execute_push(task, at_blue)
     assert ex.forbidden_contacts == ["blue"]
 
 
@@ -122,9 +126,10 @@ def test_guess_routes_the_object_around_the_obstacle():
     from robotplan.program.push_program import PushProgram
     from robotplan.program.skeleton import parse_skeleton, space_for
 
-    scene = load_scene(TASKS / "obstacle_push.yaml")
-    prog = PushProgram(scene, parse_skeleton("push@0,push@0", "pusher", "box"), None,
-                       space_for(scene))
+    task = load_task(TASKS / "obstacle_push.yaml")
+    scene = task.scene
+    prog = PushProgram(task, parse_skeleton("push@0,push@0", "pusher", "box"), None,
+                       space_for(task))
     route = object_route(prog, np.array([-0.25, 0.0]), np.array([0.38, 0.0]))
     assert len(route) == 3 and abs(route[1, 1]) > 0.15 + 0.08
     wall = np.array(scene.bodies["wall"].pose[:2])
@@ -180,13 +185,14 @@ def test_fast_reach_no_longer_clips_the_object():
     step: in 20 simulation steps a step the pusher lags, clips the L and flings it; at the
     data's speed the L stays within 1 cm of where the plan holds it until the push."""
     case = json.loads((DATA / "lshape_fast_reach.json").read_text())
-    scene = parse_scene(case["scene"], DATA / "lshape_fast_reach.json")
+    task = make_task(parse_scene(case["scene"], DATA / "lshape_fast_reach.json"))
+    scene = task.scene
     q = np.array(case["pusher"])
     T = (len(q) - 1) // len(case["phases"])
     push = np.array([case["phases"][t // T] == "push" for t in range(len(q) - 1)])
     start = np.array(scene.bodies["object"].pose)
-    fast = execute_push(scene, "object", "pusher", q)
-    slow = execute_push(scene, "object", "pusher", q, substeps=reach_substeps(q, push))
+    fast = execute_push(task, q)
+    slow = execute_push(task, q, substeps=reach_substeps(q, push))
     reach_end = int(np.argmax(push))  # the last state of the reach phase
     assert np.abs(fast.object_poses[reach_end, :2] - start[:2]).max() > 0.05
     assert np.abs(slow.object_poses[reach_end, :2] - start[:2]).max() < 0.01

@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from robotplan import load_scene
 from robotplan.base.resources import learned_dir
 from robotplan.execution.imagined_world import ImaginedWorld, rigid_step
 from robotplan.execution.scene_world import SceneWorld
 from robotplan.models.loading import load_dynamics
+from robotplan.scene.task import load_task
 from tests.conftest import TASKS
 
 
@@ -20,10 +20,10 @@ def fq():
     return load_dynamics(learned_dir("push_rigid"))
 
 
-def _box_scene(pusher_xy):
+def _box_task(pusher_xy):
     """box_push with its box at the origin, unturned, and the pusher at ``pusher_xy``."""
-    scene = load_scene(TASKS / "box_push.yaml")
-    return scene.with_state({"box": (0.0, 0.0, 0.0), "pusher": (*pusher_xy, 0.0)})
+    task = load_task(TASKS / "box_push.yaml")
+    return task.at(task.scene.with_state({"box": (0.0, 0.0, 0.0), "pusher": (*pusher_xy, 0.0)}))
 
 
 def _pivot(pose, centre):
@@ -44,8 +44,8 @@ def test_a_rigid_step_turns_about_the_pivot_then_shifts_it():
 
 def test_without_contact_the_object_stays_where_it_is(fq):
     """A long reach round the box, 10 cm from it all the way: not a hair of motion."""
-    scene = _box_scene((-0.25, 0.0))
-    with ImaginedWorld(scene, "box", fq) as world:
+    task = _box_task((-0.25, 0.0))
+    with ImaginedWorld(task, fq) as world:
         start = world.observe().poses["box"]
         for a, b in [((-0.25, 0.0), (-0.25, 0.19)), ((-0.25, 0.19), (0.25, 0.19))]:
             world.run_step({"pusher": np.array(a)}, {"pusher": np.array(b)}, 400)
@@ -59,11 +59,11 @@ def test_a_push_moves_the_box_as_pybullet_does(fq):
     along it 12 steps of 1.5 cm: F_q's box ends within 1.5 cm of pybullet's, having moved
     more than 9 cm, and turned the same way by within a quarter of pybullet's turn (over
     10°)."""
-    scene = _box_scene((-0.14, 0.02))
+    task = _box_task((-0.14, 0.02))
     path = [np.array((-0.14 + 0.015 * k, 0.02)) for k in range(13)]
     ends = []
-    for world_of in (SceneWorld, lambda s, o: ImaginedWorld(s, o, fq)):
-        with world_of(scene, "box") as world:
+    for world_of in (SceneWorld, lambda t: ImaginedWorld(t, fq)):
+        with world_of(task) as world:
             for a, b in itertools.pairwise(path):
                 world.run_step({"pusher": a}, {"pusher": b}, 20)
             ends.append(world.observe().poses["box"])
@@ -77,5 +77,4 @@ def test_a_push_moves_the_box_as_pybullet_does(fq):
 def test_a_scene_f_q_cannot_stand_in_for_is_refused(fq):
     for name in ("three_objects", "two_arm_left_only"):
         with pytest.raises(ValueError, match="one free pusher and one object"):
-            ImaginedWorld(load_scene(TASKS / f"{name}.yaml"),
-                          "red" if name == "three_objects" else "box", fq)
+            ImaginedWorld(load_task(TASKS / f"{name}.yaml"), fq)

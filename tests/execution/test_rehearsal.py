@@ -8,7 +8,8 @@ import pytest
 
 import robotplan
 from robotplan import load_scene
-from robotplan.api import _replanner, playback_layers
+from robotplan.api.playback import playback_layers
+from robotplan.api.push import PushPlanner
 from robotplan.base.resources import learned_dir
 from robotplan.bench.push_scenes import draw_scene
 from robotplan.execution.execute import plan_substeps, run_open_loop
@@ -16,6 +17,7 @@ from robotplan.execution.imagined_world import ImaginedWorld
 from robotplan.execution.rehearsal import rehearsable, rehearsal_world, rehearse
 from robotplan.models.loading import load_dynamics
 from robotplan.scene.loader import parse_scene
+from robotplan.scene.task import PushTask, load_task, make_task
 from tests.conftest import TASKS
 
 
@@ -32,11 +34,12 @@ def box_plan(fq):
 
 
 def _nothing_plans(observed, tail, fresh, last_resort=None):
-    return robotplan.Plan(observed, "box", None, False)
+    assert isinstance(observed, PushTask) and observed.obj == "box"
+    return robotplan.PushPlan(observed, None, False)
 
 
 def test_only_one_pusher_one_object_and_no_obstacles_are_rehearsed():
-    kinds = {name: rehearsable(load_scene(TASKS / f"{name}.yaml"))
+    kinds = {name: rehearsable(load_task(TASKS / f"{name}.yaml"))
              for name in ("box_push", "lshape_push", "three_objects", "obstacle_push",
                           "two_arm_left_only")}
     assert kinds == {"box_push": True, "lshape_push": True, "three_objects": False,
@@ -46,22 +49,21 @@ def test_only_one_pusher_one_object_and_no_obstacles_are_rehearsed():
 def test_boxes_and_l_shapes_rehearse_in_the_object_frame_f_q_other_footprints_in_their_own():
     own = learned_dir("push_rigid")
     for name in ("box_push", "lshape_push"):
-        scene = load_scene(TASKS / f"{name}.yaml")
-        world = rehearsal_world(scene, scene.objects[0].name, own)
+        world = rehearsal_world(load_task(TASKS / f"{name}.yaml"), own)
         assert world.name == "push_rigid_object"
     doc = draw_scene(0, 0, "ood")
-    unseen = parse_scene(doc, "ood.yaml")
-    assert unseen.objects[0].shape.type == "polygon"
-    assert rehearsal_world(unseen, unseen.objects[0].name, own) == own
-    assert rehearsal_world(unseen, unseen.objects[0].name, own, "elsewhere") == Path("elsewhere")
+    unseen = make_task(parse_scene(doc, "ood.yaml"))
+    assert unseen.scene.bodies[unseen.obj].shape.type == "polygon"
+    assert rehearsal_world(unseen, own) == own
+    assert rehearsal_world(unseen, own, "elsewhere") == Path("elsewhere")
 
 
 def test_without_re_plans_a_rehearsal_is_the_plan_run_in_f_q(box_plan, fq):
-    scene, sol = box_plan.scene, box_plan.best
-    r = rehearse(scene, "box", sol, _nothing_plans, fq)
+    task, sol = box_plan.task, box_plan.best
+    r = rehearse(task, sol, _nothing_plans, fq)
     assert np.array_equal(r.pusher, sol.q_pusher[:, :2])
-    assert r.substeps == plan_substeps(scene, sol)
-    with ImaginedWorld(scene, "box", fq) as world:
+    assert r.substeps == plan_substeps(task, sol)
+    with ImaginedWorld(task, fq) as world:
         poses = [world.observe().poses["box"]]
         for t, n in enumerate(r.substeps):
             world.run_step({"pusher": sol.q_pusher[t]}, {"pusher": sol.q_pusher[t + 1]}, n)
@@ -74,17 +76,17 @@ def test_without_re_plans_a_rehearsal_is_the_plan_run_in_f_q(box_plan, fq):
 
 def test_past_its_budget_a_rehearsal_asks_for_no_re_plan(box_plan, fq):
     x, y, yaw = box_plan.scene.bodies["box"].pose
-    moved = box_plan.scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
+    moved = box_plan.task.at(box_plan.scene.with_state({"box": (x, y - 0.06, yaw + 0.3)}))
     asked = []
 
     def replan(*args):
         asked.append(args)
         return _nothing_plans(*args)
 
-    r = rehearse(moved, "box", box_plan.best, replan, fq, budget=0.0)
+    r = rehearse(moved, box_plan.best, replan, fq, budget=0.0)
     assert not asked and r.replans and not any(rp.adopted for rp in r.replans)
     assert np.array_equal(r.pusher, box_plan.best.q_pusher[:, :2])
-    assert rehearse(moved, "box", box_plan.best, replan, fq).replans and asked
+    assert rehearse(moved, box_plan.best, replan, fq).replans and asked
 
 
 def test_a_rehearsal_re_plans_where_f_q_leaves_the_plan_and_its_open_loop_ends_in_the_goal(
@@ -93,12 +95,12 @@ def test_a_rehearsal_re_plans_where_f_q_leaves_the_plan_and_its_open_loop_ends_i
     pushes past it; rehearsed in F_q (re-planning through the real planner), the pusher's
     states take it to the goal, in F_q and open loop in pybullet."""
     x, y, yaw = box_plan.scene.bodies["box"].pose
-    moved = box_plan.scene.with_state({"box": (x, y - 0.06, yaw + 0.3)})
-    plain = robotplan.execute(box_plan, moved, mode="open_loop")
+    moved = box_plan.task.at(box_plan.scene.with_state({"box": (x, y - 0.06, yaw + 0.3)}))
+    plain = robotplan.execute(box_plan, moved.scene, mode="open_loop")
     assert plain.coverage < 0.5
-    r = rehearse(moved, "box", box_plan.best, _replanner(box_plan), fq)
+    r = rehearse(moved, box_plan.best, PushPlanner().replanner(box_plan), fq)
     assert any(rp.adopted for rp in r.replans) and r.coverage >= 0.95
-    ex = run_open_loop(moved, "box", {"pusher": r.pusher}, r.substeps)
+    ex = run_open_loop(moved, {"pusher": r.pusher}, r.substeps)
     assert ex.coverage >= 0.9
 
 

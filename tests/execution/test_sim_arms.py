@@ -12,14 +12,14 @@ from robotplan.execution.loop_settings import LoopSettings
 from robotplan.execution.scene_world import SceneWorld
 from robotplan.execution.steering import steer_actor
 from robotplan.program.skeleton import Phase, Skeleton
-from robotplan.scene.loader import load_scene
+from robotplan.scene.task import load_task
 from tests.conftest import TASKS
 
 
 @pytest.fixture
 def arm_world():
-    scene = load_scene(TASKS / "two_arm_handover.yaml")
-    with SceneWorld(scene, "box") as world:
+    task = load_task(TASKS / "two_arm_handover.yaml")
+    with SceneWorld(task) as world:
         yield world
 
 

@@ -13,6 +13,7 @@ from robotplan.functionals.sticking import QuasiStaticObjectPush
 from robotplan.program.chain_program import ChainPushProgram, objects_touch, touching_distance
 from robotplan.program.settings import ProgramSettings
 from robotplan.program.skeleton import chain_candidates, load_skeleton_space, parse_skeleton
+from robotplan.scene.task import make_task
 from tests.conftest import TASKS
 
 THREE_PUSHES = "push@0,push@0>blue,push@0>blue"
@@ -25,7 +26,7 @@ def scene():
 
 def build(scene, text=THREE_PUSHES):
     sk = parse_skeleton(text, "pusher", "red")
-    return ChainPushProgram(scene, sk, None, load_skeleton_space(), ProgramSettings())
+    return ChainPushProgram(make_task(scene), sk, None, load_skeleton_space(), ProgramSettings())
 
 
 def test_chained_skeletons_parse_and_enumerate():
@@ -123,7 +124,9 @@ def test_kinematic_chain_plan_brings_blue_into_the_goal(scene):
     gaps = [float(blue.sdf(p, torch.as_tensor(q))) for p, q in zip(pusher, sol.q_others["blue"],
                                                                     strict=True)]
     assert min(gaps) > scene.bodies["pusher"].shape.radius
-    ex = execute_push(scene, "red", "pusher", sol.q_pusher)
+    task = make_task(scene)
+    assert (task.obj, task.actors, task.chained) == ("red", ("pusher",), "blue")
+    ex = execute_push(task, sol.q_pusher)
     assert set(ex.others) == {"blue"} and ex.others["blue"].shape == (61, 3)
     # red, pushed by the pusher, pushes blue along +x
     assert (ex.others["blue"][:, 0] - ex.others["blue"][0, 0]).max() > 0.01

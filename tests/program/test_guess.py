@@ -6,17 +6,17 @@ import numpy as np
 import pytest
 import torch
 
-from robotplan import load_scene
 from robotplan.program.guess import contact_offset, contact_point_guess
 from robotplan.program.push_program import PushProgram
 from robotplan.program.settings import ProgramSettings
 from robotplan.program.skeleton import load_skeleton_space, parse_skeleton
+from robotplan.scene.task import load_task
 from tests.conftest import DATA, TASKS
 
 
 def kinematic_program(scene_file, obj, text="push@0"):
-    scene = load_scene(scene_file)
-    return PushProgram(scene, parse_skeleton(text, "pusher", obj), None, load_skeleton_space(),
+    task = load_task(scene_file)
+    return PushProgram(task, parse_skeleton(text, "pusher", obj), None, load_skeleton_space(),
                        ProgramSettings())
 
 

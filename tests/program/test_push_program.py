@@ -8,13 +8,13 @@ import pytest
 import torch
 from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoDiff
 
-from robotplan import load_scene
 from robotplan.functionals.collision import crossing_depth
 from robotplan.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.models.rigid import RigidMotion
 from robotplan.program.push_program import PushProgram
 from robotplan.program.settings import ProgramSettings
 from robotplan.program.skeleton import load_skeleton_space, parse_skeleton
+from robotplan.scene.task import load_task
 from tests.conftest import DATA, TASKS
 
 TINY = {"channels": (2, 2, 2), "sdf_features": 8, "point_features": 8, "hidden": (16, 16)}
@@ -23,12 +23,12 @@ TINY = {"channels": (2, 2, 2), "sdf_features": 8, "point_features": 8, "hidden":
 def build(text="push@2", kinematic=False, scene_file=TASKS / "box_push.yaml", rigid=False,
           **settings):
     torch.manual_seed(0)
-    scene = load_scene(scene_file)
+    task = load_task(scene_file)
     space = replace(load_skeleton_space(), init_frame="table")  # init 2: west of the box
     model = None if kinematic else PushDynamics(DynamicsSpec(**TINY)).double()  # float64
     if rigid:
         model = RigidMotion(DynamicsSpec(kind="rigid", encoder="joint", **TINY)).double()
-    return PushProgram(scene, parse_skeleton(text, "pusher", "box"), model, space,
+    return PushProgram(task, parse_skeleton(text, "pusher", "box"), model, space,
                        ProgramSettings(**settings))
 
 
@@ -150,9 +150,9 @@ def test_solve_skeleton_stops_where_the_kinematics_cannot_push():
     from robotplan.program.solve import solve_skeleton
 
     torch.manual_seed(0)
-    scene = load_scene(TASKS / "box_push.yaml")
+    task = load_task(TASKS / "box_push.yaml")
     model = PushDynamics(DynamicsSpec(**TINY))
-    sol = solve_skeleton(scene, parse_skeleton("push@2", "pusher", "box"), model,
+    sol = solve_skeleton(task, parse_skeleton("push@2", "pusher", "box"), model,
                          replace(load_skeleton_space(), init_frame="table"),
                          ProgramSettings(warm_max_step=0.01, warm_max_turn=0.02,
                                          warm_iterations=30, warm_restarts=0))
@@ -166,7 +166,7 @@ def test_learned_program_never_ends_worse_than_its_warm_start():
     kin = build(kinematic=True, scene_file=DATA / "box_push_near.yaml")
     warm = kin.solve()
     torch.manual_seed(0)
-    learned = PushProgram(kin.scene, kin.skeleton, PushDynamics(DynamicsSpec(**TINY)),
+    learned = PushProgram(kin.task, kin.skeleton, PushDynamics(DynamicsSpec(**TINY)),
                           kin.space, ProgramSettings(iterations=3), guess=kin.as_guess(warm))
     assert learned.keep_start and not kin.keep_start
     sol = learned.solve()
@@ -188,7 +188,7 @@ def test_a_start_the_learned_rows_accept_is_kept_without_a_learned_solve():
     assert warm.violation <= FEASIBLE
     torch.manual_seed(0)
     model = PushDynamics(DynamicsSpec(**TINY))
-    learned = PushProgram(kin.scene, kin.skeleton, model, kin.space, ProgramSettings(),
+    learned = PushProgram(kin.task, kin.skeleton, model, kin.space, ProgramSettings(),
                           guess=kin.as_guess(warm))
     start = learned.start_solution()
     x = learned.prog.GetInitialGuess(learned.prog.decision_variables())
@@ -201,7 +201,7 @@ def test_a_start_the_learned_rows_accept_is_kept_without_a_learned_solve():
         settings = ProgramSettings(iterations=3, accept_good_start=True,
                                    good_rms_mm=good_rms_mm)
         torch.manual_seed(0)
-        return solve_skeleton(kin.scene, kin.skeleton, model, kin.space, settings,
+        return solve_skeleton(kin.task, kin.skeleton, model, kin.space, settings,
                               guess=kin.as_guess(warm))
 
     kept = replan(good_rms_mm=1e6)
@@ -228,7 +228,7 @@ def test_a_start_far_from_the_constraints_is_kept_without_a_learned_solve():
         settings = ProgramSettings(iterations=3, warm_from_guess=False,
                                    learned_start_violation=bound)
         torch.manual_seed(0)
-        return solve_skeleton(kin.scene, kin.skeleton, model, kin.space, settings,
+        return solve_skeleton(kin.task, kin.skeleton, model, kin.space, settings,
                               guess=guess)
 
     kept = replan(0.02)
@@ -254,11 +254,11 @@ def test_arm_touch_program_ends_in_contact_and_hands_its_touch_point_on():
     from robotplan.program.arm_program import ArmPushProgram
     from robotplan.program.skeleton import space_for
 
-    scene = load_scene(TASKS / "two_arm_touch.yaml")
-    space = space_for(scene)
+    task = load_task(TASKS / "two_arm_touch.yaml")
+    scene, space = task.scene, space_for(task)
     for init in (0, 1):
         skeleton = parse_skeleton(f"left:push@2,right:touch@{init}", "left", "box")
-        prog = ArmPushProgram(scene, skeleton, None, space)
+        prog = ArmPushProgram(task, skeleton, None, space)
         sol = prog.solve()
         if sol.violation < 1e-2:
             break

@@ -3,13 +3,13 @@ skeletons/settings.yaml, and the one builder that reads them."""
 
 import pytest
 
-from robotplan import load_scene
 from robotplan.program import settings as settings_module
 from robotplan.program.push_program import PushProgram
 from robotplan.program.push_rows import ROW_BUILDERS
 from robotplan.program.row_table import load_rows, rows_for_stage
 from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings, settings_for
 from robotplan.program.skeleton import load_skeleton_space, parse_skeleton
+from robotplan.scene.task import load_task
 from tests.conftest import TASKS, assert_each_refused
 
 
@@ -28,7 +28,7 @@ def test_every_row_of_the_table_has_a_builder_and_a_known_setting():
 def test_the_program_adds_the_rows_in_table_order(learned, monkeypatch):
     """The builder follows the table: the rows it adds come in the table's order, and a row
     left out of the table is left out of the program."""
-    scene = load_scene(TASKS / "obstacle_push.yaml")
+    task = load_task(TASKS / "obstacle_push.yaml")
     sk = parse_skeleton("push@0", "pusher", "box")
     added: list[str] = []
     original = PushProgram.add_row
@@ -43,7 +43,7 @@ def test_the_program_adds_the_rows_in_table_order(learned, monkeypatch):
         from robotplan.base.resources import learned_dir
         from robotplan.models.dynamics import load_model
         model = load_model(learned_dir())
-    prog = PushProgram(scene, sk, model, load_skeleton_space(), ProgramSettings())
+    prog = PushProgram(task, sk, model, load_skeleton_space(), ProgramSettings())
     expected = [r.row for r in rows_for_stage(learned)]
     assert added == expected
     names = [b.evaluator().get_description() for b in prog.prog.GetAllConstraints()]
@@ -55,7 +55,7 @@ def test_the_program_adds_the_rows_in_table_order(learned, monkeypatch):
                         lambda learned: [r for r in without
                                          if r.stage in ("both", "learned" if learned
                                                         else "kinematic")])
-    prog = PushProgram(scene, sk, model, load_skeleton_space(), ProgramSettings())
+    prog = PushProgram(task, sk, model, load_skeleton_space(), ProgramSettings())
     assert "swept" not in {b.evaluator().get_description()
                            for b in prog.prog.GetAllConstraints()}
 

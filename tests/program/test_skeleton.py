@@ -7,7 +7,7 @@ from robotplan.program.skeleton import (
     load_skeleton_space,
     parse_skeleton,
 )
-from tests.conftest import TASKS
+from tests.conftest import ROOT, TASKS
 
 
 def test_paper_candidates_are_4_plus_16():
@@ -57,27 +57,33 @@ def test_reach_pruning_keeps_the_arms_that_can_reach(task, expected, frame):
     """Before any program: the left-only scene keeps left pushes only, from faces of the
     box whose straight pushes reach the goal; the handover scene keeps left-then-right
     only (the box starts beyond the right arm's reach, the goal beyond the left's)."""
-    from robotplan import load_scene
     from robotplan.program.arm_program import reach_check
+    from robotplan.scene.task import load_task
+    from robotplan.search.request import SearchRequest
     from robotplan.search.scene_search import candidate_tiers
 
-    scene = load_scene(TASKS / f"{task}.yaml")
-    kept, space = next(candidate_tiers(scene, "box", ["left", "right"], None, 2, quiet=True))
+    task = load_task(TASKS / f"{task}.yaml")
+    assert (task.obj, task.actors) == ("box", ("left", "right"))
+    request = SearchRequest(task, ROOT / "learned" / "push_flow", quiet=True)
+    kept, space = next(candidate_tiers(request))
     assert kept, "pruning removed every skeleton"
     assert space.init_frame == frame
     assert {tuple(p.actor for p in sk.phases if p.mode == "push") for sk in kept} <= expected
     every = actor_candidates(space, ["left", "right"], "box")
     assert len(kept) < len(every) / 4
-    why = next(reach_check(scene, sk, space) for sk in every if sk not in kept)
+    why = next(reach_check(task, sk, space) for sk in every if sk not in kept)
     assert "reach" in why or "goal" in why
 
 
 def test_touch_pruning_ends_with_the_touching_arm():
-    from robotplan import load_scene
+    from robotplan.scene.task import load_task
+    from robotplan.search.request import SearchRequest
     from robotplan.search.scene_search import candidate_tiers
 
-    scene = load_scene(TASKS / "two_arm_touch.yaml")
-    kept, space = next(candidate_tiers(scene, "box", ["left", "right"], None, 2, quiet=True))
+    task = load_task(TASKS / "two_arm_touch.yaml")
+    assert (task.obj, task.actors, task.touch_actor) == ("box", ("left", "right"), "right")
+    kept, space = next(candidate_tiers(SearchRequest(task, ROOT / "learned" / "push_flow",
+                                                     quiet=True)))
     every = actor_candidates(space, ["left", "right"], "box", touch_actor="right")
     assert kept and len(kept) < len(every) / 4
     assert all(sk.phases[-1].actor == "right" and sk.phases[-1].mode == "reach" for sk in kept)

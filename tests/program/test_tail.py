@@ -4,11 +4,11 @@ earlier plan re-anchored at a moved start."""
 import numpy as np
 import pytest
 
-from robotplan import load_scene
 from robotplan.program.skeleton import Phase, Skeleton
 from robotplan.program.solution import Solution
 from robotplan.program.solve import warm_guess
 from robotplan.program.tail import solution_tail
+from robotplan.scene.task import load_task
 from tests.conftest import TASKS
 
 T = 3
@@ -48,16 +48,16 @@ def test_a_phase_cut_midway_is_done_again_over_its_full_steps(plan):
 
 
 def test_warm_guess_starts_at_the_moved_object_and_ends_where_the_plan_did():
-    scene = load_scene(TASKS / "box_push.yaml")
-    x, y, yaw = scene.bodies["box"].pose
+    task = load_task(TASKS / "box_push.yaml")
+    x, y, yaw = task.scene.bodies["box"].pose
     phases = (Phase("reach", "pusher", "box", 0), Phase("push", "pusher", "box", 0))
     N = 2 * T
     q_obj = np.array([[x, y, yaw]] * (T + 1) + [[x + 0.05 * k, y, yaw] for k in range(1, T + 1)])
     q_pusher = q_obj[:, :2] - [0.15, 0.0]
     contact = q_obj[T + 1:, :2] - [0.1, 0.0]
     sol = Solution(Skeleton(phases), True, "", 0.0, 0.0, 0.0, q_obj, q_pusher, contact)
-    moved = scene.with_state({"box": (x + 0.03, y - 0.02, yaw + 0.2)})
-    guess = warm_guess(moved, sol)
+    moved = task.scene.with_state({"box": (x + 0.03, y - 0.02, yaw + 0.2)})
+    guess = warm_guess(task.at(moved), sol)
     assert np.allclose(guess["q_obj"][0], moved.bodies["box"].pose)
     assert np.allclose(guess["q_obj"][N], q_obj[N])  # the correction fades out
     assert np.allclose(guess["q_pusher"][0], moved.bodies["pusher"].pose[:2])

@@ -10,8 +10,8 @@ import torch
 import yaml
 
 from robotplan import SceneError, load_scene
+from robotplan.hanging.scene.parts import hang_parts
 from robotplan.scene import RegionGoal, TouchGoal, parse_scene
-from robotplan.scene.hang_check import hang_parts
 from robotplan.scene.schema import HangGoal
 from tests.conftest import TASKS
 

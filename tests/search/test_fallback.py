@@ -9,7 +9,10 @@ import robotplan
 from robotplan.bench.push_scenes import draw_scene
 from robotplan.program.tail import solution_tail
 from robotplan.scene.loader import parse_scene
+from robotplan.scene.task import load_task
 from robotplan.search.fallback import side_by_side
+from robotplan.search.request import SearchRequest
+from tests.conftest import TASKS
 
 
 @pytest.fixture(scope="module")
@@ -21,9 +24,12 @@ def pose_plan():
 
 
 def test_only_a_free_pushers_pose_re_plan_with_two_workers_runs_side_by_side(pose_plan):
-    scene = pose_plan.scene
-    assert side_by_side(scene, 2, {"tail": None})
-    assert not side_by_side(scene, 1, {"tail": None}) and not side_by_side(scene, 2, None)
+    request = SearchRequest(pose_plan.task, pose_plan.options["model"], workers=2,
+                            guesses={"tail": None})
+    assert side_by_side(request)
+    assert not side_by_side(request.but(workers=1))
+    assert not side_by_side(request.but(guesses=None))
+    assert not side_by_side(request.but(task=load_task(TASKS / "box_push.yaml")))  # a region
 
 
 @pytest.mark.parametrize(("dx", "turn_deg", "tail_solves"), [(0.008, 5.0, True),
@@ -35,9 +41,10 @@ def test_side_by_side_plans_what_the_sequence_plans(pose_plan, dx, turn_deg, tai
     best, obj = pose_plan.best, pose_plan.obj
     T = (len(best.q_obj) - 1) // len(best.skeleton.phases)
     x, y, yaw = best.q_obj[2 * T]
-    observed = pose_plan.scene.with_state({obj: (x + dx, y, yaw + np.radians(turn_deg))})
+    observed = pose_plan.task.at(pose_plan.scene.with_state(
+        {obj: (x + dx, y, yaw + np.radians(turn_deg))}))
     tail = solution_tail(best, 2 * T)
-    warm = robotplan.Plan(observed, obj, tail, True)
+    warm = robotplan.PushPlan(observed, tail, True)
     both, sequence = (robotplan.plan(observed, workers=w, warm_start=warm, progress=False,
                                      quiet=True, time_budget=20.0, replan=True)
                       for w in (2, 1))

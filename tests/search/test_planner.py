@@ -8,7 +8,9 @@ from robotplan import load_scene
 from robotplan.execution.execute import execute_push
 from robotplan.program.settings import ProgramSettings
 from robotplan.program.skeleton import parse_skeleton
+from robotplan.scene.task import load_task
 from robotplan.search.planner import FEASIBLE, GOOD_RMS_MM, search_push
+from robotplan.search.request import SearchRequest
 from tests.conftest import DATA, ROOT
 
 MODEL = ROOT / "learned" / "push_flow"
@@ -16,12 +18,13 @@ MODEL = ROOT / "learned" / "push_flow"
 
 @pytest.mark.skipif(not (MODEL / "weights.pt").exists(), reason="push_flow not shipped")
 def test_search_solves_box_push_and_the_plan_works_in_pybullet():
-    scene = load_scene(DATA / "box_push_near.yaml")  # one push at the data's speeds
+    task = load_task(DATA / "box_push_near.yaml")  # one push at the data's speeds
+    scene = task.scene
     # the goal is east of the box: the push from straight behind (init 0 in the goal frame,
     # from the west) is tried first
     skeletons = [parse_skeleton(s, "pusher", "box") for s in ("push@2", "push@0")]
-    result = search_push(scene, MODEL, skeletons, ProgramSettings(iterations=40), workers=1,
-                         progress=False)
+    result = search_push(SearchRequest(task, MODEL, workers=1, progress=False), skeletons,
+                         ProgramSettings(iterations=40))
     assert len(result.candidates) == 1, "stops at the first good-enough plan"
     best = result.best
     assert best.skeleton == skeletons[1]
@@ -29,7 +32,7 @@ def test_search_solves_box_push_and_the_plan_works_in_pybullet():
     assert np.allclose(best.q_obj[0], scene.bodies["box"].pose)
     assert {"warm_start", "H_F", "H_coll", "H_PoC", "H_g", "solver"} <= set(best.timings)
     assert 0 < sum(best.timings.values()) <= 1.01 * best.seconds + 0.01
-    ex = execute_push(scene, "box", "pusher", best.q_pusher)
+    ex = execute_push(task, best.q_pusher)
     assert ex.coverage >= 0.95
 
 

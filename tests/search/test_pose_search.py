@@ -9,6 +9,7 @@ from robotplan.program.push_program import PushProgram
 from robotplan.program.skeleton import load_skeleton_space
 from robotplan.program.solution import FEASIBLE
 from robotplan.scene.loader import parse_scene
+from robotplan.scene.task import make_task
 from robotplan.search.pose_search import pose_candidates
 from robotplan.search.scene_search import settings_for
 from tests.search.test_pose_pushes import BOX, scene_doc
@@ -17,13 +18,13 @@ from tests.search.test_pose_pushes import BOX, scene_doc
 def test_kinematic_program_solves_a_turn_from_the_fitted_guess():
     """A box moved 12 cm and turned 60°: the fitted guess meets sticking, H_PoC and the pose
     row exactly, and SNOPT's kinematic stage ends feasible from it."""
-    scene = parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)]))
-    settings = settings_for(scene)
-    space, skeletons, guesses = pose_candidates(scene, "object", "pusher",
-                                                load_skeleton_space(), settings)
+    task = make_task(parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)])))
+    assert (task.obj, task.actors, task.goal) == ("object", ("pusher",), "pose")
+    settings = settings_for(task)
+    space, skeletons, guesses = pose_candidates(task, load_skeleton_space(), settings)
     assert skeletons
     sk = skeletons[0]
-    prog = PushProgram(scene, sk, None, space, settings, guess=guesses[sk])
+    prog = PushProgram(task, sk, None, space, settings, guess=guesses[sk])
     x = np.zeros(prog.prog.num_vars())
     for V, value in prog._guess_pairs():
         x[prog.prog.FindDecisionVariableIndices(V.ravel())] = value.ravel()
@@ -40,11 +41,11 @@ def test_a_given_skeleton_fixes_the_faces_of_the_fit():
     (object frame), with its guess, even when another sequence would fit better."""
     from robotplan.program.skeleton import parse_skeleton
 
-    scene = parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)]))
-    settings = settings_for(scene)
+    task = make_task(parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)])))
+    settings = settings_for(task)
     given = parse_skeleton("push@1,push@2", "pusher", "object")
-    space, skeletons, guesses = pose_candidates(scene, "object", "pusher",
-                                                load_skeleton_space(), settings, given=given)
+    space, skeletons, guesses = pose_candidates(task, load_skeleton_space(), settings,
+                                                given=given)
     assert skeletons == [given] and space.init_frame == "object"
     g = guesses[given]
     assert g["q_obj"].shape == (4 * space.steps_per_phase + 1, 3)
@@ -56,15 +57,16 @@ def test_without_a_close_fit_the_fits_within_fit_tolerance_are_candidates(monkey
     candidates are the fits within FIT_TOLERANCE, not none."""
     from robotplan.search import pose_pushes
 
-    scene = parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)]))
-    settings = settings_for(scene)
+    task = make_task(parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)])))
+    scene = task.scene
+    settings = settings_for(task)
     space = load_skeleton_space()
-    _, close, _ = pose_candidates(scene, "object", "pusher", space, settings)
+    _, close, _ = pose_candidates(task, space, settings)
     monkeypatch.setattr(pose_pushes, "FIT_SHARE", 0.0)
     fits = pose_pushes.fit_pose_pushes(scene, "object", "pusher", tuple(scene.goal.pose),
                                        turn_gain=settings.turn_gain)
     assert fits and not any(f.within for f in fits)
-    _, loose, guesses = pose_candidates(scene, "object", "pusher", space, settings)
+    _, loose, guesses = pose_candidates(task, space, settings)
     assert loose and set(loose) == set(guesses)
     assert len(loose) == sum(f.error <= pose_pushes.FIT_TOLERANCE for f in fits)
     assert close  # with the shipped share, the close fits are candidates
@@ -96,9 +98,10 @@ def test_a_region_target_meets_the_goal_row_with_the_least_turn():
     5° step that leaves at most half of goal_tol outside, with the centroid on the region's."""
     from robotplan.search.pose_search import REGION_SLACK, YAW_STEP_DEG, region_target
 
-    scene = parse_scene(region_doc([0.22, 0.16], 0.5, [0.4, 0.4]))
-    settings = settings_for(scene)
-    x, y, yaw = region_target(scene, "object", settings)
+    task = make_task(parse_scene(region_doc([0.22, 0.16], 0.5, [0.4, 0.4])))
+    scene = task.scene
+    settings = settings_for(task)
+    x, y, yaw = region_target(task, settings)
     assert np.allclose([x, y], [0.35, 0.02], atol=1e-9)  # a box's centroid is its origin
     bound = REGION_SLACK * settings.goal_tol
     assert _outside_share(scene, (x, y, yaw), settings) <= bound
@@ -115,17 +118,17 @@ def test_a_region_target_without_room_to_spare_takes_the_least_turn_to_the_best_
     quarter or half turn to the same fit)."""
     from robotplan.search.pose_search import region_target
 
-    scene = parse_scene(region_doc([0.26, 0.18], 0.5, [0.4, 0.4]))
-    yaw = region_target(scene, "object", settings_for(scene))[2]
+    task = make_task(parse_scene(region_doc([0.26, 0.18], 0.5, [0.4, 0.4])))
+    yaw = region_target(task, settings_for(task))[2]
     assert abs(yaw) < math.radians(5.0)
 
 
 def test_a_region_target_keeps_a_fitting_yaw_and_refuses_a_region_too_small():
     from robotplan.search.pose_search import region_target
 
-    small = parse_scene(region_doc([0.1, 0.06], 0.37, [0.4, 0.4]))
+    small = make_task(parse_scene(region_doc([0.1, 0.06], 0.37, [0.4, 0.4])))
     settings = settings_for(small)
-    assert region_target(small, "object", settings)[2] == pytest.approx(0.37)  # fits as is
+    assert region_target(small, settings)[2] == pytest.approx(0.37)  # fits as is
     # larger than the 7 cm wide region in every direction: more than half outside at any yaw
-    narrow = parse_scene(region_doc([0.18, 0.18], 0.0, [0.5, 0.07]))
-    assert region_target(narrow, "object", settings) is None
+    narrow = make_task(parse_scene(region_doc([0.18, 0.18], 0.0, [0.5, 0.07])))
+    assert region_target(narrow, settings) is None

@@ -8,6 +8,7 @@ import torch
 from robotplan import load_scene
 from robotplan.program.push_program import PushProgram
 from robotplan.program.skeleton import space_for
+from robotplan.scene.task import make_task
 from robotplan.search.route import (
     GOAL_INSIDE,
     _clear,
@@ -69,16 +70,17 @@ def test_routes_without_obstacles_are_the_two_l_shapes(box_scene):
 
 
 def test_routed_skeletons_push_from_behind_and_the_guess_follows_the_route():
-    scene = load_scene(TASKS / "obstacle_push.yaml")
-    space, skeletons = routed_candidates(scene, "pusher", "box", space_for(scene),
-                                          scene.goal_region, 0.027)
+    task = make_task(load_scene(TASKS / "obstacle_push.yaml"))
+    scene = task.scene
+    space, skeletons = routed_candidates(scene, "pusher", "box", space_for(task),
+                                          task.region, 0.027)
     # the longest push, 0.63 m at 2.7 cm a step, plus two steps into contact
     assert space.steps_per_phase == 26 and space.init_frame == "object"
     north = next(sk for sk in skeletons if sk.phases[1].via[1] > 0)
     assert [ph.init for ph in north.phases if ph.mode == "push"] == [3, 2, 1]
     assert north.as_rows()[1]["via"] == [-0.25, 0.25]
     assert "push(pusher->box@3 to (-0.25, 0.25))" in north.describe()
-    prog = PushProgram(scene, north, None, space)
+    prog = PushProgram(task, north, None, space)
     T = space.steps_per_phase
     ends = prog.guess["q_obj"][[2 * T, 4 * T, 6 * T], :2]
     assert np.abs(ends - [(-0.25, 0.25), (0.38, 0.25), (0.38, 0.0)]).max() < 1e-9
@@ -88,9 +90,9 @@ def test_routed_skeletons_push_from_behind_and_the_guess_follows_the_route():
 
 
 def test_long_segments_are_split_into_several_pushes():
-    scene = load_scene(TASKS / "obstacle_push.yaml")
-    space, skeletons = routed_candidates(scene, "pusher", "box", space_for(scene),
-                                          scene.goal_region, 0.01,
+    task = make_task(load_scene(TASKS / "obstacle_push.yaml"))
+    space, skeletons = routed_candidates(task.scene, "pusher", "box", space_for(task),
+                                          task.region, 0.01,
                                           max_pushes=5)
     # 28 steps of 1 cm: the 0.63 m push is split in three (0.21 m, 23 steps)
     assert space.steps_per_phase == 27

@@ -5,7 +5,9 @@ themselves: test_planner and the slow end-to-end tests)."""
 import robotplan.search.scene_search as search_module
 from robotplan.api import solve
 from robotplan.scene import load_scene
+from robotplan.scene.task import load_task, make_task
 from robotplan.search.planner import SearchResult
+from robotplan.search.request import SearchRequest
 from tests.conftest import TASKS
 
 
@@ -15,8 +17,7 @@ def test_arm_search_tries_init_points_seen_from_the_goal_when_face_pushes_fail(
     frame's reach-pruned candidates, left arm only for this L in the left arm's reach."""
     calls = []
 
-    def no_plan(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-                time_budget, space, guesses=None, ordered=False):
+    def no_plan(request, skeletons, settings=None, space=None, ordered=False):
         calls.append((list(skeletons), space))
         return SearchResult(None, [], 1.0)
 
@@ -52,8 +53,8 @@ def test_no_further_tier_once_the_budget_is_spent_with_a_plan_in_hand():
     from robotplan.program.skeleton import parse_skeleton
     from robotplan.program.solution import Solution
 
-    scene = load_scene(TASKS / "box_push.yaml")
-    sk = parse_skeleton("push@0", scene.pushers[0].name, scene.objects[0].name)
+    task = load_task(TASKS / "box_push.yaml")
+    sk = parse_skeleton("push@0", task.actors[0], task.obj)
     sol = Solution(sk, False, "snopt info 31", 0.5, 1.0, 60.0, np.zeros((11, 3)),
                    np.zeros((11, 2)))
     with_plan = SearchResult(sol, [sol], 60.0)
@@ -72,18 +73,18 @@ def test_a_warm_start_along_a_route_keeps_its_steps_and_the_routes_settings(monk
 
     calls = []
 
-    def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-               time_budget, space, guesses=None, ordered=False):
+    def record(request, skeletons, settings=None, space=None, ordered=False):
         calls.append((settings, space))
         return SearchResult(None, [], 1.0)
 
     monkeypatch.setattr(search_module, "search_push", record)
-    scene = load_scene(TASKS / "obstacle_push.yaml")
+    task = load_task(TASKS / "obstacle_push.yaml")
     routed = Skeleton((Phase("reach", "pusher", "box", 2),
                        Phase("push", "pusher", "box", 2, via=(0.1, 0.25))))
     guess = {"q_obj": np.zeros((2 * 14 + 1, 3))}
-    search_module.search_scene(scene, TASKS.parent / "learned" / "push_flow", skeleton=routed,
-                               quiet=True, progress=False, guesses={routed: guess})
+    search_module.search_scene(SearchRequest(
+        task, TASKS.parent / "learned" / "push_flow", skeleton=routed, quiet=True,
+        progress=False, guesses={routed: guess}))
     settings, space = calls[0]
     assert space.steps_per_phase == 14
     assert settings.push_friction == 0.02 and settings.lever_weight == 100.0
@@ -99,19 +100,18 @@ def test_a_warm_started_search_plans_with_the_replan_overlay(monkeypatch):
 
     calls = []
 
-    def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-               time_budget, space, guesses=None, ordered=False):
+    def record(request, skeletons, settings=None, space=None, ordered=False):
         calls.append(settings)
         return SearchResult(None, [], 1.0)
 
     monkeypatch.setattr(search_module, "search_push", record)
-    scene = load_scene(TASKS / "box_push.yaml")
-    sk = parse_skeleton("push@0", scene.pushers[0].name, scene.objects[0].name)
+    task = load_task(TASKS / "box_push.yaml")
+    sk = parse_skeleton("push@0", task.actors[0], task.obj)
     model = TASKS.parent / "learned" / "push_rigid"
     guess = {"q_obj": np.zeros((2 * 10 + 1, 3))}
-    search_module.search_scene(scene, model, skeleton=sk, quiet=True, progress=False,
-                               guesses={sk: guess})
-    search_module.search_scene(scene, model, skeleton=sk, quiet=True, progress=False)
+    request = SearchRequest(task, model, skeleton=sk, quiet=True, progress=False)
+    search_module.search_scene(request.but(guesses={sk: guess}))
+    search_module.search_scene(request)
     warm, fresh = calls
     overlay = load_overlays()["replan"]
     assert overlay, "skeletons/settings.yaml has a replan overlay"
@@ -122,8 +122,8 @@ def test_a_warm_started_search_plans_with_the_replan_overlay(monkeypatch):
 
 
 def _box_pose_goal(monkeypatch, record):
-    """``tasks/box_push.yaml`` and the same box asked 15 cm on and turned 0.8 rad (a pose
-    goal), with ``record`` in place of every ``search_push``."""
+    """The tasks of ``tasks/box_push.yaml`` and of the same box asked 15 cm on and turned
+    0.8 rad (a pose goal), with ``record`` in place of every ``search_push``."""
     from dataclasses import replace
 
     import robotplan.search.pose_search as pose_search
@@ -133,8 +133,8 @@ def _box_pose_goal(monkeypatch, record):
     monkeypatch.setattr(pose_search, "search_push", record)
     region = load_scene(TASKS / "box_push.yaml")
     x, y, yaw = region.objects[0].pose
-    return region, replace(region, goal=PoseGoal(region.objects[0].name,
-                                                 (x + 0.15, y, yaw + 0.8)))
+    return make_task(region), make_task(replace(region, goal=PoseGoal(
+        region.objects[0].name, (x + 0.15, y, yaw + 0.8))))
 
 
 def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
@@ -148,17 +148,18 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
 
     calls = []
 
-    def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-               time_budget, space, guesses=None, ordered=False):
+    def record(request, skeletons, settings=None, space=None, ordered=False):
+        guesses = request.guesses
         calls.append((list(skeletons), space, guesses, settings))
         tried = [Solution(sk, False, "snopt info 31", 0.5, 1.0, 1.0, np.zeros((1, 3)),
                           np.zeros((1, 2))) for sk in skeletons[:1] if guesses]
         return SearchResult(tried[0] if tried else None, tried, 1.0)
 
-    _, scene = _box_pose_goal(monkeypatch, record)
-    yaw = scene.objects[0].pose[2]
+    _, task = _box_pose_goal(monkeypatch, record)
+    yaw = task.scene.objects[0].pose[2]
     model = TASKS.parent / "learned" / "push_rigid"
-    search_module.search_scene(scene, model, quiet=True, progress=False)
+    request = SearchRequest(task, model, quiet=True, progress=False)
+    search_module.search_scene(request)
     (fitted, space, guesses, settings), = calls  # an unsolved fitted plan: no plain tier
     assert fitted and set(guesses) == set(fitted)
     assert space.init_frame == "object" and space.steps_per_phase >= 10
@@ -168,7 +169,7 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
         assert abs(guesses[sk]["q_obj"][-1, 2] - (yaw + 0.8)) < 0.02  # the guess turns
     assert settings.turn_gain != 1.0 and settings.goal_tol == 0.02  # the pose overlay
     monkeypatch.setattr(pose_search, "pose_candidates", lambda *a, **k: (space, [], {}))
-    search_module.search_scene(scene, model, quiet=True, progress=False)
+    search_module.search_scene(request)
     plain, plain_space, none, _ = calls[-1]
     assert len(plain) > len(fitted) and none is None and plain_space.init_frame == "goal"
 
@@ -182,20 +183,19 @@ def test_a_fresh_search_while_executing_a_pose_goal_plans_with_the_replan_overla
 
     calls = []
 
-    def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-               time_budget, space, guesses=None, ordered=False):
-        calls.append((scene.goal.type, settings, guesses is not None))
+    def record(request, skeletons, settings=None, space=None, ordered=False):
+        calls.append((request.task.goal, settings, request.guesses is not None))
         return SearchResult(None, [], 1.0)
 
     region, pose = _box_pose_goal(monkeypatch, record)
     model = TASKS.parent / "learned" / "push_rigid"
     overlay = load_overlays()["replan"]
-    for scene in (pose, region):
+    for task in (pose, region):
         for replan in (False, True):
             calls.clear()
-            search_module.search_scene(scene, model, quiet=True, progress=False,
-                                       replan=replan)
-            assert all(kind == scene.goal.type for kind, _, _ in calls)
+            search_module.search_scene(SearchRequest(task, model, quiet=True, progress=False,
+                                                     replan=replan))
+            assert all(kind == task.goal for kind, _, _ in calls)
             with_overlay = [all(getattr(s, k) == v for k, v in overlay.items())
                             for _, s, _ in calls]
             assert with_overlay[0] == replan
@@ -224,10 +224,10 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
 
     calls, budgets, solve_plain, solve_fits, unsolved_fits = [], [], [False], [False], [0.5]
 
-    def record(scene, model_dir, skeletons, settings, workers, progress, exhaustive,
-               time_budget, space, guesses=None, ordered=False):
+    def record(request, skeletons, settings=None, space=None, ordered=False):
+        guesses = request.guesses
         calls.append((list(skeletons), space, guesses, settings))
-        budgets.append((time_budget, ordered))
+        budgets.append((request.time_budget, ordered))
         solved = solve_fits[0] if guesses else solve_plain[0]
         unsolved = unsolved_fits[0] if guesses else 0.5
         tried = [Solution(sk, solved, "snopt info 31", 0.0 if solved else unsolved, 1.0, 1.0,
@@ -236,16 +236,17 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
 
     monkeypatch.setattr(search_module, "search_push", record)
     monkeypatch.setattr(pose_search, "search_push", record)
-    scene = load_scene(TASKS / "box_push.yaml")
+    task = load_task(TASKS / "box_push.yaml")
+    scene = task.scene
     model = TASKS.parent / "learned" / "push_rigid"
-    result, spaces = search_module.search_scene(scene, model, quiet=True, progress=False,
-                                                time_budget=0.5)
+    request = SearchRequest(task, model, quiet=True, progress=False)
+    result, spaces = search_module.search_scene(request.but(time_budget=0.5))
     (plain, _, none, _), (fitted, space, guesses, settings) = calls
     assert budgets[1] == (None, True)  # past the budget, the fits in their own order
     assert plain and none is None and fitted and set(guesses) == set(fitted)
     assert space.init_frame == "object"
     assert settings.turn_gain == overlay("pose").turn_gain != 1.0
-    assert settings.goal_tol == search_module.settings_for(scene).goal_tol  # the region's
+    assert settings.goal_tol == search_module.settings_for(task).goal_tol  # the region's
     body = scene.bodies[scene.objects[0].name]
     H = region_goal(body, scene.goal_region, settings)
     for sk in fitted:
@@ -255,26 +256,24 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
 
     calls.clear()
     solve_plain[0] = True
-    search_module.search_scene(scene, model, quiet=True, progress=False)
+    search_module.search_scene(request)
     assert len(calls) == 1 and calls[0][2] is None  # solved: no fitted tier
 
     calls.clear()  # executing, the fitted pushes come first: solved, no plain tier
     solve_fits[0] = True
-    result, _ = search_module.search_scene(scene, model, quiet=True, progress=False,
-                                           replan=True)
+    result, _ = search_module.search_scene(request.but(replan=True))
     assert len(calls) == 1 and calls[0][2] is not None and result.solved
 
     # unsolved fitted pushes within the caller's last-resort bound end the search too
     solve_fits[0], solve_plain[0], unsolved_fits[0] = False, False, 0.02
     for last_resort, searches in ((0.03, 1), (0.01, 3), (None, 3)):
         calls.clear()
-        result, _ = search_module.search_scene(scene, model, quiet=True, progress=False,
-                                               replan=True, last_resort=last_resort)
+        result, _ = search_module.search_scene(request.but(replan=True,
+                                                           last_resort=last_resort))
         assert len(calls) == searches and not result.solved
         assert result.best.violation == 0.02  # the plain tier's plans violate more
         # the fitted pushes at both budgets before the plain tier
         assert [g is not None for _, _, g, _ in calls] == [True, True, False][:searches]
     budgets.clear()  # the fitted pushes took 2 s: the plain tier still gets the whole budget
-    search_module.search_scene(scene, model, quiet=True, progress=False, replan=True,
-                               time_budget=1.5)
+    search_module.search_scene(request.but(replan=True, time_budget=1.5))
     assert [b for b, _ in budgets] == [None, None, 1.5]

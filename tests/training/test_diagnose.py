@@ -5,6 +5,7 @@ import json
 import numpy as np
 
 from robotplan import load_scene
+from robotplan.scene.task import load_task
 from robotplan.training.diagnose import check_steps, summarize, table
 from tests.cli.test_main import run
 from tests.conftest import DATA, ROOT
@@ -27,8 +28,8 @@ def _straight_push_plan(scene, speed: float, turn: float) -> dict:
 
 
 def test_physics_and_model_agree_on_a_centred_push_and_catch_a_wrong_turn():
-    scene = load_scene(DATA / "box_push_near.yaml")
-    checks = check_steps(scene, _straight_push_plan(scene, 0.02, np.radians(5)), FLOW)
+    task = load_task(DATA / "box_push_near.yaml")
+    checks = check_steps(task, _straight_push_plan(task.scene, 0.02, np.radians(5)), FLOW)
     assert len(checks) == 5  # every step in contact
     s = summarize(checks)
     phys = np.array([c.physics for c in checks])

@@ -4,8 +4,8 @@ import json
 
 import pytest
 
+from robotplan.hanging.models.hang_model import HANG_THRESHOLDS, load_hang_model
 from robotplan.models.dynamics import load_model
-from robotplan.models.hang import HANG_THRESHOLDS, load_hang_model
 from robotplan.models.rigid import load_rigid
 from robotplan.training.evaluation import evaluate_push
 from robotplan.training.rigid_evaluation import evaluate_rigid
@@ -66,7 +66,7 @@ def test_shipped_hang_model_tells_hanging_poses_from_the_rest():
     κ2 it accepts most poses that hang in place and rejects most that do not."""
     import numpy as np
 
-    from robotplan.training.hang_train import HangSamples, hang_metrics
+    from robotplan.hanging.training.train import HangSamples, hang_metrics
 
     folder = LEARNED / "hang"
     if not folder.is_dir():

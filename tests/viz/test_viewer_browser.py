@@ -10,8 +10,8 @@ import subprocess
 import numpy as np
 import pytest
 
-from robotplan import load_scene
 from robotplan.execution.execute import execute_push, reach_substeps
+from robotplan.scene.task import load_task
 from robotplan.viz.viewer import Layer, write_playback
 from tests.conftest import TASKS
 
@@ -71,14 +71,15 @@ def test_the_playback_moves_with_the_slider_and_transit_is_a_motion(tmp_path):
     """A pusher that moves 0.45 m in one free step (as a planned transit may) is drawn
     moving smoothly over the slowed steps pybullet executed, the box moves when pushed, the
     ghosted plan layer disappears when the next plan takes over."""
-    scene = load_scene(TASKS / "box_push.yaml")
+    task = load_task(TASKS / "box_push.yaml")
+    scene = task.scene
     transit = np.array([[-0.28, 0.10], [-0.28, -0.35]])  # a long free move
     approach = np.linspace([-0.28, -0.35], [-0.20, 0.0], 8)
     push = np.linspace([-0.20, 0.0], [0.30, 0.05], 20)
     q = np.vstack([transit, approach[1:], push[1:]])
     free = np.array([True] + [False] * (len(q) - 2))
     substeps = reach_substeps(q, ~free)
-    ex = execute_push(scene, "box", "pusher", q, substeps=substeps)
+    ex = execute_push(task, q, substeps=substeps)
     half = float(ex.times[len(ex.times) // 2])
     page = tmp_path / "playback.html"
     write_playback(scene, page, [

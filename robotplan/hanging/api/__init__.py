@@ -1,0 +1,1 @@
+"""Hanging's facade: plan, execute, play back and solve a hang task."""

@@ -1,0 +1,1 @@
+"""Hanging's benchmarks: Tab. 3 and its representation rows."""

@@ -1,0 +1,1 @@
+"""Hanging's commands: data, train, eval and bench hang."""

@@ -1,0 +1,1 @@
+"""Hanging's execution layer: the pybullet world a mug is dropped in."""

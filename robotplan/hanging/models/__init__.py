@@ -1,0 +1,1 @@
+"""Hanging's models layer: H_hang, the learned success network."""

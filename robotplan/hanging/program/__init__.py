@@ -1,0 +1,1 @@
+"""Hanging's program layer: the Drake program over the mug's pose."""

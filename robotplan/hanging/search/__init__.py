@@ -1,0 +1,1 @@
+"""Hanging's search layer: the optimisation from random starts and the sampling baselines."""
