@@ -1,10 +1,21 @@
 """The package's layers: each imports only the layers below it, no import cycles (a lazy
 import counts like any other), no private names across modules, no module over the limit.
 
+Mug hanging is a vertical slice, ``robotplan.hanging``, with the core's layers inside it: a
+module ``robotplan.hanging.<layer>...`` ranks as that core layer and may import the core and
+the slice at or below it. The core reaches into the slice only from its top layers
+(:data:`ENTERS_HANGING`: the facade and the commands dispatch to it), at or below their rank,
+and no module outside the slice is named after hanging.
+
+A scene is classified once into its task (``robotplan.scene.task``): no condition outside the
+scene file layer reads the kind of a scene from its raw fields. The search and the programs
+take their inputs in a few objects (a task, a request): at most :data:`MAX_PARAMETERS` each.
+
 Imports under ``if TYPE_CHECKING:`` are annotations, not dependencies, and are left out.
 """
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -28,11 +39,20 @@ LAYERS = [
     "cli",          # the command line
 ]
 MAX_LINES = 300
+SLICE = "hanging"  # robotplan.hanging.<layer>...: mug hanging, layered as the core
+ENTERS_HANGING = ("api", "bench", "cli")  # the core layers that may import the slice
+
+
+def _in_slice(module: str) -> bool:
+    return module.split(".")[1:2] == [SLICE]
 
 
 def _layer(module: str) -> int:
-    """The rank of ``robotplan.<layer>...`` (the package root ranks above everything)."""
+    """The rank of ``robotplan.<layer>...`` and of ``robotplan.hanging.<layer>...`` (the
+    package root, and the slice's own root, rank above everything)."""
     parts = module.split(".")
+    if len(parts) > 1 and parts[1] == SLICE:
+        return LAYERS.index(parts[2]) if len(parts) > 2 else len(LAYERS)
     return LAYERS.index(parts[1]) if len(parts) > 1 else len(LAYERS)
 
 
@@ -88,10 +108,19 @@ MODULES = _modules()
 GRAPH = {m: _imports(m, p, set(MODULES)) for m, p in MODULES.items()}
 
 
+def _layer_name(module: str) -> str | None:
+    """The layer package a module lives in (None: a root, the package's or the slice's)."""
+    parts = module.split(".")
+    if _in_slice(module):
+        return parts[2] if len(parts) > 2 else None
+    return parts[1] if len(parts) > 1 else None
+
+
 def test_every_module_belongs_to_a_layer():
     for module in MODULES:
-        if module != "robotplan":
-            assert module.split(".")[1] in LAYERS, f"{module}: add its package to LAYERS"
+        if module not in ("robotplan", f"robotplan.{SLICE}"):
+            assert _layer_name(module) in LAYERS, (
+                f"{module}: add its package to LAYERS (under {SLICE}: a layer's name)")
 
 
 def test_imports_go_down_the_layers():
@@ -105,6 +134,41 @@ def test_imports_go_down_the_layers():
                            f"{target} (layer {LAYERS[_layer(target)]} is above "
                            f"{LAYERS[_layer(module)]})")
     assert not bad, "\n".join(bad)
+
+
+def _slice_entries(module: str, imports) -> list[str]:
+    """The imports of the slice by a core module that the slice's rule forbids."""
+    if _in_slice(module) or module == "robotplan":
+        return []
+    return [f"{module}:{line} imports {target} ({LAYERS[_layer(module)]} may not reach into "
+            f"{SLICE}: only {', '.join(ENTERS_HANGING)} may, at or below their rank)"
+            for target, _names, line in imports if _in_slice(target)
+            and (_layer_name(module) not in ENTERS_HANGING or _layer(target) > _layer(module))]
+
+
+def _named_after_hanging(module: str) -> bool:
+    """A module outside the slice whose own name speaks of hanging."""
+    return not _in_slice(module) and any("hang" in p for p in module.split(".")[1:])
+
+
+def test_hanging_lives_in_its_package():
+    """Everything only mug hanging uses is under ``robotplan/hanging`` (no core module is
+    named after it), and the core reaches into the slice only from its top layers."""
+    named = sorted(m for m in MODULES if _named_after_hanging(m))
+    assert not named, f"move into robotplan/{SLICE}/<layer>/ (or rename): {named}"
+    bad = [entry for module, imports in GRAPH.items() for entry in _slice_entries(module, imports)]
+    assert not bad, "\n".join(bad)
+
+
+def test_the_slice_has_a_subpackage_per_layer():
+    """The slice's structure is visible: each layer it uses is a package of its own."""
+    root = PACKAGE / SLICE
+    assert (root / "__init__.py").is_file()
+    subs = {p.name for p in root.iterdir() if p.is_dir() and p.name != "__pycache__"}
+    assert subs <= set(LAYERS), f"not layers: {subs - set(LAYERS)}"
+    assert all((root / s / "__init__.py").is_file() for s in subs)
+    assert not [p.name for p in root.glob("*.py") if p.name != "__init__.py"], (
+        "the slice's modules live in its layer packages")
 
 
 def test_no_import_cycles():
@@ -154,3 +218,88 @@ def test_the_checks_see_a_wrong_import(tmp_path):
     imports = _imports("robotplan.sdf.low", low, set(MODULES))
     assert imports == [("robotplan.cli.main", ["main"], 2)]
     assert _layer(imports[0][0]) > _layer("robotplan.sdf.low")
+    # the slice: ranked by its inner layer, above its rank is up, the core's low layers stay out
+    assert _layer("robotplan.hanging.program.x") == _layer("robotplan.program.x")
+    assert _layer("robotplan.hanging.cli.x") > _layer("robotplan.hanging.search.x")
+    assert _named_after_hanging("robotplan.search.hang_x")
+    assert not _named_after_hanging("robotplan.hanging.search.hang_x")
+    entry = [("robotplan.hanging.search.optimise", [], 3)]
+    assert _slice_entries("robotplan.search.planner", entry)
+    assert not _slice_entries("robotplan.api", entry)
+    assert _slice_entries("robotplan.api", [("robotplan.hanging.cli.commands", [], 3)])
+
+
+# a condition that tells a scene's kind from its raw fields: arms or pushers present, the
+# goal's type or class, the count of objects, a plan's class (the family dispatch reads the
+# task's ``family`` instead)
+KIND_TEST = re.compile(r"\.(robots|pushers)\b|\bgoal\.type\b|\.goal\)|"
+                       r"isinstance\([^)]*(Goal|Plan)\b|getattr\([^)]*\.goal\b|"
+                       r"len\([^)]*\.objects\)|\b(chain_target|scene_classes)\(")
+TASK_MODULES = ("robotplan.scene",)  # the task module and the scene file layer
+MAX_PARAMETERS = 6  # besides self / cls, in the search and the programs
+FEW_PARAMETERS = ("search", "program")
+
+
+def _conditions(tree: ast.AST) -> list[ast.expr]:
+    """Every expression that decides something: tests of if / while / assert, conditional
+    expressions, comprehension filters, the operands of and / or, isinstance and bool."""
+    out: list[ast.expr] = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If | ast.IfExp | ast.While | ast.Assert):
+            out.append(node.test)
+        elif isinstance(node, ast.comprehension):
+            out += node.ifs
+        elif isinstance(node, ast.BoolOp):
+            out += node.values
+        elif isinstance(node, ast.Call) and getattr(node.func, "id", "") in ("isinstance",
+                                                                             "bool"):
+            out.append(node)
+    return out
+
+
+def _kind_tests(tree: ast.AST) -> list[tuple[int, str]]:
+    """``(line, condition)`` of each condition that reads a scene's kind from raw fields."""
+    found = {(c.lineno, ast.unparse(c)) for c in _conditions(tree)}
+    return sorted((line, text) for line, text in found if KIND_TEST.search(text))
+
+
+def test_the_task_is_made_once():
+    """Outside the scene file layer (where the task module builds the task), no condition
+    reads what kind of scene it is from the scene's fields: layers get the task."""
+    bad = [f"{MODULES[m].relative_to(PACKAGE.parent)}:{line}: {text}"
+           for m, path in MODULES.items() if not m.startswith(TASK_MODULES)
+           for line, text in _kind_tests(ast.parse(path.read_text()))]
+    assert not bad, "read the task instead (robotplan.scene.task):\n" + "\n".join(bad)
+
+
+def _parameters(fn: ast.FunctionDef | ast.AsyncFunctionDef) -> int:
+    a = fn.args
+    names = [x.arg for x in (*a.posonlyargs, *a.args, *a.kwonlyargs)]
+    return (len([n for n in names if n not in ("self", "cls")]) + (a.vararg is not None)
+            + (a.kwarg is not None))
+
+
+def _long_signatures(tree: ast.AST) -> list[tuple[int, str, int]]:
+    return [(fn.lineno, fn.name, n) for fn in ast.walk(tree)
+            if isinstance(fn, ast.FunctionDef | ast.AsyncFunctionDef)
+            and (n := _parameters(fn)) > MAX_PARAMETERS]
+
+
+def test_search_and_programs_take_few_parameters():
+    """A function of the search or the programs takes at most MAX_PARAMETERS besides
+    ``self``: what a search needs travels in a frozen request, a program gets a task."""
+    bad = [f"{MODULES[m].relative_to(PACKAGE.parent)}:{line} {name}: {n} parameters"
+           for m, path in MODULES.items() if _layer_name(m) in FEW_PARAMETERS
+           for line, name, n in _long_signatures(ast.parse(path.read_text()))]
+    assert not bad, "\n".join(bad)
+
+
+def test_the_task_and_parameter_checks_can_fail():
+    tree = ast.parse("def f(scene, a, b, c, d, e, g):\n"
+                     "    if scene.robots or scene.goal.type == 'pose':\n"
+                     "        return [o for o in scene.objects\n"
+                     "                if isinstance(scene.goal, PoseGoal)]\n"
+                     "    return bool(task.arms)\n")
+    assert [line for line, _ in _kind_tests(tree)] == [2, 2, 2, 4]
+    assert _long_signatures(tree) == [(1, "f", 7)]
+    assert not _kind_tests(ast.parse("for robot in scene.robots:\n    x = task.arms\n"))

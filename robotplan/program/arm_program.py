@@ -81,7 +81,7 @@ class ArmPushProgram(PushProgram):
             a, b = names
             H = ArmSeparation(self.kin[a], self.kin[b])
             self._add_rows(H, [self.QJ[a][1:], self.QJ[b][1:]], 1, 100.0,
-                           settings.arm_gap * 100, np.inf, "arm_gap")  # cm
+                           (settings.arm_gap * 100, np.inf), "arm_gap")  # cm
 
     # ------------------------------------------------------------ structure
     def _actors(self) -> list[str]:
@@ -118,26 +118,26 @@ class ArmPushProgram(PushProgram):
                 np.concatenate((Q[t], Q[t - 1])), is_convex=True)
         acting = [t for t in range(1, N + 1) if self.actor_of_state[t] == name]
         if acting:
-            self._add_rows(TipCoupling(kin), [Q[acting], self.Q2[acting]], 2, 100.0, 0.0, 0.0,
+            self._add_rows(TipCoupling(kin), [Q[acting], self.Q2[acting]], 2, 100.0, (0.0, 0.0),
                            f"tip_{name}")  # cm
         r, top = self.tip_radius, objects_top(self.scene)
         low = self._push_states(name)
         if low:
-            self._add_rows(TipHeight(kin), [Q[low]], 1, 100.0, r * 100, r * 100,
+            self._add_rows(TipHeight(kin), [Q[low]], 1, 100.0, (r * 100, r * 100),
                            f"push_height_{name}")
         reaching = [t for t in acting if t not in low]
         if reaching:
-            self._add_rows(TipHeight(kin), [Q[reaching]], 1, 100.0, r * 100, np.inf,
+            self._add_rows(TipHeight(kin), [Q[reaching]], 1, 100.0, (r * 100, np.inf),
                            f"above_table_{name}")
         # idle: lifted over the objects, from the second state after it last acted
         idle = [t for t in range(2, N + 1) if self.actor_of_state[t] != name
                 and self.actor_of_state[t - 1] != name]
         if idle:
             self._add_rows(TipHeight(kin), [Q[idle]], 1, 100.0,
-                           (top + s.idle_lift + r) * 100, np.inf, f"idle_lift_{name}")
+                           ((top + s.idle_lift + r) * 100, np.inf), f"idle_lift_{name}")
         bounds = np.array([top + s.flange_clearance] + [s.link_min] * (len(kin._frames) - 2))
         self._add_rows(CheckPointHeights(kin), [Q[1:]], len(bounds), 100.0,
-                       bounds[None] * 100, np.inf, f"links_{name}")
+                       (bounds[None] * 100, np.inf), f"links_{name}")
 
     def _limit_tip_steps(self) -> None:
         """|Δx| per step and axis of the acting tip ≤ tip_reach_step while reaching and ≤

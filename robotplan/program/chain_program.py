@@ -105,27 +105,27 @@ class ChainPushProgram(PushProgram):
         # the two objects may touch along a face, pressed in by at most coll_depth
         face = min(np.ptp(b.shape.outline(), axis=0).min() for b in (obj, target))
         touch = face * (1.0 / s.a_coll + s.coll_depth)
-        self._add_rows(Collision(obj, target, a=s.a_coll), [Q1[1:], Q3[1:]], 1, 1e4, 0.0,
-                       touch * 1e4, "H_coll_chain")  # cm²
+        self._add_rows(Collision(obj, target, a=s.a_coll), [Q1[1:], Q3[1:]], 1, 1e4, (0.0,
+                       touch * 1e4), "H_coll_chain")  # cm²
         clear = face_contact_overlap(self.pusher, s.a_coll, -s.reach_clearance)
         self._add_rows(Collision(target, self.pusher, a=s.a_coll), [Q3[1:], self.Q2[1:]], 1,
-                       1e4, 0.0, clear * 1e4, "H_coll_pusher_chain")
+                       1e4, (0.0, clear * 1e4), "H_coll_pusher_chain")
         pushing = set(self.push_steps.tolist())
         free = np.array([t for t in range(1, N + 1) if t not in pushing], dtype=int)
         if s.swept_samples > 0 and len(free):
             k = s.swept_samples
             self._add_rows(SweptClearance(target, self.pusher, k),
                            [Q3[free], self.Q2[free - 1], self.Q2[free]], k, 100,
-                           -100 * s.swept_tolerance, np.inf, "swept_chain")
+                           (-100 * s.swept_tolerance, np.inf), "swept_chain")
         for spec in self.scene.obstacles:
             wall = self.scene.bodies[spec.name]
-            self._add_rows(FixedCollision(target, wall, s.a_coll), [Q3[1:]], 1, 1e4, 0.0,
-                           s.obstacle_overlap * 1e4, f"H_coll_{spec.name}_chain")
+            self._add_rows(FixedCollision(target, wall, s.a_coll), [Q3[1:]], 1, 1e4, (0.0,
+                           s.obstacle_overlap * 1e4), f"H_coll_{spec.name}_chain")
         self.chain_dynamics = None
         if not len(self.chain_steps):
             return
         steps = self.chain_steps
-        self._add_rows(ContactPoint(obj, target), [Q1[steps], Q3[steps], P3], 2, 100, 0.0, 0.0,
+        self._add_rows(ContactPoint(obj, target), [Q1[steps], Q3[steps], P3], 2, 100, (0.0, 0.0),
                        "H_PoC_chain")  # cm
         if model is None:
             i = np.arange(1, len(steps))
@@ -134,11 +134,11 @@ class ChainPushProgram(PushProgram):
                 a, b = steps[pairs - 1], steps[pairs]
                 for Q in (Q1, Q3):  # the contact point sticks to both objects
                     self._add_rows(StickingContact(), [Q[a], P3[pairs - 1], Q[b], P3[pairs]], 2,
-                                   100, 0.0, 0.0, "sticking_chain")
+                                   100, (0.0, 0.0), "sticking_chain")
             self._add_object_push(turn=True)
             self._add_motion_cost(Q3)
             return
-        self.chain_dynamics = self._add_dynamics(model, target, Q3, obj, Q1,
+        self.chain_dynamics = self._add_dynamics(model, (target, Q3), (obj, Q1),
                                                  self.guess["q_chain"], "H_F_chain")
         if s.cone_in_learned and s.push_friction > 0:
             self._add_object_push(turn=s.turn_in_learned)

@@ -42,15 +42,16 @@ class DynamicsRows(ProgramRows):
 
     def _row_dynamics(self, spec: RowSpec) -> None:
         """H_F (eq. 5) of the object pushed by the actor in every step."""
-        self.dynamics = self._add_dynamics(self.model, self.obj, self.Q1, self.pusher, self.Q2,
-                                           self.guess["q_obj"], spec.row)
+        self.dynamics = self._add_dynamics(self.model, (self.obj, self.Q1),
+                                           (self.pusher, self.Q2), self.guess["q_obj"], spec.row)
 
-    def _add_dynamics(self, model: PushDynamics | RigidMotion, obj, Q_obj: np.ndarray, actor,
-                      Q_actor: np.ndarray, path: np.ndarray, name: str) -> Dynamics:
-        """H_F (or H_q for F_q) of ``obj`` (poses ``Q_obj (N+1, 3)``) pushed by ``actor``
-        (``Q_actor (N+1, 2)`` positions of a disc, or ``(N+1, 3)`` poses of an object) in every
-        step, integrated around ``path (N+1, ≥2)``, the object's guessed centres."""
-        s = self.settings
+    def _add_dynamics(self, model: PushDynamics | RigidMotion, pushed: tuple, pushing: tuple,
+                      path: np.ndarray, name: str) -> Dynamics:
+        """H_F (or H_q for F_q) of the body ``pushed = (obj, Q_obj)`` (poses ``(N+1, 3)``)
+        pushed by ``pushing = (actor, Q_actor)`` (``(N+1, 2)`` positions of a disc, or
+        ``(N+1, 3)`` poses of an object) in every step, integrated around ``path (N+1, ≥2)``,
+        the object's guessed centres."""
+        (obj, Q_obj), (actor, Q_actor), s = pushed, pushing, self.settings
         if isinstance(model, RigidMotion):
             dynamics: Dynamics = RigidDynamics(model, obj, actor)
             # the row (and its time in the profile) is named after its functional

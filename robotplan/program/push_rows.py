@@ -123,7 +123,7 @@ class PushRows(DynamicsRows):
         ub[self.push_steps - 1] = touch
         if self.task.goal == "touch":
             ub[-1] = touch  # the touch goal's last state is a contact, not a reach
-        self._add_rows(H, [self.Q1[1:], self.Q2[1:]], 1, k, 0.0, ub * k, spec.row)
+        self._add_rows(H, [self.Q1[1:], self.Q2[1:]], 1, k, (0.0, ub * k), spec.row)
 
     def _add_swept(self, spec: RowSpec) -> None:
         """Along each free move of a free pusher, its gap to the object at a few points (and
@@ -137,7 +137,7 @@ class PushRows(DynamicsRows):
             k = s.swept_samples
             self._add_rows(SweptClearance(self.obj, self.pusher, k),
                            [self.Q1[free], self.Q2[free - 1], self.Q2[free]], k, scale,
-                           -scale * s.swept_tolerance, np.inf, spec.row)
+                           (-scale * s.swept_tolerance, np.inf), spec.row)
 
     def swept_shortfall(self, q_obj: np.ndarray, q_pusher: np.ndarray) -> float:
         """How far (in the swept row's scaled units) the plan's moves cross the object, at
@@ -165,16 +165,16 @@ class PushRows(DynamicsRows):
         for obstacle in self.scene.obstacles:
             wall = self.scene.bodies[obstacle.name]
             self._add_rows(FixedCollision(self.obj, wall, s.a_coll), [self.Q1[1:]], 1, k,
-                           0.0, s.obstacle_overlap * k, f"H_coll_{obstacle.name}")
+                           (0.0, s.obstacle_overlap * k), f"H_coll_{obstacle.name}")
             self._add_rows(FixedCollision(self.pusher, wall, s.a_coll), [self.Q2[1:]], 1, k,
-                           0.0, self._clear_overlap() * k, f"H_coll_{obstacle.name}_pusher")
+                           (0.0, self._clear_overlap() * k), f"H_coll_{obstacle.name}_pusher")
 
     def _add_contact(self, spec: RowSpec) -> None:
         if len(self.push_steps):
             H = ContactPoint(self.obj, self.pusher)
             steps = self.push_steps
-            self._add_rows(H, [self.Q1[steps], self.Q2[steps], self.P], 2, spec.scale, 0.0,
-                           0.0, spec.row)
+            self._add_rows(H, [self.Q1[steps], self.Q2[steps], self.P], 2, spec.scale, (0.0,
+                           0.0), spec.row)
 
     def _add_lever_cost(self, spec: RowSpec) -> None:
         """``lever_weight`` · Σ (lever arm in cm)² over push steps (see PushLever)."""
@@ -203,7 +203,7 @@ class PushRows(DynamicsRows):
         shorter_face = np.minimum(edges, np.roll(edges, 1))[corners]  # the faces at a corner
         bound = np.minimum(self.settings.corner_clearance, shorter_face / 3)
         self._add_rows(CornerClearance(outline[corners]), [self.Q1[self.push_steps], self.P],
-                       len(corners), spec.scale, spec.scale * bound[None], np.inf, spec.row)
+                       len(corners), spec.scale, (spec.scale * bound[None], np.inf), spec.row)
 
     def _add_quasi_static(self, turn: bool, scale: float = 100.0) -> None:
         """QuasiStaticPush rows in every push step: the friction cone, and with ``turn`` the
@@ -224,7 +224,7 @@ class PushRows(DynamicsRows):
         lb, ub = np.zeros((1, m)), np.full((1, m), np.inf)
         if H.turn:
             ub[0, 0] = 0.0
-        self._add_rows(H, blocks, m, scale, lb, ub,
+        self._add_rows(H, blocks, m, scale, (lb, ub),
                        ("quasi_static" if H.turn else "friction_cone") + suffix)
 
     def _add_sticking(self, spec: RowSpec) -> None:
@@ -237,21 +237,21 @@ class PushRows(DynamicsRows):
             a, b = np.array(pairs).T
             ta, tb = self.push_steps[a], self.push_steps[b]
             self._add_rows(StickingContact(), [self.Q1[ta], self.P[a], self.Q1[tb], self.P[b]],
-                           2, spec.scale, 0.0, 0.0, spec.row)
+                           2, spec.scale, (0.0, 0.0), spec.row)
 
     def _add_pushing(self, spec: RowSpec) -> None:
         """In push steps the actor moves into the contact point."""
         if len(self.push_steps):
             self._add_rows(PushingDirection(), [self.Q2[self.push_steps - 1],
                                                 self.Q2[self.push_steps], self.P],
-                           1, spec.scale, 0.0, np.inf, spec.row)
+                           1, spec.scale, (0.0, np.inf), spec.row)
 
     def _add_goal(self, spec: RowSpec) -> None:
         if self.task.goal == "touch":
             # the touching tip is the last phase's actor; it ends on the object (H_PoC)
             self.P_touch = self.prog.NewContinuousVariables(1, 2, "p_touch")
             H = ContactPoint(self.obj, self.scene.bodies[self.task.touch_actor])
-            self._add_rows(H, [self.Q1[-1:], self.Q2[-1:], self.P_touch], 2, 100, 0.0, 0.0,
+            self._add_rows(H, [self.Q1[-1:], self.Q2[-1:], self.P_touch], 2, 100, (0.0, 0.0),
                            "H_touch")  # cm, as H_PoC
             return
         if self.task.goal == "pose":
@@ -260,7 +260,7 @@ class PushRows(DynamicsRows):
             outline = self.goal_body.shape.outline()
             H = PoseError(outline, tuple(self.scene.goal.pose))
             bound = 100 * H.tolerance(outline, self.settings.goal_tol) / np.sqrt(3)
-            self._add_rows(H, [self.goal_Q[self.N:]], 3, 100, -bound, bound, "H_pose")
+            self._add_rows(H, [self.goal_Q[self.N:]], 3, 100, (-bound, bound), "H_pose")
             return
         if self.region is None:
             return

@@ -59,14 +59,14 @@ class ProgramRows:
             self._limit_steps(self.Q1[:, 2:], self.push_steps, [max_turn])
 
     def _add_rows(self, H, blocks: list[np.ndarray], m: int, scale: float,
-                  lb: float | np.ndarray, ub: float | np.ndarray, name: str) -> None:
+                  bounds: tuple[float | np.ndarray, float | np.ndarray], name: str) -> None:
         """Constraint lb ≤ scale · H(row t) ≤ ub (m residuals each) for every row t of the
-        variable blocks; bounds are scalars, one per row ``(n,)`` or one per residual
-        ``(1, m)``."""
+        variable blocks, ``bounds = (lb, ub)``: scalars, one per row ``(n,)`` or one per
+        residual ``(1, m)``."""
         fn, variables = stepwise(H, blocks, scale)
         n = blocks[0].shape[0]
         lb, ub = (np.broadcast_to(b[:, None] if b.ndim == 1 else b, (n, m)).ravel()
-                  for b in (np.asarray(lb, dtype=float), np.asarray(ub, dtype=float)))
+                  for b in (np.asarray(bound, dtype=float) for bound in bounds))
         binding = self.prog.AddConstraint(bridge(fn, self.timings, name), lb, ub, variables,
                                           name)
         if self.settings.sparse_jacobians:

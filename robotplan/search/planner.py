@@ -16,6 +16,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from multiprocessing import get_context
 from pathlib import Path
 from queue import SimpleQueue
@@ -144,19 +145,19 @@ def good_enough(s: Solution, good_rms_mm: float = GOOD_RMS_MM) -> bool:
 
 
 def stops_search(sol: Solution, holds_solved: bool, elapsed: float,
-                 time_budget: float | None, patience: float, exhaustive: bool,
+                 time_budget: float | None, exhaustive: bool,
                  good_rms_mm: float = GOOD_RMS_MM) -> bool:
     """Whether the search stops on collecting ``sol``, ``elapsed`` seconds in: past the time
     budget with a solved plan in hand (``holds_solved``, ``sol`` included); otherwise (unless
     ``exhaustive``) on a good-enough plan (residual at most ``good_rms_mm``), or past
-    ``patience`` seconds with a solved plan in hand. Past the budget without one it waits
+    PATIENCE_S seconds with a solved plan in hand. Past the budget without one it waits
     for the programs already running (:func:`search_push` starts no more): a pose goal's
     fitted programs run a minute or more each, and the one still running is often the one
     that plans (measured: docs/experiments.md#pose-goals)."""
     if past_budget(elapsed, time_budget) and holds_solved:
         return True
     return not exhaustive and (good_enough(sol, good_rms_mm)
-                               or (holds_solved and elapsed > patience))
+                               or (holds_solved and elapsed > PATIENCE_S))
 
 
 def past_budget(elapsed: float, time_budget: float | None) -> bool:
@@ -164,16 +165,15 @@ def past_budget(elapsed: float, time_budget: float | None) -> bool:
     return time_budget is not None and elapsed > time_budget
 
 
-def run_in_pool(solve: Callable, items: list, workers: int, initializer: Callable,
-                initargs: tuple, collect: Callable[[object], bool],
-                may_start: Callable[[], bool]) -> None:
+def run_in_pool(solve: Callable, items: list, workers: int, setup: Callable[[], None] | None,
+                collect: Callable[[object], bool], may_start: Callable[[], bool]) -> None:
     """``solve`` each of ``items`` in order in a pool of ``workers`` forked processes (each
-    set up by ``initializer(*initargs)``), handing every result to ``collect`` as it comes;
+    set up by ``setup()``), handing every result to ``collect`` as it comes;
     stop when ``collect`` says so (the programs still running are dropped), and start an
     item only while ``may_start()``. An error in a worker is raised here."""
     finished: SimpleQueue = SimpleQueue()
     pending, running = list(items), 0
-    with get_context("fork").Pool(workers, initializer, initargs) as pool:
+    with get_context("fork").Pool(workers, setup) as pool:
         while True:
             while pending and running < workers and may_start():
                 pool.apply_async(solve, (pending.pop(0),), callback=finished.put,
@@ -241,8 +241,8 @@ def search_push(request: SearchRequest, skeletons: list[Skeleton],
         bar.update()
         bar.set_postfix(best_violation=f"{min(s.violation for s in solutions):.3g}")
         holds_solved = holds_solved or is_solved(sol)
-        return stops_search(sol, holds_solved, time.time() - t0, time_budget, PATIENCE_S,
-                            exhaustive, settings.good_rms_mm)
+        return stops_search(sol, holds_solved, time.time() - t0, time_budget, exhaustive,
+                            settings.good_rms_mm)
 
     def may_start() -> bool:  # past the budget only while nothing has been collected
         return not past_budget(time.time() - t0, time_budget) or not solutions
@@ -254,7 +254,7 @@ def search_push(request: SearchRequest, skeletons: list[Skeleton],
                 break
     else:
         _dynamics(model_dir)  # loaded here, inherited by the forked workers
-        run_in_pool(_solve, queue, workers, _init_worker, args, collect, may_start)
+        run_in_pool(_solve, queue, workers, partial(_init_worker, *args), collect, may_start)
     bar.close()
     order = {sk: i for i, sk in enumerate(queue)}
     solutions.sort(key=lambda s: order[s.skeleton])

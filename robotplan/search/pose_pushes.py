@@ -26,6 +26,7 @@ from scipy.optimize import least_squares
 from robotplan.functionals.sticking import centroid, turning_radius
 from robotplan.geometry.transforms import wrap_angle
 from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 
 __all__ = ["FIT_SHARE", "FIT_TOLERANCE", "INIT_DIRECTIONS_DEG", "STANDOFF", "Face", "PosePushes",
            "TurningBody", "faces_of", "fit_pose_pushes", "fit_rank", "push_arc", "rotation"]
@@ -40,6 +41,7 @@ FIT_TOLERANCE = 0.004  # m of pose error (yaw as c·Δθ) a fit may leave to the
 FIT_SHARE = 0.4
 LENGTH_WEIGHT = 0.05  # least-squares weight of each push's length: shorter pushes first
 MAX_LENGTH = 0.35  # m pushed at most in one push
+KEEP_FITS = 4  # fits kept, one per sequence of face classes: a pose tier's programs
 PUSH_COST = 0.1  # m of pushing one more push (its reach around the object) counts as
 ROOM_SAMPLES = 6  # points per push at which the object must leave the pusher room on the table
 INIT_DIRECTIONS_DEG = (0.0, 90.0, 180.0, 270.0)  # face normal classes in the object frame
@@ -166,15 +168,16 @@ def _path(body: TurningBody, faces: tuple[Face, ...], c0: np.ndarray, yaw0: floa
     return c, yaw, np.concatenate(passed), np.array(turns)
 
 
-def fit_pose_pushes(scene: Scene, obj: str, actor: str, goal: tuple[float, float, float],
-                    max_pushes: int = 2, keep: int = 4, turn_gain: float = 1.0,
-                    classes: tuple[int, ...] | None = None) -> list[PosePushes]:
-    """The ``keep`` best fits (the least pushing among those within tolerance of ``goal``
+def fit_pose_pushes(task: PushTask, goal: tuple[float, float, float], max_pushes: int = 2,
+                    turn_gain: float = 1.0, classes: tuple[int, ...] | None = None
+                    ) -> list[PosePushes]:
+    """The KEEP_FITS best fits (the least pushing among those within tolerance of ``goal``
     and on the table, FIT_TOLERANCE or FIT_SHARE of the start's pose error, whichever is
-    less; else the closest), one per sequence of face classes, of up
-    to ``max_pushes`` pushes bringing ``obj`` to ``goal`` under the quasi-static push
+    less; else the closest), one per sequence of face classes, of up to ``max_pushes``
+    pushes by the task's pusher bringing its object to ``goal`` under the quasi-static push
     (turning law ``c² Δθ = turn_gain · r × Δc``); ``classes``: only the sequences of
     ``max_pushes`` faces of these init classes."""
+    scene, obj, actor = task.scene, task.obj, task.actors[0]
     body = TurningBody(scene, obj, turn_gain)
     pose = np.asarray(scene.bodies[obj].pose, dtype=float)
     c0 = pose[:2] + rotation(pose[2]) @ body.c_B
@@ -215,7 +218,7 @@ def fit_pose_pushes(scene: Scene, obj: str, actor: str, goal: tuple[float, float
             key = tuple(f.init for f in seq)
             if key not in fits or fit_rank(fit) < fit_rank(fits[key]):
                 fits[key] = fit
-    return sorted(fits.values(), key=fit_rank)[:keep]
+    return sorted(fits.values(), key=fit_rank)[:KEEP_FITS]
 
 
 def fit_rank(fit: PosePushes) -> tuple[bool, float]:

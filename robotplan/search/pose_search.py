@@ -163,11 +163,10 @@ def pose_candidates(task: PushTask, space: SkeletonSpace,
     fits: list[PosePushes] = []
     if given is not None:
         classes = tuple(p.init for p in given.phases if p.mode == "push")
-        fits = fit_pose_pushes(scene, obj, actor, target, len(classes),
-                               turn_gain=gain, classes=classes)
+        fits = fit_pose_pushes(task, target, len(classes), turn_gain=gain, classes=classes)
     loose: list[PosePushes] = []
     for pushes in () if given is not None else (max_pushes, max_pushes + 1):
-        found = fit_pose_pushes(scene, obj, actor, target, pushes, turn_gain=gain)
+        found = fit_pose_pushes(task, target, pushes, turn_gain=gain)
         fits = [f for f in found if f.within]
         if fits:  # one push more only when none fits
             break

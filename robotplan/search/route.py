@@ -32,11 +32,13 @@ from robotplan.functionals.clearance import densify, obstacle_clearance
 from robotplan.functionals.sticking import centroid
 from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
 from robotplan.scene import Body, Scene
+from robotplan.scene.task import PushTask
 from robotplan.sdf import Shape2D
 
 __all__ = ["Route", "centred_pushes", "face_routes", "routed_candidates"]
 
 ROUTE_CLEARANCE = 0.04  # m between the routed footprint and every obstacle
+ROUTE_LIMIT = 3  # routes tried: the shortest, fewest segments first
 # m: a route ends where the footprint (at its start yaw) lies this far inside the goal
 # region: beyond the region's inset that the program plans into (goal_inset, 2 cm)
 GOAL_INSIDE = 0.03
@@ -139,7 +141,7 @@ def _trim_to_region(legs: list[tuple[int, float]], start: np.ndarray, R: np.ndar
 
 
 def face_routes(scene: Scene, obj: str, goal_xy: np.ndarray,
-                clearance: float = ROUTE_CLEARANCE, limit: int = 3,
+                clearance: float = ROUTE_CLEARANCE,
                 pushable: set[int] | None = None, region: Body | None = None
                 ) -> list[Route]:
     """Rectilinear routes of ``obj``'s centre from its start to ``goal_xy`` along its start
@@ -147,7 +149,7 @@ def face_routes(scene: Scene, obj: str, goal_xy: np.ndarray,
     from every obstacle: the two L-shaped routes (either axis first) and, for each axis,
     detours that pass each obstacle on either side; only directions in ``pushable`` (all by
     default). With the goal ``region``, a route ends at the first waypoint where the
-    footprint lies inside it (:func:`_trim_to_region`). The ``limit`` shortest, fewest
+    footprint lies inside it (:func:`_trim_to_region`). The ROUTE_LIMIT shortest, fewest
     segments first among equal lengths."""
     body = scene.bodies[obj]
     start = np.array(body.pose[:2], dtype=float)
@@ -179,7 +181,7 @@ def face_routes(scene: Scene, obj: str, goal_xy: np.ndarray,
         key = tuple(np.round(waypoints, 4).ravel())
         routes.setdefault(key, Route(waypoints, dirs))
     ordered = sorted(routes.values(), key=lambda r: (round(r.length, 3), len(r.directions)))
-    return ordered[:limit]
+    return ordered[:ROUTE_LIMIT]
 
 
 def _split(route: Route, longest: float) -> Route:
@@ -193,14 +195,14 @@ def _split(route: Route, longest: float) -> Route:
     return Route(np.array(points), tuple(dirs))
 
 
-def routed_candidates(scene: Scene, actor: str, obj: str, space: SkeletonSpace,
-                      region: Body, speed: float, max_pushes: int = 4,
-                      ) -> tuple[SkeletonSpace, list[Skeleton]]:
-    """Skeletons that push ``obj`` along :func:`face_routes` to the goal ``region``'s
-    centre, each ending where the object lies inside it (reach + push per segment,
+def routed_candidates(task: PushTask, space: SkeletonSpace, speed: float,
+                      max_pushes: int = 4) -> tuple[SkeletonSpace, list[Skeleton]]:
+    """Skeletons in which the task's pusher pushes its object along :func:`face_routes` to
+    the goal region's centre, each ending where the object lies inside it (reach + push per segment,
     the push from the face behind the segment, ``via`` the segment's end), and the space
     they need: init points in the object's frame, enough steps per phase for the longest
     push at ``speed`` m per step (two steps for contact), at most MAX_STEPS_PER_PHASE."""
+    scene, obj, actor, region = task.scene, task.obj, task.actors[0], task.region
     pushable = centred_pushes(scene.bodies[obj].shape, scene.bodies[actor].shape.radius)
     routes = face_routes(scene, obj, np.array(region.pose[:2], dtype=float),
                          pushable=pushable, region=region)

@@ -106,8 +106,7 @@ def _search_routes(request: SearchRequest, settings: ProgramSettings, space: Ske
     task = request.task
     routed, skeletons = space, []
     if task.region is not None:
-        routed, skeletons = routed_candidates(task.scene, task.actors[0], task.obj, space,
-                                              task.region, settings.guess_speed)
+        routed, skeletons = routed_candidates(task, space, settings.guess_speed)
     request.say(f"no plan with up to {request.max_pushes} pushes; trying {len(skeletons)} "
                 f"routes around the obstacles ({routed.steps_per_phase} steps per phase)")
     if not skeletons:

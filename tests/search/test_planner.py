@@ -68,20 +68,20 @@ def test_the_search_stops_on_a_good_plan_or_after_its_patience_with_a_solved_one
     good, solved, broken = plan(1e-4, 3.0), plan(1e-4, 8.0), plan(0.5, 1.0)
     assert is_solved(solved) and not is_solved(broken)
     early, late = PATIENCE_S - 1.0, PATIENCE_S + 1.0
-    assert stops_search(good, True, 1.0, None, PATIENCE_S, False)
-    assert not stops_search(solved, True, early, None, PATIENCE_S, False)
-    assert stops_search(solved, True, late, None, PATIENCE_S, False)
+    assert stops_search(good, True, 1.0, None, False)
+    assert not stops_search(solved, True, early, None, False)
+    assert stops_search(solved, True, late, None, False)
     # a broken plan collected late stops the search only if a solved one came before
-    assert stops_search(broken, True, late, None, PATIENCE_S, False)
-    assert not stops_search(broken, False, late, None, PATIENCE_S, False)
+    assert stops_search(broken, True, late, None, False)
+    assert not stops_search(broken, False, late, None, False)
     # exhaustive: only the time budget stops it, once a solved plan is in hand
-    assert not stops_search(good, True, late, None, PATIENCE_S, True)
-    assert stops_search(broken, True, 101.0, 100.0, PATIENCE_S, True)
+    assert not stops_search(good, True, late, None, True)
+    assert stops_search(broken, True, 101.0, 100.0, True)
     # past the budget without one it waits for the programs still running
-    assert not stops_search(broken, False, 101.0, 100.0, PATIENCE_S, True)
+    assert not stops_search(broken, False, 101.0, 100.0, True)
     # a looser good-enough residual (F_q's overlay) stops at the first solved plan
-    assert stops_search(solved, False, early, None, PATIENCE_S, False, PLAUSIBLE_RMS_MM)
-    assert not stops_search(broken, False, early, None, PATIENCE_S, False, PLAUSIBLE_RMS_MM)
+    assert stops_search(solved, False, early, None, False, PLAUSIBLE_RMS_MM)
+    assert not stops_search(broken, False, early, None, False, PLAUSIBLE_RMS_MM)
 
 
 def _nap(item: tuple[int, float]) -> int:
@@ -110,17 +110,17 @@ def test_past_the_budget_the_pool_starts_nothing_but_collects_what_runs():
         got.append(result)
         return False
 
-    run_in_pool(_nap, [(0, 0.3), (1, 0.6), (2, 0.0), (3, 0.0)], 2, None, (), collect_all,
+    run_in_pool(_nap, [(0, 0.3), (1, 0.6), (2, 0.0), (3, 0.0)], 2, None, collect_all,
                 may_start)
     assert sorted(got) == [0, 1]
 
     got.clear()
-    run_in_pool(_nap, [(0, 0.0), (1, 30.0), (2, 0.0)], 2, None, (),
+    run_in_pool(_nap, [(0, 0.0), (1, 30.0), (2, 0.0)], 2, None,
                 lambda r: got.append(r) or True, lambda: True)
     assert got == [0]
 
     with pytest.raises(ValueError, match="a worker's error"):
-        run_in_pool(_nap, [(-1, 0.0)], 1, None, (), collect_all, lambda: True)
+        run_in_pool(_nap, [(-1, 0.0)], 1, None, collect_all, lambda: True)
 
 
 def test_plans_around_obstacles_must_keep_the_margin():

@@ -8,6 +8,7 @@ import torch
 
 from robotplan.functionals.sticking import QuasiStaticPush
 from robotplan.scene.loader import parse_scene
+from robotplan.scene.task import make_task
 from robotplan.search.pose_pushes import (
     FIT_SHARE,
     FIT_TOLERANCE,
@@ -81,7 +82,7 @@ def test_fit_reaches_a_pose_made_by_two_pushes(shape):
     guess = pose_guess(scene, "object", "pusher", made, 20)
     goal = [float(v) for v in guess["q_obj"][-1]]
     scene = parse_scene(scene_doc(shape, goal))
-    fits = fit_pose_pushes(scene, "object", "pusher", tuple(goal), max_pushes=2)
+    fits = fit_pose_pushes(make_task(scene), tuple(goal), max_pushes=2)
     assert fits and fits[0].error <= FIT_TOLERANCE
     body = TurningBody(scene, "object", 1.0)
     for fit in fits:  # fewest pushes first, each within tolerance when the first is
@@ -104,10 +105,10 @@ def test_a_turn_in_place_near_the_target_is_fitted_with_two_pushes(shape):
     scene = parse_scene(scene_doc(shape, [float(v) for v in goal]))
     start_error = body.radius * 0.03
     assert start_error < FIT_TOLERANCE
-    one = fit_pose_pushes(scene, "object", "pusher", goal, max_pushes=1)
+    one = fit_pose_pushes(make_task(scene), goal, max_pushes=1)
     assert one and not any(f.within for f in one)
     assert all(f.tolerance == pytest.approx(FIT_SHARE * start_error) for f in one)
-    two = fit_pose_pushes(scene, "object", "pusher", goal, max_pushes=2)
+    two = fit_pose_pushes(make_task(scene), goal, max_pushes=2)
     assert two[0].within and len(two[0].faces) == 2
     assert two[0].error <= FIT_SHARE * start_error
     assert min(two[0].lengths) > 0.0005  # both push: neither is a placeholder

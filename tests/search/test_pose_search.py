@@ -63,7 +63,7 @@ def test_without_a_close_fit_the_fits_within_fit_tolerance_are_candidates(monkey
     space = load_skeleton_space()
     _, close, _ = pose_candidates(task, space, settings)
     monkeypatch.setattr(pose_pushes, "FIT_SHARE", 0.0)
-    fits = pose_pushes.fit_pose_pushes(scene, "object", "pusher", tuple(scene.goal.pose),
+    fits = pose_pushes.fit_pose_pushes(task, tuple(scene.goal.pose),
                                        turn_gain=settings.turn_gain)
     assert fits and not any(f.within for f in fits)
     _, loose, guesses = pose_candidates(task, space, settings)

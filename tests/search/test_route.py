@@ -71,9 +71,7 @@ def test_routes_without_obstacles_are_the_two_l_shapes(box_scene):
 
 def test_routed_skeletons_push_from_behind_and_the_guess_follows_the_route():
     task = make_task(load_scene(TASKS / "obstacle_push.yaml"))
-    scene = task.scene
-    space, skeletons = routed_candidates(scene, "pusher", "box", space_for(task),
-                                          task.region, 0.027)
+    space, skeletons = routed_candidates(task, space_for(task), 0.027)
     # the longest push, 0.63 m at 2.7 cm a step, plus two steps into contact
     assert space.steps_per_phase == 26 and space.init_frame == "object"
     north = next(sk for sk in skeletons if sk.phases[1].via[1] > 0)
@@ -91,9 +89,7 @@ def test_routed_skeletons_push_from_behind_and_the_guess_follows_the_route():
 
 def test_long_segments_are_split_into_several_pushes():
     task = make_task(load_scene(TASKS / "obstacle_push.yaml"))
-    space, skeletons = routed_candidates(task.scene, "pusher", "box", space_for(task),
-                                          task.region, 0.01,
-                                          max_pushes=5)
+    space, skeletons = routed_candidates(task, space_for(task), 0.01, max_pushes=5)
     # 28 steps of 1 cm: the 0.63 m push is split in three (0.21 m, 23 steps)
     assert space.steps_per_phase == 27
     assert all(sk.pushes == 5 for sk in skeletons)
