@@ -22,12 +22,9 @@ The thresholds are :class:`LoopSettings`, with overlays per scene class in
 ``skeletons/loop.yaml`` (:func:`loop_settings_for`: a chain re-plans from larger departures
 at a phase's end).
 
-Between re-plans a free pusher may follow the object (``follow_object``, off by default):
-in push steps its planned position is carried by the rigid motion that takes the planned
-object pose to the observed one, so it keeps the planned point of contact on the object. Or
-the acting free pusher or arm may steer (``steer_gain``, off by default): keep the planned
-push direction and move sideways with the object and against its turn
-(:func:`steer_pusher`; an arm's joints follow its tip to first order).
+Between re-plans the acting free pusher or arm may steer (``steer_gain``, off by default
+for free pushers): keep the planned push direction and move sideways with the object and
+against its turn (:func:`steer_pusher`; an arm's joints follow its tip to first order).
 """
 
 from __future__ import annotations
@@ -48,7 +45,7 @@ from robotplan.execution.loop_settings import (
 )
 from robotplan.execution.scene_world import Observation, SceneWorld, actuation
 from robotplan.execution.sim import PHYSICS, Physics
-from robotplan.execution.steering import follow_object, steer_actor, steer_pusher
+from robotplan.execution.steering import steer_actor, steer_pusher
 from robotplan.geometry.transforms import wrap_angle
 from robotplan.program.solution import Solution
 from robotplan.program.tail import solution_tail
@@ -56,7 +53,7 @@ from robotplan.scene.task import PushTask
 from robotplan.search.planner import adoptable
 
 __all__ = ["LOOP_CLASSES", "LoopSettings", "Replan", "departure", "execute_closed_loop",
-           "follow_object", "load_loop_overlays", "loop_settings_for", "steer_pusher"]
+           "load_loop_overlays", "loop_settings_for", "steer_pusher"]
 
 
 @dataclass
@@ -143,10 +140,6 @@ class _Loop:
         return {self.obj: self.plan.q_obj[self.t],
                 **{k: v[self.t] for k, v in self.plan.q_others.items()}}
 
-    def pushing(self) -> bool:
-        """Whether the next step is a push step."""
-        return self.plan.skeleton.phases[self.t // self.T].mode == "push"
-
     def now(self) -> float:
         return sum(self.executed) * self.physics.timestep
 
@@ -181,11 +174,7 @@ def execute_closed_loop(task: PushTask, sol: Solution, replan: Replanner,
                     break
                 continue
             target = {k: v[loop.t + 1] for k, v in loop.drive.items()}
-            if settings.follow_object and world.pusher is not None and loop.pushing():
-                name = world.pusher.name
-                target[name] = follow_object(target[name], loop.plan.q_obj[loop.t],
-                                             seen.poses[obj])
-            elif settings.steer_gain:
+            if settings.steer_gain:
                 steer_actor(world, loop, target, seen.poses[obj], settings)
             world.run_step(command, target, loop.substeps[loop.t])
             loop.executed.append(loop.substeps[loop.t])

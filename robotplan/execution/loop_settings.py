@@ -29,21 +29,19 @@ class LoopSettings:
     phase_drift_yaw: float = math.radians(2.0)
     goal_coverage: float = 0.995  # below this at the plan's end: plan afresh
     # the same for a pose goal: Push-T's success (0.95) and 1 % for what 1 mm of perception
-    # error uncovers of a T. Closing pushes from 0.96-0.98 left T-shapes lower as often as
-    # higher (measured: docs/experiments.md#pose-closing)
+    # error uncovers of a T; closing pushes above it left T-shapes lower as often as higher
+    # (measured: docs/experiments.md#pose-closing)
     pose_coverage: float = 0.96
     touch_gap: float = 0.005  # m: a touch goal farther than this at the end: plan afresh
-    # a free pusher's L-shape that departs again and again used up 8 re-plans and ended
-    # at 0.07-0.78 where 9-12 took it to 0.998-1.000; arms and chains keep 8 (overlays)
-    # (measured: docs/experiments.md#replan-fits)
+    # a free pusher's L-shape that departs again and again needs more than 8 re-plans to
+    # reach its goal; arms and chains keep 8 (overlays) (measured: docs/experiments.md#replan-fits)
     max_replans: int = 16
     # off by default: searching afresh at once when a departure's re-anchored tail does not
-    # plan finds plans that drift off again, at 30-110 s a search (measured:
-    # docs/experiments.md#closed-loop)
+    # plan finds slow plans that drift off again (measured: docs/experiments.md#closed-loop)
     fresh_after_miss: bool = False
     # at a phase's end, an object beyond drift / drift_yaw whose tail does not plan gets a
-    # fresh search at once: the stale plan pushes where the object is not and drove it
-    # 17-48 cm off on the push benchmark (measured: docs/experiments.md#closed-loop)
+    # fresh search at once: the stale plan pushes where the object is not and drives it
+    # further off (measured: docs/experiments.md#closed-loop)
     fresh_beyond_drift: bool = True
     # at the plan's end with the goal not met, the plan's last reach and push are tried
     # again from where the object is before a fresh search; off (pose goals): the fresh
@@ -56,8 +54,8 @@ class LoopSettings:
     # (measured: docs/experiments.md#last-resort)
     adopt_feasible_at_end: bool = True
     # the largest scaled constraint violation such a last-resort plan may have: three times
-    # the bound of a solved plan; the re-plans that ended L-shapes below 0.9 at 0.01
-    # violated by 0.011-0.017 (measured: docs/experiments.md#last-resort)
+    # the bound of a solved plan, which the re-plans that left L-shapes short of the goal
+    # missed only narrowly (measured: docs/experiments.md#last-resort)
     last_resort_violation: float = 0.03
     # a gross departure at a phase end whose re-plans do not solve also takes a last-resort
     # plan rather than the stale one, which pushes where the object is not
@@ -65,11 +63,8 @@ class LoopSettings:
     last_resort_beyond_drift: bool = True
     # off by default: with no re-plans left, an object beyond drift / drift_yaw of the plan
     # ends the execution where it is, rather than the stale plan pushing where the object
-    # is not (a pose goal's box driven 40 cm off; measured: docs/experiments.md#close-fits)
+    # is not (measured: docs/experiments.md#close-fits)
     stop_when_lost: bool = False
-    # off by default: carrying the pusher with a turned object turns the push with it, which
-    # can drive the object further off (measured: docs/experiments.md#closed-loop)
-    follow_object: bool = False
     # m of sideways offset of the acting pusher or arm tip per rad of the object's yaw off
     # the plan in push steps and the largest offset (steer_pusher); 0, off: for free pushers
     # no gain helped beyond the scatter between scenes (measured:

@@ -1,10 +1,8 @@
 """Feedback on the acting actor's motion between re-plans (:mod:`robotplan.execution.
-closed_loop`): a free pusher carried with the object (``follow_object``), or the acting free
-pusher or arm steered sideways against the object's turn (``steer_gain``)."""
+closed_loop`): the acting free pusher or arm steered sideways against the object's turn
+(``steer_gain``)."""
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
@@ -12,17 +10,7 @@ from robotplan.execution.loop_settings import LoopSettings
 from robotplan.execution.scene_world import SceneWorld
 from robotplan.geometry.transforms import wrap_angle
 
-__all__ = ["follow_object", "steer_actor", "steer_pusher"]
-
-
-def follow_object(target: np.ndarray, planned_pose: np.ndarray, seen_pose: np.ndarray
-                  ) -> np.ndarray:
-    """The pusher target ``(x, y)`` carried by the rigid motion from the object's
-    ``planned_pose`` to its ``seen_pose``."""
-    turn = float(seen_pose[2] - planned_pose[2])
-    c, s = math.cos(turn), math.sin(turn)
-    rel = np.asarray(target, dtype=float) - planned_pose[:2]
-    return seen_pose[:2] + np.array([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]])
+__all__ = ["steer_actor", "steer_pusher"]
 
 
 def steer_pusher(target: np.ndarray, start: np.ndarray, planned_pose: np.ndarray,

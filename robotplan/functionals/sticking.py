@@ -17,9 +17,8 @@ from torch import Tensor
 from robotplan.functionals.base import Functional
 from robotplan.sdf.footprint import support_corners
 
-__all__ = ["CornerClearance", "PushLever", "PushingDirection", "QuasiStaticObjectPush",
-           "QuasiStaticPush", "StickingContact", "centroid", "convex_corners",
-           "limit_surface_radius", "turning_radius"]
+__all__ = ["PushLever", "PushingDirection", "QuasiStaticObjectPush", "QuasiStaticPush",
+           "StickingContact", "centroid", "limit_surface_radius", "turning_radius"]
 
 
 def centroid(outline: np.ndarray) -> np.ndarray:
@@ -160,31 +159,3 @@ class QuasiStaticObjectPush(QuasiStaticPush):
         n = -torch.stack((c * g[:, 0] - s * g[:, 1], s * g[:, 0] + c * g[:, 1]), -1)
         return self._rows(X_prev, X, p, n)
 
-
-def convex_corners(outline: np.ndarray, min_turn_deg: float = 20.0) -> np.ndarray:
-    """Indices ``(K,)`` of the convex corners of a counter-clockwise outline ``(V, 2)``:
-    vertices where the boundary turns left by more than ``min_turn_deg`` (a circle's fine
-    polygon has none; an L-shape's notch corner is concave and not one)."""
-    prev, nxt = np.roll(outline, 1, axis=0), np.roll(outline, -1, axis=0)
-    a, b = outline - prev, nxt - outline
-    cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    return np.nonzero(np.arctan2(cross, (a * b).sum(1)) > np.radians(min_turn_deg))[0]
-
-
-class CornerClearance(Functional):
-    """Distance (m) of the contact point from each convex corner of the object.
-
-    ``residual(X_WB (T, 3), p_W (T, 2)) → (T, K)`` = |p_B − v_k| for the corners
-    ``v_k (K, 2)`` in the body frame. A push at a corner has no face normal: any direction
-    in the corner's normal cone passes the friction cone and, through the centroid, the
-    lever arm is 0; but the contact rolls off to either side and the object turns away in
-    pybullet (measured: docs/experiments.md#corner-clearance). A lower bound on these
-    distances keeps pushes on faces.
-    """
-
-    def __init__(self, corners_B: np.ndarray) -> None:
-        self.corners = torch.as_tensor(np.asarray(corners_B, dtype=float))
-
-    def residual(self, X_WB: Tensor, p: Tensor) -> Tensor:
-        d = _in_body_frame(X_WB, p)[:, None, :] - self.corners.to(p)  # (T, K, 2)
-        return (d * d).sum(-1).clamp_min(1e-18).sqrt()

@@ -17,13 +17,11 @@ from robotplan.functionals.collision import (
 )
 from robotplan.functionals.goal import PoseError
 from robotplan.functionals.sticking import (
-    CornerClearance,
     PushingDirection,
     PushLever,
     QuasiStaticPush,
     StickingContact,
     centroid,
-    convex_corners,
     turning_radius,
 )
 from robotplan.geometry.transforms import carry_with_body
@@ -51,7 +49,6 @@ ROW_BUILDERS = {  # a row of skeletons/rows.yaml → the PushRows method that ad
     "goal": "_add_goal",
     "acceleration": "_add_costs",
     "lever": "_add_lever_cost",
-    "corner": "_add_corner_clearance",
 }
 
 
@@ -76,12 +73,8 @@ class PushRows(DynamicsRows):
         getattr(self, ROW_BUILDERS[spec.row])(spec)
 
     def _row_step_limits(self, spec: RowSpec) -> None:
-        """The stage's step limits (the learned stage's ``max_*``, the kinematic ``warm_*``)."""
-        s = self.settings
-        if spec.stage == "learned":
-            self._add_step_limits(s.max_step, s.max_turn)
-        else:
-            self._add_step_limits(s.warm_max_step, s.warm_max_turn)
+        """The kinematic stage's step limits (``warm_max_step``, ``warm_max_turn``)."""
+        self._add_step_limits(self.settings.warm_max_step, self.settings.warm_max_turn)
 
     def _row_friction_cone(self, spec: RowSpec) -> None:
         """The learned stage's quasi-static rows: the cone, the turning law with
@@ -190,20 +183,6 @@ class PushRows(DynamicsRows):
             return np.array([w * r @ r]), None if J is None else (2 * w * r @ J)[None]
 
         self._add_cost(total, variables, spec.row)
-
-    def _add_corner_clearance(self, spec: RowSpec) -> None:
-        """|p_B − corner| ≥ corner_clearance in every push step (see CornerClearance)."""
-        if self.settings.corner_clearance <= 0 or not len(self.push_steps):
-            return
-        outline = self.obj.shape.outline()
-        corners = convex_corners(outline)
-        if not len(corners):
-            return
-        edges = np.linalg.norm(np.roll(outline, -1, axis=0) - outline, axis=1)
-        shorter_face = np.minimum(edges, np.roll(edges, 1))[corners]  # the faces at a corner
-        bound = np.minimum(self.settings.corner_clearance, shorter_face / 3)
-        self._add_rows(CornerClearance(outline[corners]), [self.Q1[self.push_steps], self.P],
-                       len(corners), spec.scale, (spec.scale * bound[None], np.inf), spec.row)
 
     def _add_quasi_static(self, turn: bool, scale: float = 100.0) -> None:
         """QuasiStaticPush rows in every push step: the friction cone, and with ``turn`` the

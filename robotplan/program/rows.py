@@ -48,15 +48,14 @@ class ProgramRows:
         lim = np.tile(limits, n)
         self.prog.AddLinearConstraint(D, -lim, lim, Q.ravel())
 
-    def _add_step_limits(self, max_step: float | None, max_turn: float | None) -> None:
-        """Pusher travel per push step and axis ≤ ``max_step`` (the speeds of the push data)
-        and object rotation per push step ≤ ``max_turn``. Reach steps move through free space
-        and are not limited (a bound there changes SNOPT's path: the swept clearance checks
-        long moves after the solve instead)."""
-        if len(self.push_steps) and max_step is not None:
-            self._limit_steps(self.Q2, self.push_steps, [max_step] * 2)
-        if len(self.push_steps) and max_turn is not None:
-            self._limit_steps(self.Q1[:, 2:], self.push_steps, [max_turn])
+    def _add_step_limits(self, step: float, turn: float) -> None:
+        """Pusher travel per push step and axis ≤ ``step`` (m; the speeds of the push data)
+        and object rotation per push step ≤ ``turn`` (rad). Reach steps move through free
+        space and are not limited (a bound there changes SNOPT's path: the swept clearance
+        checks long moves after the solve instead)."""
+        if len(self.push_steps):
+            self._limit_steps(self.Q2, self.push_steps, [step] * 2)
+            self._limit_steps(self.Q1[:, 2:], self.push_steps, [turn])
 
     def _add_rows(self, H, blocks: list[np.ndarray], m: int, scale: float,
                   bounds: tuple[float | np.ndarray, float | np.ndarray], name: str) -> None:

@@ -23,15 +23,12 @@ class ProgramSettings:
     a_goal: float = 100.0
     dynamics_rmse: float = 0.0015  # m: allowed RMSE of φ1_t against F(…) over X per step
     # H_F as a cost (weight per mm² of mean squared residual per step) when > 0, else as a
-    # constraint ≤ dynamics_rmse² per step: the model's own error (~4.5 mm in contact) makes
-    # the bound either infeasible or loose enough to move the object without contact
+    # constraint ≤ dynamics_rmse² per step: the model's own error in contact makes the bound
+    # either infeasible or loose enough to move the object without contact
+    # (measured: docs/experiments.md#dynamics-residual)
     dynamics_weight: float = 0.01
     hold_while_reaching: bool = True  # q_obj,t = q_obj,t−1 in reach phases
     guess_speed: float = 0.027  # m per step and axis in the initial guess (data: ≤ 2.9 cm)
-    # optional hard limits per step and axis (m, rad); off by default: they leave SNOPT far
-    # from a feasible plan (measured: docs/experiments.md#step-limits)
-    max_step: float | None = None
-    max_turn: float | None = None
     # allowed smoothed overlap: what a face contact pressed in by ``coll_depth`` costs (at
     # least ``coll_area``, m²); a bound below what touching costs makes H_coll and H_PoC
     # fight (measured: docs/experiments.md#collision-bound)
@@ -47,18 +44,15 @@ class ProgramSettings:
     swept_samples: int = 7
     swept_tolerance: float = 0.002
     # a solved plan's free moves are checked again at points ``swept_check_spacing`` (m)
-    # apart, and a crossing deeper than ``swept_check_depth`` (m) fails the swept row: the
-    # samples of a long move (up to 1.2 m in one step of a reach) let it cross the object
-    # 4.5–5.7 cm deep between them, and pybullet drags the object along; a bound on the
-    # step in the program instead changed SNOPT's path where it did not bind, and rows at
-    # this spacing added after the solve did not repair a crossing (measured:
-    # docs/experiments.md#swept-clearance)
+    # apart, and a crossing deeper than ``swept_check_depth`` (m) fails the swept row: a long
+    # reach step can cross the object between its samples, and pybullet drags it along; a
+    # step bound in the program or rows added after the solve did worse
+    # (measured: docs/experiments.md#swept-clearance)
     swept_check_spacing: float | None = 0.01
     swept_check_depth: float = 0.01
     # the same check on push steps, the pusher's move seen from the object (its start carried
-    # by the object's step): a push step's rows hold at its end states only, and a re-plan
-    # hopped the pusher 5 cm deep through a T between two faces in one step, flinging it 22
-    # cm off; the plans that executed well cross at most 1.1 cm (a slide round a corner)
+    # by the object's step): a push step's rows hold at its end states only, so the pusher
+    # can hop through the object between two faces; plans that executed well cross far less
     # (measured: docs/experiments.md#swept-clearance)
     push_check_depth: float = 0.02
     goal_tol: float = 0.003  # share of the object's area allowed outside the goal (or off its pose)
@@ -122,11 +116,6 @@ class ProgramSettings:
     # cost per cm² of the push's lever arm about the centroid (PushLever), both stages: an
     # off-centre push on a long face turns the box in pybullet, not in the plan
     lever_weight: float = 0.01
-    # m between H_PoC's contact point and every convex corner of the object in push steps
-    # (CornerClearance; at most a third of the shorter adjacent face), both stages; 0: off.
-    # Off by default: it loses as many benchmark scenes as it wins
-    # (measured: docs/experiments.md#corner-clearance)
-    corner_clearance: float = 0.0
     # quasi-static sticking pushes (QuasiStaticPush) with this pusher–object friction,
     # well inside pybullet's 0.5 × 0.3 = 0.15 (8.5°): the object arrives a few degrees off
     # the plan, and a push at the plan's cone edge then slides; ≤ 0 leaves the object's
@@ -138,8 +127,8 @@ class ProgramSettings:
     # (measured: docs/experiments.md#turn-in-learned)
     turn_in_learned: bool = True
     # the turning law's gain g (c² Δθ = g · r × Δc; 1: the ellipsoidal limit surface of the
-    # support points): pybullet turns a box or T pushed along a face normal 1.32× as far
-    # (median over off-centre sticking pushes; measured: docs/experiments.md#pose-goals)
+    # support points); pybullet turns a box or T pushed along a face normal further, which
+    # the `pose` overlay's gain follows (measured: docs/experiments.md#pose-goals)
     turn_gain: float = 1.0
     # arms (robotplan/program/arm_program.py)
     step_seconds: float = 1.0 / 12.0  # one planned step: 20 simulation steps, as the data

@@ -15,7 +15,6 @@ from robotplan.execution.closed_loop import (
     _goal_met,
     departure,
     execute_closed_loop,
-    follow_object,
     load_loop_overlays,
     loop_settings_for,
     steer_pusher,
@@ -37,14 +36,6 @@ def test_departure_names_the_object_and_how_far_it_is_off():
     assert far.startswith("box 12.0 mm")
     turned = departure(planned, {"box": np.array([0.0, 0.0, 2 * math.pi - 0.2])}, 0.01, 0.1)
     assert turned is not None and "11.5°" in turned  # yaw is compared modulo 2π
-
-
-def test_follow_object_keeps_the_pusher_where_it_was_on_the_object():
-    planned, seen = np.array([0.1, 0.0, 0.0]), np.array([0.2, 0.1, math.pi / 2])
-    target = np.array([0.0, 0.0])  # 0.1 m behind the object along its x axis
-    moved = follow_object(target, planned, seen)
-    assert moved == pytest.approx([0.2, 0.0])  # 0.1 m behind along the turned axis
-    assert follow_object(target, planned, planned) == pytest.approx(target)
 
 
 def test_steering_moves_the_pusher_sideways_to_the_object_and_against_its_turn():
@@ -101,7 +92,7 @@ def test_a_users_loop_settings_are_typed_and_win_over_the_scene_class():
     assert parse_loop_overrides([]) == {}
     for item, says in (("no_such=1", "no_such: not a closed-loop setting"),
                        ("max_replans=2.5", "max_replans: '2.5' is not a int"),
-                       ("follow_object=maybe", "follow_object: 'maybe' is not a bool"),
+                       ("redo_last_push=maybe", "redo_last_push: 'maybe' is not a bool"),
                        ("drift=nan", "drift: 'nan' is not a float"),
                        ("drift=-0.1", "drift: must not be negative"),
                        ("drift", "expected NAME=VALUE"), ("drift=", "expected NAME=VALUE")):

@@ -95,28 +95,3 @@ def test_quasi_static_push_turn_and_friction_cone():
         fd = central_difference_jacobian(H, (Xs, Xt, xs, ps), i)
         assert torch.allclose(J, fd, rtol=1e-5, atol=1e-9), (i, (J - fd).abs().max())
 
-
-def test_corner_clearance_sees_the_convex_corners_only_and_has_exact_gradients():
-    from robotplan.functionals.sticking import CornerClearance, convex_corners
-    from robotplan.sdf import Box, Circle, LShape
-
-    ell = LShape((0.2, 0.15), 0.06)
-    outline = ell.outline()
-    corners = convex_corners(outline)
-    notch = np.array([-0.1 + 0.06, -0.075 + 0.06])
-    assert len(corners) == 5 and not np.isclose(outline[corners], notch).all(1).any()
-    assert len(convex_corners(Box((0.1, 0.2)).outline())) == 4
-    assert len(convex_corners(Circle(0.05).outline())) == 0
-    H = CornerClearance(Box((0.2, 0.1)).outline())
-    X = torch.tensor([[0.3, -0.1, 0.0], [0.3, -0.1, math.pi / 2]], dtype=F64)
-    p = torch.tensor([[0.4, -0.15], [0.3, -0.1 + 0.1 - 0.01]], dtype=F64)
-    r = H(X, p)
-    assert r.shape == (2, 4)
-    assert r[0].min() < 1e-8  # at the corner (0.1, −0.05) of the unturned box
-    # turned by 90°: the corners (±0.1, 0.05) of the box sit at (0.25 | 0.35, 0.0)
-    assert abs(r[1].min().item() - math.hypot(0.05, 0.01)) < 1e-12
-    X = X + 0.01
-    _, jac = H.jacobians(X, p)
-    for which, J in enumerate(jac):
-        fd = central_difference_jacobian(H, (X, p), which)
-        assert (J - fd).abs().max() < 1e-7, which

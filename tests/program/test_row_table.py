@@ -76,14 +76,14 @@ def test_a_users_program_settings_win_over_every_later_overlay():
     from robotplan.program.settings import parse_program_overrides, with_overrides
 
     given = parse_program_overrides(["accept_good_start=off", "lever_weight=0.5",
-                                     "max_step=0.02", "solver=ipopt"])
-    assert given == {"accept_good_start": False, "lever_weight": 0.5, "max_step": 0.02,
+                                     "warm_max_step=0.02", "solver=ipopt"])
+    assert given == {"accept_good_start": False, "lever_weight": 0.5, "warm_max_step": 0.02,
                      "solver": "ipopt"}
     mine = with_overrides(settings_for("arms"), given)
     # the re-plan overlay turns accept_good_start on and the routes' sets lever_weight
     later = settings_for("routes", base=settings_for("replan", base=mine))
     assert not later.accept_good_start and later.lever_weight == 0.5
-    assert later.max_step == 0.02 and later.solver == "ipopt" and later.sparse_jacobians
+    assert later.warm_max_step == 0.02 and later.solver == "ipopt" and later.sparse_jacobians
     assert settings_for("replan").accept_good_start  # without them, the overlay's value
     for items, words in ((["no_such=1"], "not a program setting"),
                          (["with_contact=maybe"], "not a bool"),
