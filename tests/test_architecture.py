@@ -303,3 +303,17 @@ def test_the_task_and_parameter_checks_can_fail():
     assert [line for line, _ in _kind_tests(tree)] == [2, 2, 2, 4]
     assert _long_signatures(tree) == [(1, "f", 7)]
     assert not _kind_tests(ast.parse("for robot in scene.robots:\n    x = task.arms\n"))
+
+
+MAX_PROGRAM_SETTINGS = 25  # what is per row lives in the row table, per tier in the tiers
+
+
+def test_program_settings_stay_few():
+    """``ProgramSettings`` holds the solver's options and the two-stage scheme; the rows'
+    constants are the row table's (``skeletons/rows.yaml``)."""
+    from dataclasses import fields
+
+    from robotplan.program.settings import ProgramSettings
+
+    names = [f.name for f in fields(ProgramSettings)]
+    assert len(names) <= MAX_PROGRAM_SETTINGS, names

@@ -5,7 +5,7 @@ of a settings dataclass it changes (``skeletons/settings.yaml`` for the programs
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import fields, replace
 from pathlib import Path
 from typing import TypeVar
@@ -17,25 +17,33 @@ __all__ = ["apply_overlays", "parse_overrides", "read_overlays"]
 S = TypeVar("S")
 
 
+def _defaults(defaults: object) -> dict[str, object]:
+    """Setting names → default values: a mapping as it is, a dataclass's fields."""
+    if isinstance(defaults, Mapping):
+        return dict(defaults)
+    return {f.name: getattr(defaults, f.name) for f in fields(defaults)}
+
+
 def read_overlays(path: Path, defaults: object, classes: tuple[str, ...],
                   what: str) -> dict[str, dict]:
     """The overlays of ``path`` (YAML, safe loader), each key a scene class of ``classes``
-    and each field one of the dataclass ``defaults``' with a value of its type (an int
-    where a float is expected is fine). Raises ValueError naming the file and the field;
-    ``what`` says what the fields are (e.g. "program setting")."""
+    and each setting one of ``defaults``' (a settings dataclass, or names → defaults) with
+    a value of its type (an int where a float is expected is fine). Raises ValueError
+    naming the file and the field; ``what`` says what the fields are (e.g. "program
+    setting")."""
     data = yaml.safe_load(path.read_text()) or {}
     if not isinstance(data, dict):
         raise ValueError(f"{path}: must map scene classes to overlays")
-    names = {f.name for f in fields(defaults)}
+    known = _defaults(defaults)
     for name, overlay in data.items():
         if name not in classes:
             raise ValueError(f"{path}: {name}: not a scene class; one of {classes}")
         if not isinstance(overlay, dict):
             raise ValueError(f"{path}: {name}: must map {what}s to values")
         for key, value in overlay.items():
-            if key not in names:
+            if key not in known:
                 raise ValueError(f"{path}: {name}.{key}: not a {what}")
-            default = getattr(defaults, key)
+            default = known[key]
             if default is not None and type(value) is not type(default) and not (
                     isinstance(default, float) and type(value) is int):
                 raise ValueError(f"{path}: {name}.{key}: must be a {type(default).__name__}")
@@ -54,13 +62,14 @@ _TRUE, _FALSE = ("true", "on", "yes", "1"), ("false", "off", "no", "0")
 
 
 def parse_overrides(defaults: object, items: Sequence[str], what: str) -> dict[str, object]:
-    """``NAME=VALUE`` items (the CLI's ``--loop``, ``--program``) as fields of the dataclass
-    ``defaults`` with values of their types: booleans as true/false (on/off, yes/no, 1/0),
-    numbers as written and not negative, text as it is. Raises ValueError naming the item
-    that is not a field (``what`` names the fields, e.g. "closed-loop setting") or not of
-    its type. Only fields of those kinds (or None by default) can be set so."""
-    names = {f.name: getattr(defaults, f.name) for f in fields(defaults)
-             if isinstance(getattr(defaults, f.name), (bool, int, float, str, type(None)))}
+    """``NAME=VALUE`` items (the CLI's ``--loop``, ``--program``) as settings of ``defaults``
+    (a settings dataclass, or names → defaults) with values of their types: booleans as
+    true/false (on/off, yes/no, 1/0), numbers as written and not negative, text as it is.
+    Raises ValueError naming the item that is not a setting (``what`` names them, e.g.
+    "closed-loop setting") or not of its type. Only settings of those kinds (or None by
+    default) can be set so."""
+    names = {k: v for k, v in _defaults(defaults).items()
+             if isinstance(v, (bool, int, float, str, type(None)))}
     out: dict[str, object] = {}
     for item in items:
         name, sep, text = item.partition("=")

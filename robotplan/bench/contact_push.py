@@ -15,7 +15,6 @@ clouds' marching-squares vertices, differentiated by autograd in H_q).
 from __future__ import annotations
 
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -45,10 +44,10 @@ SUCCESS = 0.95  # coverage of the goal footprint that counts as pushed there (Pu
 # cost of weight 1 per mm²: as a hard row SNOPT does not leave the still start, and at the
 # default 0.01 the box reaches the goal in the plan without the pusher (measured:
 # docs/experiments.md#contact-push)
-CONTACT_PUSH_SETTINGS: ProgramSettings = replace(
-    DEFAULT_SETTINGS, warm_start=False, with_collision=False, with_contact=False,
-    cone_in_learned=False, turn_in_learned=False, lever_weight=0.0, dynamics_weight=1.0,
-    iterations=DEFAULT_SETTINGS.warm_iterations)
+CONTACT_PUSH_SETTINGS: ProgramSettings = DEFAULT_SETTINGS.with_values({
+    "warm_start": False, "with_collision": False, "with_contact": False,
+    "friction_cone.active": False, "friction_cone.turn": False, "lever.weight": 0.0,
+    "H_F.weight": 1.0, "iterations": DEFAULT_SETTINGS.warm_iterations})
 
 
 def contact_push_scene() -> Scene:

@@ -183,12 +183,13 @@ def add_program_option(parser) -> None:
     parser.add_argument("--program", action="append", default=[], metavar="NAME=VALUE",
                         help="a program setting in place of the scene class's (a field of "
                         "ProgramSettings, e.g. with_contact=false for the paper's ablation "
-                        "without H_PoC; repeatable; re-plans keep it)")
+                        "without H_PoC, or a row's constant ROW.NAME of skeletons/rows.yaml, "
+                        "e.g. goal.tol=0.01; repeatable; re-plans keep it)")
 
 
 def program_overrides(args) -> dict | None:
-    """The ``--program`` settings as ProgramSettings fields; None after printing one line
-    on a bad item (the caller exits with status 2)."""
+    """The ``--program`` settings (ProgramSettings fields, rows' ROW.NAME); None after
+    printing one line on a bad item (the caller exits with status 2)."""
     from robotplan.program.settings import parse_program_overrides
 
     try:

@@ -66,12 +66,12 @@ def reach_substeps(q_pusher: np.ndarray, push_step: np.ndarray, physics: Physics
 def plan_substeps(task: PushTask, sol: Solution, physics: Physics = PHYSICS) -> list[int]:
     """Simulation steps of each planned step of ``sol``: a push step as the data
     (``keep_every``); a free pusher's reach step slowed to ``REACH_SPEED``, an arm's
-    ``reach_slowdown`` times (the program lets its joints move that much more)."""
+    ``arm_joints.reach_slowdown`` times (the program lets its joints move that much more)."""
     steps = len(sol.q_pusher) - 1
     T = steps // len(sol.skeleton.phases)
     push = np.array([sol.skeleton.phases[t // T].mode == "push" for t in range(steps)])
     if task.arms:
-        slow = round(ARM_PROGRAM_SETTINGS.reach_slowdown)
+        slow = round(ARM_PROGRAM_SETTINGS.row("arm_joints").reach_slowdown)
         return [physics.keep_every * (1 if p else slow) for p in push]
     return reach_substeps(sol.q_pusher, push, physics)
 

@@ -8,12 +8,12 @@ each step (the phase's actor): ``FK_xy(q_t) = x_t``
 see the tip exactly as they see a free pusher. Per arm and step:
 
 * joint limits (bounds) and joint-velocity limits (linear; reach steps are executed
-  ``reach_slowdown`` times slower, so they may move that much more);
+  ``arm_joints.reach_slowdown`` times slower, so they may move that much more);
 * the acting tip at push height in its push phases (and at a touch goal), above the
-  table while reaching; an idle arm keeps its tip ``idle_lift`` above the objects;
-* the flange above the objects' tops and the check links above ``link_min``: no link
+  table while reaching; an idle arm keeps its tip ``tip_height.idle_lift`` above the objects;
+* the flange above the objects' tops and the check links above ``tip_height.link_min``: no link
   but the tip reaches down to the objects or the table;
-* with two arms, their check points (tips included) ``arm_gap`` apart (smooth minimum).
+* with two arms, their check points (tips included) ``arm_separation.gap`` apart (smooth minimum).
 
 Costs: the squared joint steps of every arm, besides the push program's own.
 """
@@ -81,7 +81,7 @@ class ArmPushProgram(PushProgram):
             a, b = names
             H = ArmSeparation(self.kin[a], self.kin[b])
             self._add_rows(H, [self.QJ[a][1:], self.QJ[b][1:]], 1, 100.0,
-                           (settings.arm_gap * 100, np.inf), "arm_gap")  # cm
+                           (settings.row("arm_separation").gap * 100, np.inf), "arm_gap")  # cm
 
     # ------------------------------------------------------------ structure
     def _actors(self) -> list[str]:
@@ -107,13 +107,13 @@ class ArmPushProgram(PushProgram):
         lower, upper = np.array(kin.model.joint_lower), np.array(kin.model.joint_upper)
         prog.AddBoundingBoxConstraint(np.tile(lower, N + 1), np.tile(upper, N + 1), Q.ravel())
         prog.AddBoundingBoxConstraint(kin.q0, kin.q0, Q[0])
-        # joint-velocity limits per step (reach steps run reach_slowdown times longer)
-        v = np.array(kin.model.velocity_limits) * s.step_seconds
+        # joint-velocity limits per step (reach steps run arm_joints.reach_slowdown times longer)
+        v = np.array(kin.model.velocity_limits) * s.row("arm_joints").step_seconds
         for t in range(1, N + 1):
-            scale = 1.0 if self._is_push_step(t) else s.reach_slowdown
+            scale = 1.0 if self._is_push_step(t) else s.row("arm_joints").reach_slowdown
             prog.AddLinearConstraint(np.hstack((np.eye(dof), -np.eye(dof))), -v * scale,
                                      v * scale, np.concatenate((Q[t], Q[t - 1])))
-            prog.AddQuadraticCost(2 * s.joint_step_weight * np.block(
+            prog.AddQuadraticCost(2 * s.row("arm_joints").weight * np.block(
                 [[np.eye(dof), -np.eye(dof)], [-np.eye(dof), np.eye(dof)]]), np.zeros(2 * dof),
                 np.concatenate((Q[t], Q[t - 1])), is_convex=True)
         acting = [t for t in range(1, N + 1) if self.actor_of_state[t] == name]
@@ -121,6 +121,7 @@ class ArmPushProgram(PushProgram):
             self._add_rows(TipCoupling(kin), [Q[acting], self.Q2[acting]], 2, 100.0, (0.0, 0.0),
                            f"tip_{name}")  # cm
         r, top = self.tip_radius, objects_top(self.scene)
+        height = s.row("tip_height")
         low = self._push_states(name)
         if low:
             self._add_rows(TipHeight(kin), [Q[low]], 1, 100.0, (r * 100, r * 100),
@@ -134,22 +135,23 @@ class ArmPushProgram(PushProgram):
                 and self.actor_of_state[t - 1] != name]
         if idle:
             self._add_rows(TipHeight(kin), [Q[idle]], 1, 100.0,
-                           ((top + s.idle_lift + r) * 100, np.inf), f"idle_lift_{name}")
-        bounds = np.array([top + s.flange_clearance] + [s.link_min] * (len(kin._frames) - 2))
+                           ((top + height.idle_lift + r) * 100, np.inf), f"idle_lift_{name}")
+        bounds = np.array([top + height.flange_clearance]
+                          + [height.link_min] * (len(kin._frames) - 2))
         self._add_rows(CheckPointHeights(kin), [Q[1:]], len(bounds), 100.0,
                        (bounds[None] * 100, np.inf), f"links_{name}")
 
     def _limit_tip_steps(self) -> None:
-        """|Δx| per step and axis of the acting tip ≤ tip_reach_step while reaching and ≤
-        the data's speed (``warm_max_step``) while pushing, in both stages: without it the
+        """|Δx| per step and axis of the acting tip ≤ tip_reach.step while reaching and ≤
+        the data's speed (``step_limits.step``) while pushing, in both stages: without it the
         learned stage can sweep the tip across the box's face between two planned states
         (measured: docs/experiments.md#tip-reach-step)."""
         D = np.hstack((np.eye(2), -np.eye(2)))
         for t in range(1, self.N + 1):
             if self.actor_of_state[t] != self.actor_of_state[t - 1]:
                 continue
-            lim = (self.settings.warm_max_step if self._is_push_step(t)
-                   else self.settings.tip_reach_step)
+            lim = (self.settings.row("step_limits").step if self._is_push_step(t)
+                   else self.settings.row("tip_reach").step)
             self.prog.AddLinearConstraint(D, -np.full(2, lim), np.full(2, lim),
                                           np.concatenate((self.Q2[t], self.Q2[t - 1])))
 
@@ -162,7 +164,7 @@ class ArmPushProgram(PushProgram):
         push height in its push states, descending while it reaches; idle, back home."""
         s, N, T = self.settings, self.N, self.T
         top, r = objects_top(self.scene), self.tip_radius
-        high = top + s.idle_lift + r + 0.03
+        high = top + s.row("tip_height").idle_lift + r + 0.03
         out = {}
         low_states = {name: set(self._push_states(name)) for name in self.kin}
         for name, kin in self.kin.items():
@@ -180,8 +182,9 @@ class ArmPushProgram(PushProgram):
             for t in range(1, N + 1):  # idle: the home pose's tip
                 if np.isnan(targets[t]).all() and self.actor_of_state[t] != name:
                     targets[t] = kin.tip(kin.q0)
-            out[name] = track_tip_path(kin, targets, kin.q0, top + s.flange_clearance,
-                                       s.link_min)
+            height = s.row("tip_height")
+            out[name] = track_tip_path(kin, targets, kin.q0, top + height.flange_clearance,
+                                       height.link_min)
         return out
 
     def _guess_pairs(self) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -16,7 +16,7 @@ between ``obj`` and the target. Constraints added:
 * kinematic stage: ``p_chain`` sticks to both objects, and the target moves as a
   quasi-static push at ``p_chain`` along its inward normal (QuasiStaticObjectPush);
   learned stage: H_F(target | obj) in every step (the learned model with ``obj``'s SDF as
-  φ2), with the same quasi-static rows as the single push keeps (``cone_in_learned``).
+  φ2), with the same quasi-static rows as the single push keeps (``friction_cone.active``).
 """
 
 from __future__ import annotations
@@ -102,25 +102,26 @@ class ChainPushProgram(PushProgram):
         for t in range(1, N + 1):  # the target holds still unless obj pushes it
             if t not in chained:
                 self._hold(Q3, t)
-        # the two objects may touch along a face, pressed in by at most coll_depth
+        # the two objects may touch along a face, pressed in by at most H_coll.contact_depth
         face = min(np.ptp(b.shape.outline(), axis=0).min() for b in (obj, target))
-        touch = face * (1.0 / s.a_coll + s.coll_depth)
-        self._add_rows(Collision(obj, target, a=s.a_coll), [Q1[1:], Q3[1:]], 1, 1e4, (0.0,
+        coll = s.row("H_coll")
+        touch = face * (1.0 / coll.a + coll.contact_depth)
+        self._add_rows(Collision(obj, target, a=coll.a), [Q1[1:], Q3[1:]], 1, 1e4, (0.0,
                        touch * 1e4), "H_coll_chain")  # cm²
-        clear = face_contact_overlap(self.pusher, s.a_coll, -s.reach_clearance)
-        self._add_rows(Collision(target, self.pusher, a=s.a_coll), [Q3[1:], self.Q2[1:]], 1,
+        clear = face_contact_overlap(self.pusher, coll.a, -coll.clearance)
+        self._add_rows(Collision(target, self.pusher, a=coll.a), [Q3[1:], self.Q2[1:]], 1,
                        1e4, (0.0, clear * 1e4), "H_coll_pusher_chain")
         pushing = set(self.push_steps.tolist())
         free = np.array([t for t in range(1, N + 1) if t not in pushing], dtype=int)
-        if s.swept_samples > 0 and len(free):
-            k = s.swept_samples
+        if s.row("swept").samples > 0 and len(free):
+            k = s.row("swept").samples
             self._add_rows(SweptClearance(target, self.pusher, k),
                            [Q3[free], self.Q2[free - 1], self.Q2[free]], k, 100,
-                           (-100 * s.swept_tolerance, np.inf), "swept_chain")
+                           (-100 * s.row("swept").tolerance, np.inf), "swept_chain")
         for spec in self.scene.obstacles:
             wall = self.scene.bodies[spec.name]
-            self._add_rows(FixedCollision(target, wall, s.a_coll), [Q3[1:]], 1, 1e4, (0.0,
-                           s.obstacle_overlap * 1e4), f"H_coll_{spec.name}_chain")
+            self._add_rows(FixedCollision(target, wall, coll.a), [Q3[1:]], 1, 1e4, (0.0,
+                           s.row("H_coll_obstacles").overlap * 1e4), f"H_coll_{spec.name}_chain")
         self.chain_dynamics = None
         if not len(self.chain_steps):
             return
@@ -140,14 +141,15 @@ class ChainPushProgram(PushProgram):
             return
         self.chain_dynamics = self._add_dynamics(model, (target, Q3), (obj, Q1),
                                                  self.guess["q_chain"], "H_F_chain")
-        if s.cone_in_learned and s.push_friction > 0:
-            self._add_object_push(turn=s.turn_in_learned)
+        if s.row("friction_cone").active and s.row("quasi_static").friction > 0:
+            self._add_object_push(turn=s.row("friction_cone").turn)
 
     def _add_object_push(self, turn: bool) -> None:
         """QuasiStaticObjectPush rows of the target at ``p_chain`` in chained push steps."""
         target, k = self.target, self.chain_steps
-        radius = turning_radius(target.shape, self.settings.turn_gain)
-        H = QuasiStaticObjectPush(target, radius, self.settings.push_friction, turn=turn)
+        push = self.settings.row("quasi_static")
+        radius = turning_radius(target.shape, push.turn_gain)
+        H = QuasiStaticObjectPush(target, radius, push.friction, turn=turn)
         self._add_quasi_static_rows(H, [self.Q3[k - 1], self.Q3[k], self.P3], "_chain")
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from robotplan.functionals.dynamics import LearnedDynamics, phase_quadrature
+from robotplan.functionals.dynamics import QUADRATURE_COARSE, LearnedDynamics, phase_quadrature
 from robotplan.functionals.framed_dynamics import FramedDynamics, field_dynamics
 from robotplan.functionals.rigid_dynamics import RigidDynamics
 from robotplan.models.dynamics import PushDynamics
@@ -59,7 +59,7 @@ class DynamicsRows(ProgramRows):
         else:
             quad = phase_quadrature(torch.as_tensor(path[:, :2], dtype=torch.float32),
                                     obj.shape.bound_radius, self.scene.workspace,
-                                    coarse=s.quad_coarse)
+                                    coarse=QUADRATURE_COARSE)
             dynamics = field_dynamics(model, obj, actor, quad)
         N, d = self.N, Q_actor.shape[1]
         scale = mm2_per_unit(dynamics, self.scene)
@@ -83,16 +83,16 @@ class DynamicsRows(ProgramRows):
             return values, J
 
         variables = np.concatenate((Q_obj.ravel(), Q_actor.ravel()))
-        if s.dynamics_weight > 0:
+        if s.row("H_F").weight > 0:
             def total(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
                 values, J = fn(x, jac)
-                w = s.dynamics_weight
+                w = s.row("H_F").weight
                 return (np.array([w * values.sum()]),
                         None if J is None else w * J.sum(axis=0, keepdims=True))
 
             self._add_cost(total, variables, name)
             return dynamics
-        bound = (s.dynamics_rmse * 1e3) ** 2
+        bound = (s.row("H_F").rmse * 1e3) ** 2
         self.prog.AddConstraint(bridge(fn, self.timings, name), np.zeros(N), np.full(N, bound),
                                 variables, name)
         return dynamics

@@ -6,13 +6,13 @@ points ``p (·, 2)``. State 0 is the scene's start. Through the fast evaluators,
 callback per functional covering every step:
 
 * H_F (learned dynamics, eq. 5) in every step: a cost on the mean squared SDF residual
-  (``dynamics_weight``), or a bound on it;
+  (``H_F.weight``), or a bound on it;
 * H_coll (eq. 7) between pusher and object in every step, bounded by what a face contact
-  costs in push steps and by ``reach_clearance`` of free space in the other steps; along
+  costs in push steps and by ``H_coll.clearance`` of free space in the other steps; along
   each free move of a free pusher, its gap to the object (SweptClearance) at a few points;
 * H_PoC (eq. 9, decision-variable form) in push steps: φ_obj(p) = φ_pusher(p) = 0;
-* H_g (eq. 8) at the last state: at most ``goal_tol`` of the object's area outside the goal
-  region shrunk by ``goal_inset``;
+* H_g (eq. 8) at the last state: at most ``goal.tol`` of the object's area outside the goal
+  region shrunk by ``goal.inset``;
 * the object holds still in reach phases.
 
 Costs: squared accelerations of the pusher and of the contact points, with the prefix
@@ -86,7 +86,7 @@ class PushProgram(PushRows):
         self.model, self.dynamics = model, None
         # the rows of the table (skeletons/rows.yaml) of this stage, in its order
         for spec in rows_for_stage(learned=model is not None):
-            if spec.enabled is None or getattr(settings, spec.enabled):
+            if spec.enabled is None or settings.value(spec.enabled):
                 self.add_row(spec)
 
     # ------------------------------------------------------------------ hooks

@@ -54,14 +54,14 @@ ROW_BUILDERS = {  # a row of skeletons/rows.yaml → the PushRows method that ad
 
 def region_goal(body: Body, region: Body, settings: ProgramSettings) -> GoalRegion:
     """H_g of ``body`` in the goal ``region`` as the program's goal row has it: the region
-    shrunk by ``goal_inset`` (at most a third of the room the body has at its centre), so
+    shrunk by ``goal.inset`` (at most a third of the room the body has at its centre), so
     that a plan ends deeper inside and tolerates execution error; the row bounds H_g over
-    the body's area by ``goal_tol``."""
+    the body's area by ``goal.tol``."""
     origin = torch.zeros(1, 2, dtype=torch.float64)
     extent = np.ptp(body.shape.outline(), axis=0).max() / 2
     room = -float(region.shape.sdf(origin)[0]) - extent
-    inset = min(settings.goal_inset, max(0.0, room / 3))
-    return GoalRegion(body, region, a=settings.a_goal, inset=inset)
+    inset = min(settings.row("goal").inset, max(0.0, room / 3))
+    return GoalRegion(body, region, a=settings.row("goal").a, inset=inset)
 
 
 class PushRows(DynamicsRows):
@@ -73,17 +73,18 @@ class PushRows(DynamicsRows):
         getattr(self, ROW_BUILDERS[spec.row])(spec)
 
     def _row_step_limits(self, spec: RowSpec) -> None:
-        """The kinematic stage's step limits (``warm_max_step``, ``warm_max_turn``)."""
-        self._add_step_limits(self.settings.warm_max_step, self.settings.warm_max_turn)
+        """The kinematic stage's step limits (the row's ``step`` and ``turn``)."""
+        limits = self.settings.row("step_limits")
+        self._add_step_limits(limits.step, limits.turn)
 
     def _row_friction_cone(self, spec: RowSpec) -> None:
         """The learned stage's quasi-static rows: the cone, the turning law with
-        ``turn_in_learned``."""
-        if self.settings.push_friction > 0 and len(self.push_steps):
-            self._add_quasi_static(turn=self.settings.turn_in_learned, scale=spec.scale)
+        ``friction_cone.turn``."""
+        if self.settings.row("quasi_static").friction > 0 and len(self.push_steps):
+            self._add_quasi_static(turn=self.settings.row("friction_cone").turn, scale=spec.scale)
 
     def _row_quasi_static(self, spec: RowSpec) -> None:
-        if len(self.push_steps) and self.settings.push_friction > 0:
+        if len(self.push_steps) and self.settings.row("quasi_static").friction > 0:
             self._add_quasi_static(turn=True, scale=spec.scale)
 
     def _row_object_motion(self, spec: RowSpec) -> None:
@@ -101,17 +102,18 @@ class PushRows(DynamicsRows):
                 self._hold(self.Q1, t)
 
     def _clear_overlap(self) -> float:
-        """H_coll of the actor ``reach_clearance`` off a face (m²)."""
+        """H_coll of the actor ``H_coll.clearance`` off a face (m²)."""
         s = self.settings
-        return face_contact_overlap(self.pusher, s.a_coll, -s.reach_clearance)
+        return face_contact_overlap(self.pusher, s.row("H_coll").a, -s.row("H_coll").clearance)
 
     def _add_collision(self, spec: RowSpec) -> None:
         """H_coll in every step: at most a pressed-in face contact in push steps, and
-        ``reach_clearance`` of free space in the other steps (the pusher follows straight
+        ``H_coll.clearance`` of free space in the other steps (the pusher follows straight
         lines between the planned points; brushing the object on the way turns it)."""
-        s, k = self.settings, spec.scale
-        H = Collision(self.obj, self.pusher, a=s.a_coll)
-        touch = max(s.coll_area, face_contact_overlap(self.pusher, s.a_coll, s.coll_depth))
+        k, coll = spec.scale, self.settings.row("H_coll")
+        H = Collision(self.obj, self.pusher, a=coll.a)
+        touch = max(coll.contact_area,
+                    face_contact_overlap(self.pusher, coll.a, coll.contact_depth))
         ub = np.full(self.N, self._clear_overlap())
         ub[self.push_steps - 1] = touch
         if self.task.goal == "touch":
@@ -120,46 +122,47 @@ class PushRows(DynamicsRows):
 
     def _add_swept(self, spec: RowSpec) -> None:
         """Along each free move of a free pusher, its gap to the object at a few points (and
-        after the solve at points ``swept_check_spacing`` apart: :meth:`swept_shortfall`)."""
+        after the solve at points ``swept.check_spacing`` apart: :meth:`swept_shortfall`)."""
         s, scale = self.settings, spec.scale
         pushing = set(self.push_steps.tolist())
         free = np.array([t for t in range(1, self.N + 1) if t not in pushing], dtype=int)
-        if self.planar_pusher and s.swept_samples > 0 and len(free):
+        if self.planar_pusher and s.row("swept").samples > 0 and len(free):
             self._swept_check = (free, scale)
-            # the object holds still in these steps (hold_while_reaching): its pose at t
-            k = s.swept_samples
+            # the object holds still in these steps (hold_object.active): its pose at t
+            k = s.row("swept").samples
             self._add_rows(SweptClearance(self.obj, self.pusher, k),
                            [self.Q1[free], self.Q2[free - 1], self.Q2[free]], k, scale,
-                           (-scale * s.swept_tolerance, np.inf), spec.row)
+                           (-scale * s.row("swept").tolerance, np.inf), spec.row)
 
     def swept_shortfall(self, q_obj: np.ndarray, q_pusher: np.ndarray) -> float:
         """How far (in the swept row's scaled units) the plan's moves cross the object, at
-        points ``swept_check_spacing`` apart: free moves beyond ``swept_check_depth`` (the
+        points ``swept.check_spacing`` apart: free moves beyond ``swept.check_depth`` (the
         row's samples miss it in long moves), push steps' moves seen from the object beyond
-        ``push_check_depth`` (rows hold at their end states only). 0 without the row."""
+        ``swept.push_check_depth`` (rows hold at their end states only). 0 without the row."""
         check = getattr(self, "_swept_check", None)
         s = self.settings
-        if check is None or s.swept_check_spacing is None:
+        if check is None or s.row("swept").check_spacing is None:
             return 0.0
         free, scale = check
         q1, q2 = torch.from_numpy(q_obj), torch.from_numpy(q_pusher[:, :2])
-        depth = partial(crossing_depth, self.obj, self.pusher, spacing=s.swept_check_spacing,
-                        samples=s.swept_samples)
-        beyond = depth(q1[free], q2[free - 1], q2[free]) - s.swept_check_depth
+        depth = partial(crossing_depth, self.obj, self.pusher, spacing=s.row("swept").check_spacing,
+                        samples=s.row("swept").samples)
+        beyond = depth(q1[free], q2[free - 1], q2[free]) - s.row("swept").check_depth
         push = self.push_steps
         if len(push):
             start = carry_with_body(q2[push - 1, None], q1[push - 1], q1[push])[:, 0]
-            beyond = max(beyond, depth(q1[push], start, q2[push]) - s.push_check_depth)
+            beyond = max(beyond, depth(q1[push], start, q2[push]) - s.row("swept").push_check_depth)
         return scale * max(0.0, beyond)
 
     def _add_obstacle_collision(self, spec: RowSpec) -> None:
         """H_coll of the object and of the actor with every obstacle, in every step."""
-        s, k = self.settings, spec.scale
+        a, k = self.settings.row("H_coll").a, spec.scale
+        overlap = self.settings.row("H_coll_obstacles").overlap
         for obstacle in self.scene.obstacles:
             wall = self.scene.bodies[obstacle.name]
-            self._add_rows(FixedCollision(self.obj, wall, s.a_coll), [self.Q1[1:]], 1, k,
-                           (0.0, s.obstacle_overlap * k), f"H_coll_{obstacle.name}")
-            self._add_rows(FixedCollision(self.pusher, wall, s.a_coll), [self.Q2[1:]], 1, k,
+            self._add_rows(FixedCollision(self.obj, wall, a), [self.Q1[1:]], 1, k,
+                           (0.0, overlap * k), f"H_coll_{obstacle.name}")
+            self._add_rows(FixedCollision(self.pusher, wall, a), [self.Q2[1:]], 1, k,
                            (0.0, self._clear_overlap() * k), f"H_coll_{obstacle.name}_pusher")
 
     def _add_contact(self, spec: RowSpec) -> None:
@@ -170,8 +173,8 @@ class PushRows(DynamicsRows):
                            0.0), spec.row)
 
     def _add_lever_cost(self, spec: RowSpec) -> None:
-        """``lever_weight`` · Σ (lever arm in cm)² over push steps (see PushLever)."""
-        w = self.settings.lever_weight
+        """``lever.weight`` · Σ (lever arm in cm)² over push steps (see PushLever)."""
+        w = self.settings.row("lever").weight
         if w <= 0 or not len(self.push_steps):
             return
         H = PushLever(centroid(self.obj.shape.outline()))
@@ -187,11 +190,11 @@ class PushRows(DynamicsRows):
     def _add_quasi_static(self, turn: bool, scale: float = 100.0) -> None:
         """QuasiStaticPush rows in every push step: the friction cone, and with ``turn`` the
         limit surface's turning rate (the kinematic stage, and the learned stage with
-        ``turn_in_learned``; otherwise the learned stage keeps the cone only and H_F alone
+        ``friction_cone.turn``; otherwise the learned stage keeps the cone only and H_F alone
         decides how the object turns)."""
         c_B = centroid(self.obj.shape.outline())
-        radius = turning_radius(self.obj.shape, self.settings.turn_gain)
-        H = QuasiStaticPush(c_B, radius, self.settings.push_friction, turn=turn)
+        radius = turning_radius(self.obj.shape, self.settings.row("quasi_static").turn_gain)
+        H = QuasiStaticPush(c_B, radius, self.settings.row("quasi_static").friction, turn=turn)
         k = self.push_steps
         self._add_quasi_static_rows(H, [self.Q1[k - 1], self.Q1[k], self.Q2[k], self.P],
                                     scale=scale)
@@ -235,10 +238,10 @@ class PushRows(DynamicsRows):
             return
         if self.task.goal == "pose":
             # the object's own footprint at the target pose: each component of the pose
-            # error within tol/√3 (cm), so that at most goal_tol of the area is off target
+            # error within tol/√3 (cm), so that at most goal.tol of the area is off target
             outline = self.goal_body.shape.outline()
             H = PoseError(outline, tuple(self.scene.goal.pose))
-            bound = 100 * H.tolerance(outline, self.settings.goal_tol) / np.sqrt(3)
+            bound = 100 * H.tolerance(outline, self.settings.row("goal").tol) / np.sqrt(3)
             self._add_rows(H, [self.goal_Q[self.N:]], 3, 100, (-bound, bound), "H_pose")
             return
         if self.region is None:
@@ -255,7 +258,7 @@ class PushRows(DynamicsRows):
             return r[:, 0].numpy() * scale, J[:, 0].numpy() * scale
 
         self.prog.AddConstraint(bridge(fn, self.timings, "H_g"), np.zeros(1),
-                                np.array([self.settings.goal_tol]),
+                                np.array([self.settings.row("goal").tol]),
                                 self.goal_Q[self.N], "H_g")
 
     def _add_costs(self, spec: RowSpec) -> None:
@@ -274,6 +277,6 @@ class PushRows(DynamicsRows):
             self.prog.AddQuadraticCost(2 * weight * D.T @ D, np.zeros(2 * n), Q.ravel(),
                                        is_convex=True)
 
-        accel_cost(self.Q2, self.settings.accel_weight, prefix=True)
+        accel_cost(self.Q2, self.settings.row("acceleration").actor, prefix=True)
         if len(self.P):
-            accel_cost(self.P, self.settings.contact_accel_weight, prefix=False)
+            accel_cost(self.P, self.settings.row("acceleration").contact, prefix=False)

@@ -1,10 +1,12 @@
 """The table of a push program's rows (``skeletons/rows.yaml``): which functional couples
-which bodies in which steps, as which kind of row, at which scale, in which stage. One
-builder (:class:`~robotplan.program.push_program.PushProgram`) reads it."""
+which bodies in which steps, as which kind of row, at which scale, in which stage, with
+which constants. One builder (:class:`~robotplan.program.push_program.PushProgram`) reads
+it; the arm program adds its rows (stage ``arms``) after the table's."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
 from typing import Literal
@@ -12,9 +14,11 @@ from typing import Literal
 import yaml
 
 from robotplan.base.resources import skeletons_dir
-from robotplan.scene.reader import read
+from robotplan.scene.reader import SchemaError, read, show
 
-__all__ = ["RowSpec", "load_rows", "rows_for_stage"]
+__all__ = ["RowSpec", "load_rows", "row_parameters", "rows_for_stage"]
+
+Param = float | bool | None
 
 
 @dataclass(frozen=True)
@@ -27,8 +31,9 @@ class RowSpec:
     type: Literal["eq", "ineq", "cost"]
     scale: float
     bounds: str
-    stage: Literal["kinematic", "learned", "both"]
+    stage: Literal["kinematic", "learned", "both", "arms"]
     enabled: str | None = None
+    params: dict[str, Param] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -36,12 +41,51 @@ class RowTable:
     rows: list[RowSpec]
 
 
+def _check_params(row: int, params: object) -> dict[str, Param]:
+    """A row's ``params``: names to numbers, booleans or null."""
+    where = f"rows[{row}].params"
+    if not isinstance(params, dict):
+        raise SchemaError(where, f"must map names to values, got {show(params)}")
+    for name, value in params.items():
+        if not isinstance(name, str) or not name.isidentifier():
+            raise SchemaError(where, f"{show(name)} is not a parameter name")
+        if value is not None and not isinstance(value, bool | int | float):
+            raise SchemaError(f"{where}.{name}", f"must be a number, true/false or null, got "
+                              f"{show(value)}")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise SchemaError(f"{where}.{name}", f"must be finite, got {value}")
+    return {k: float(v) if isinstance(v, int) and not isinstance(v, bool) and
+            not _whole(k) else v for k, v in params.items()}
+
+
+def _whole(name: str) -> bool:
+    """Parameters that count things (``samples``) stay integers."""
+    return name == "samples"
+
+
 @cache
 def load_rows(path: Path | None = None) -> tuple[RowSpec, ...]:
     """The rows of the table in ``path`` (default ``skeletons/rows.yaml``), in order."""
     path = path or skeletons_dir() / "rows.yaml"
-    table = read(RowTable, yaml.safe_load(path.read_text()))
-    return tuple(table.rows)
+    data = yaml.safe_load(path.read_text())
+    rows = (data or {}).get("rows") if isinstance(data, dict) else None
+    params = [r.pop("params", {}) if isinstance(r, dict) else {} for r in rows or []]
+    table = read(RowTable, data)
+    out = tuple(RowSpec(**{**spec.__dict__, "params": _check_params(i, p)})
+                for i, (spec, p) in enumerate(zip(table.rows, params, strict=True)))
+    seen: dict[str, dict] = {}
+    for i, spec in enumerate(out):
+        if spec.row in seen and spec.params != seen[spec.row]:
+            raise SchemaError(f"rows[{i}].params", f"row {spec.row!r} has other parameters "
+                              "where it appears before")
+        seen[spec.row] = spec.params
+    return out
+
+
+def row_parameters(path: Path | None = None) -> dict[str, Param]:
+    """Every row's constants as ``ROW.NAME`` → value, in table order."""
+    return {f"{spec.row}.{name}": value for spec in load_rows(path)
+            for name, value in spec.params.items()}
 
 
 def rows_for_stage(learned: bool, path: Path | None = None) -> list[RowSpec]:

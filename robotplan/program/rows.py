@@ -30,9 +30,10 @@ class ProgramRows:
                                                    Q.ravel())
 
     def _add_motion_cost(self, Q: np.ndarray) -> None:
-        """``object_motion_weight`` · Σ_t |Δq_t|² of poses ``Q`` (yaw in ``turn_length`` m)."""
-        w = self.settings.object_motion_weight
-        scale = np.array([1.0, 1.0, self.settings.turn_length])
+        """``object_motion.weight`` · Σ_t |Δq_t|² of poses ``Q`` (yaw in
+        ``object_motion.turn_length`` m)."""
+        w = self.settings.row("object_motion").weight
+        scale = np.array([1.0, 1.0, self.settings.row("object_motion").turn_length])
         D = np.hstack((np.diag(scale), -np.diag(scale)))
         for t in range(1, self.N + 1):
             self.prog.AddQuadraticCost(2 * w * D.T @ D, np.zeros(6),

@@ -33,7 +33,7 @@ __all__ = ["FIT_SHARE", "FIT_TOLERANCE", "INIT_DIRECTIONS_DEG", "STANDOFF", "Fac
 
 MIN_FACE = 0.02  # m: shorter edges of the outline (a disc's facets) are not pushed
 FACE_MARGIN = 0.2  # share of a face kept free at either end: contacts nearer a corner slide
-STANDOFF = 0.015  # m between the pusher and the face where a reach ends (≥ reach_clearance)
+STANDOFF = 0.015  # m between the pusher and the face where a reach ends (≥ H_coll.clearance)
 FIT_TOLERANCE = 0.004  # m of pose error (yaw as c·Δθ) a fit may leave to the program
 # share of the pose error from the start that a fit may leave: near the target a push that
 # leaves 4 mm is one the program cannot close to the pose goal's tolerance, so a small

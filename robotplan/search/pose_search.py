@@ -46,7 +46,7 @@ __all__ = ["pose_candidates", "pose_guess", "region_target", "search_pose", "sea
 
 MAX_STEPS_PER_PHASE = 30
 YAW_STEP_DEG = 5.0  # the turns tried for a region goal's target
-REGION_SLACK = 0.5  # share of goal_tol that H_g may reach at a region goal's target
+REGION_SLACK = 0.5  # share of goal.tol that H_g may reach at a region goal's target
 
 
 def region_target(task: PushTask, settings: ProgramSettings
@@ -54,7 +54,7 @@ def region_target(task: PushTask, settings: ProgramSettings
     """A target pose ``(x, y, yaw)`` of the task's object for the region goal's fitted pushes: its
     footprint's centroid on the region's, turned from its start yaw by the least multiple
     of YAW_STEP_DEG at which the program's goal row (H_g over the area, eq. 8) is at most
-    REGION_SLACK of ``goal_tol`` (else within 10 % of its least); None when at every turn
+    REGION_SLACK of ``goal.tol`` (else within 10 % of its least); None when at every turn
     half the footprint or more lies outside."""
     region, body = task.region, task.scene.bodies[task.obj]
     c_B, c_R = centroid(body.shape.outline()), centroid(region.outline_world())
@@ -68,7 +68,7 @@ def region_target(task: PushTask, settings: ProgramSettings
         return None
     # the least turn within the slack, or within 10 % of the least outside share (a box's
     # half turn and quarter turns leave it about the same)
-    fits = outside <= max(REGION_SLACK * settings.goal_tol, 1.1 * float(outside.min()))
+    fits = outside <= max(REGION_SLACK * settings.row("goal").tol, 1.1 * float(outside.min()))
     i = int(np.argmax(fits))
     return float(origins[i, 0]), float(origins[i, 1]), float(wrap_angle(float(yaws[i])))
 
@@ -158,7 +158,8 @@ def pose_candidates(task: PushTask, space: SkeletonSpace,
     guess's speed and the kinematic stage's turn per step); the turning law of
     ``settings``. A ``given`` skeleton fixes the faces' classes (its pushes' init points,
     object frame) and is fitted as well as it can be."""
-    gain, scene, obj, actor = settings.turn_gain, task.scene, task.obj, task.actors[0]
+    gain, scene, actor = settings.row("quasi_static").turn_gain, task.scene, task.actors[0]
+    obj = task.obj
     target = tuple(scene.goal.pose) if target is None else target
     fits: list[PosePushes] = []
     if given is not None:
@@ -177,7 +178,7 @@ def pose_candidates(task: PushTask, space: SkeletonSpace,
         return space, [], {}
     body = TurningBody(scene, obj, gain)
     T = max(space.steps_per_phase, max(_steps_for(body, f, settings.guess_speed,
-                                                  settings.warm_max_turn) for f in fits))
+                                                  settings.row("step_limits").turn) for f in fits))
     posed = replace(space, steps_per_phase=T, init_frame="object",
                     init_directions_deg=INIT_DIRECTIONS_DEG)
     skeletons, guesses = [], {}
@@ -244,7 +245,8 @@ def search_region_fits(request: SearchRequest, settings: ProgramSettings,
     to a pose inside the region (:func:`region_target`), planned with the turning gain the
     pose goals measured in pybullet (the `pose` overlay's ``turn_gain``). No time budget:
     the tier has at most four programs, and without it nothing plans."""
-    fitted = replace(settings, turn_gain=program_settings("pose").turn_gain)
+    gain = program_settings("pose").row("quasi_static").turn_gain
+    fitted = settings.with_values({"quasi_static.turn_gain": gain})
     target = region_target(request.task, fitted)
     if target is None:
         return space, SearchResult(None)

@@ -40,7 +40,7 @@ __all__ = ["Route", "centred_pushes", "face_routes", "routed_candidates"]
 ROUTE_CLEARANCE = 0.04  # m between the routed footprint and every obstacle
 ROUTE_LIMIT = 3  # routes tried: the shortest, fewest segments first
 # m: a route ends where the footprint (at its start yaw) lies this far inside the goal
-# region: beyond the region's inset that the program plans into (goal_inset, 2 cm)
+# region: beyond the region's inset that the program plans into (goal.inset, 2 cm)
 GOAL_INSIDE = 0.03
 MAX_STEPS_PER_PHASE = 30  # longer segments are split into several pushes
 

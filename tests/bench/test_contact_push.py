@@ -46,9 +46,9 @@ def test_the_still_start_moves_nothing_and_touches_the_pusher_surface():
 
 def test_the_program_holds_the_learned_row_and_the_goal_only():
     s = CONTACT_PUSH_SETTINGS
-    assert not (s.warm_start or s.with_collision or s.with_contact or s.cone_in_learned
-                or s.turn_in_learned)
-    assert s.lever_weight == 0 and s.dynamics_weight > 0
+    assert not (s.warm_start or s.with_collision or s.with_contact or s.row("friction_cone").active
+                or s.row("friction_cone").turn)
+    assert s.row("lever").weight == 0 and s.row("H_F").weight > 0
 
 
 @pytest.mark.slow

@@ -28,8 +28,10 @@ def build(text="push@2", kinematic=False, scene_file=TASKS / "box_push.yaml", ri
     model = None if kinematic else PushDynamics(DynamicsSpec(**TINY)).double()  # float64
     if rigid:
         model = RigidMotion(DynamicsSpec(kind="rigid", encoder="joint", **TINY)).double()
+    # a row's constant ROW.NAME is given as ROW__NAME
+    values = {name.replace("__", "."): value for name, value in settings.items()}
     return PushProgram(task, parse_skeleton(text, "pusher", "box"), model, space,
-                       ProgramSettings(**settings))
+                       ProgramSettings().with_values(values))
 
 
 def test_program_shape_and_initial_guess():
@@ -50,7 +52,7 @@ def test_program_shape_and_initial_guess():
     assert abs(gap - (prog.pusher.shape.radius - 0.001)) < 1e-6
     # H_F as a constraint instead
     names = {b.evaluator().get_description()
-             for b in build(dynamics_weight=0.0).prog.GetAllConstraints()}
+             for b in build(H_F__weight=0.0).prog.GetAllConstraints()}
     assert "H_F" in names
 
 
@@ -60,10 +62,10 @@ def test_learned_program_keeps_the_quasi_static_rows_asked_for():
 
     # the default: the cone and the limit surface's turning law in the learned stage too
     assert "quasi_static" in constraints() and "friction_cone" not in constraints()
-    cone = constraints(turn_in_learned=False)
+    cone = constraints(friction_cone__turn=False)
     assert "friction_cone" in cone and "quasi_static" not in cone
-    assert not {"friction_cone", "quasi_static"} & constraints(cone_in_learned=False)
-    assert not {"friction_cone", "quasi_static"} & constraints(push_friction=0.0)
+    assert not {"friction_cone", "quasi_static"} & constraints(friction_cone__active=False)
+    assert not {"friction_cone", "quasi_static"} & constraints(quasi_static__friction=0.0)
 
 
 def test_the_ablations_leave_out_h_coll_or_h_poc_in_both_stages():
@@ -87,7 +89,7 @@ def test_kinematic_program_replaces_h_f_by_sticking_contact():
     assert "H_F" not in costs and "lever" in costs
     sol = prog.solve()  # milliseconds per iteration: solve it for real
     assert sol.violation < 1e-3, sol.violations
-    n = prog.settings.warm_max_step
+    n = prog.settings.row("step_limits").step
     push = prog.push_steps
     assert np.abs(sol.q_pusher[push] - sol.q_pusher[push - 1]).max() <= n + 1e-6
     # the contact point keeps its place on the box between consecutive push steps
@@ -114,7 +116,7 @@ def test_the_initial_guess_moves_at_most_guess_speed():
                               "H_q-constraint"])
 def test_constraint_gradients_match_finite_differences(weight, rigid):
     prog = (build(kinematic=True) if weight is None
-            else build(dynamics_weight=weight, rigid=rigid))
+            else build(H_F__weight=weight, rigid=rigid))
     guess = prog.guess
     values = {}
     for v, x in ((prog.Q1, guess["q_obj"]), (prog.Q2, guess["q_pusher"]), (prog.P, guess["p"])):
@@ -152,8 +154,8 @@ def test_solve_skeleton_stops_where_the_kinematics_cannot_push():
     model = PushDynamics(DynamicsSpec(**TINY))
     sol = solve_skeleton(task, parse_skeleton("push@2", "pusher", "box"), model,
                          replace(load_skeleton_space(), init_frame="table"),
-                         ProgramSettings(warm_max_step=0.01, warm_max_turn=0.02,
-                                         warm_iterations=30, warm_restarts=0))
+                         ProgramSettings(warm_iterations=30, warm_restarts=0).with_values(
+                             {"step_limits.step": 0.01, "step_limits.turn": 0.02}))
     assert sol.violation > FEASIBLE and "kinematic stage infeasible" in sol.status
     assert "H_F" not in sol.timings and sol.dynamics_mm2.size == 0
 
@@ -287,7 +289,7 @@ def test_a_free_move_through_the_object_is_seen_by_the_dense_check():
     assert prog.swept_shortfall(q_obj, q_pusher) == 0.0
     x, y, _yaw = prog.obj.pose
     q_pusher[4], q_pusher[5] = (x - 0.3, y), (x + 0.3, y)
-    deep = 0.06 + prog.pusher.shape.radius - prog.settings.swept_check_depth
+    deep = 0.06 + prog.pusher.shape.radius - prog.settings.row("swept").check_depth
     assert prog.swept_shortfall(q_obj, q_pusher) == pytest.approx(100 * deep, rel=0.05)
     grazing = q_pusher.copy()  # along the box's long face, in its frame B
     x_obj, y_obj, yaw = q_obj[5]
@@ -300,7 +302,7 @@ def test_a_free_move_through_the_object_is_seen_by_the_dense_check():
     x_guess[prog.prog.FindDecisionVariableIndices(prog.Q2.ravel())] = q_pusher.ravel()
     worst, _ = prog.evaluate(x_guess)
     assert worst["swept"] >= prog.swept_shortfall(q_obj, q_pusher)
-    unchecked = build(kinematic=True, swept_check_spacing=None)
+    unchecked = build(kinematic=True, swept__check_spacing=None)
     assert unchecked.swept_shortfall(q_obj, q_pusher) == 0.0
 
 
@@ -323,7 +325,7 @@ def test_a_push_step_hopping_through_the_object_is_seen_by_the_dense_check():
     hop = q_pusher.copy()
     hop[t] = centre - (q_pusher[t] - centre)
     s = prog.settings
-    deep = min(prog.obj.shape.size) / 2 + prog.pusher.shape.radius - s.push_check_depth
+    deep = min(prog.obj.shape.size) / 2 + prog.pusher.shape.radius - s.row("swept").push_check_depth
     assert prog.swept_shortfall(q_obj, hop) >= 100 * deep * 0.95
 
     turned_obj, carried = q_obj.copy(), q_pusher.copy()
@@ -334,4 +336,4 @@ def test_a_push_step_hopping_through_the_object_is_seen_by_the_dense_check():
     in_table_frame = crossing_depth(
         prog.obj, prog.pusher, torch.from_numpy(turned_obj[t:t + 1]),
         torch.from_numpy(carried[t - 1:t]), torch.from_numpy(carried[t:t + 1]), 0.01)
-    assert in_table_frame > s.push_check_depth
+    assert in_table_frame > s.row("swept").push_check_depth

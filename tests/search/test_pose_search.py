@@ -64,7 +64,7 @@ def test_without_a_close_fit_the_fits_within_fit_tolerance_are_candidates(monkey
     _, close, _ = pose_candidates(task, space, settings)
     monkeypatch.setattr(pose_pushes, "FIT_SHARE", 0.0)
     fits = pose_pushes.fit_pose_pushes(task, tuple(scene.goal.pose),
-                                       turn_gain=settings.turn_gain)
+                                       turn_gain=settings.row("quasi_static").turn_gain)
     assert fits and not any(f.within for f in fits)
     _, loose, guesses = pose_candidates(task, space, settings)
     assert loose and set(loose) == set(guesses)
@@ -103,7 +103,7 @@ def test_a_region_target_meets_the_goal_row_with_the_least_turn():
     settings = settings_for(task)
     x, y, yaw = region_target(task, settings)
     assert np.allclose([x, y], [0.35, 0.02], atol=1e-9)  # a box's centroid is its origin
-    bound = REGION_SLACK * settings.goal_tol
+    bound = REGION_SLACK * settings.row("goal").tol
     assert _outside_share(scene, (x, y, yaw), settings) <= bound
     assert _outside_share(scene, (x, y, 0.5), settings) > bound
     turn = yaw - 0.5

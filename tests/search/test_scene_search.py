@@ -87,7 +87,7 @@ def test_a_warm_start_along_a_route_keeps_its_steps_and_the_routes_settings(monk
         progress=False, guesses={routed: guess}))
     settings, space = calls[0]
     assert space.steps_per_phase == 14
-    assert settings.push_friction == 0.02 and settings.lever_weight == 100.0
+    assert settings.row("quasi_static").friction == 0.02 and settings.row("lever").weight == 100.0
 
 
 def test_a_warm_started_search_plans_with_the_replan_overlay(monkeypatch):
@@ -167,7 +167,8 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
         states = len(sk.phases) * space.steps_per_phase + 1
         assert guesses[sk]["q_obj"].shape == (states, 3)
         assert abs(guesses[sk]["q_obj"][-1, 2] - (yaw + 0.8)) < 0.02  # the guess turns
-    assert settings.turn_gain != 1.0 and settings.goal_tol == 0.02  # the pose overlay
+    # the pose overlay
+    assert settings.row("quasi_static").turn_gain != 1.0 and settings.row("goal").tol == 0.02
     monkeypatch.setattr(pose_search, "pose_candidates", lambda *a, **k: (space, [], {}))
     search_module.search_scene(request)
     plain, plain_space, none, _ = calls[-1]
@@ -245,13 +246,15 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
     assert budgets[1] == (None, True)  # past the budget, the fits in their own order
     assert plain and none is None and fitted and set(guesses) == set(fitted)
     assert space.init_frame == "object"
-    assert settings.turn_gain == overlay("pose").turn_gain != 1.0
-    assert settings.goal_tol == search_module.settings_for(task).goal_tol  # the region's
+    gain = overlay("pose").row("quasi_static").turn_gain
+    assert settings.row("quasi_static").turn_gain == gain != 1.0
+    # the region's tolerance
+    assert settings.row("goal").tol == search_module.settings_for(task).row("goal").tol
     body = scene.bodies[scene.objects[0].name]
     H = region_goal(body, scene.goal_region, settings)
     for sk in fitted:
         end = torch.from_numpy(guesses[sk]["q_obj"][-1:].copy())
-        assert float(H(end)[0, 0]) / body.area <= settings.goal_tol  # ends in the region
+        assert float(H(end)[0, 0]) / body.area <= settings.row("goal").tol  # ends in the region
     assert all(id(s) in spaces for s in result.candidates)
 
     calls.clear()
