@@ -29,7 +29,7 @@ from robotplan.program.skeleton import SkeletonSpace
 from robotplan.program.solution import Solution
 from robotplan.program.solve import warm_guess
 from robotplan.scene import Scene
-from robotplan.scene.task import PushTask
+from robotplan.scene.task import PushTask, TaskPlan
 from robotplan.search.fallback import side_by_side, tail_and_fresh
 from robotplan.search.planner import merge_results
 from robotplan.search.request import SearchRequest
@@ -46,7 +46,7 @@ REPLAN_BUDGET = 20.0
 
 
 @dataclass
-class PushPlan:
+class PushPlan(TaskPlan):
     """The outcome of :meth:`PushPlanner.plan`: the best solution (None: nothing planned),
     whether it meets every constraint, every candidate solved, and the best one's skeleton
     space."""
@@ -62,10 +62,6 @@ class PushPlan:
     # the best plan rehearsed in F_q (:mod:`robotplan.execution.rehearsal`): what the open
     # loop runs; None when not rehearsed
     rehearsal: Rehearsal | None = None
-
-    @property
-    def scene(self) -> Scene:
-        return self.task.scene
 
     @property
     def obj(self) -> str:

@@ -16,8 +16,8 @@ from robotplan.scene.bodies import Body
 from robotplan.scene.loader import load_scene
 from robotplan.scene.schema import HangGoal, PusherSpec, Scene, TouchGoal
 
-__all__ = ["PUSH_CLASSES", "HangTask", "PushTask", "Task", "UnsupportedScene", "family_of",
-           "load_task", "make_task"]
+__all__ = ["PUSH_CLASSES", "HangTask", "PushTask", "Task", "TaskPlan", "UnsupportedScene",
+           "family_of", "load_task", "make_task"]
 
 PUSH_CLASSES = ("arms", "chains", "obstacles", "pose")
 """The classes a push task may belong to (:attr:`PushTask.classes`), each of which may have
@@ -108,6 +108,17 @@ class HangTask:
 
 
 Task = PushTask | HangTask
+
+
+@dataclass
+class TaskPlan:
+    """What a family's planner returns: its task first (``scene`` is the task's)."""
+
+    task: Task
+
+    @property
+    def scene(self) -> Scene:
+        return self.task.scene
 
 
 def _chain(scene: Scene) -> tuple[str, str] | None:

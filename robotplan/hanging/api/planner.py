@@ -33,7 +33,7 @@ from robotplan.hanging.search.optimise import optimise_hang
 from robotplan.hanging.viz.picture import write_hang_picture
 from robotplan.hanging.viz.viewer import write_hang_playback
 from robotplan.scene.schema import Scene
-from robotplan.scene.task import HangTask
+from robotplan.scene.task import HangTask, TaskPlan
 
 __all__ = [
     "HangExecution",
@@ -49,7 +49,7 @@ __all__ = [
 
 
 @dataclass
-class HangPlan:
+class HangPlan(TaskPlan):
     """The pose found for the mug, in the hook frame (``solution.pose``) and in the world."""
 
     task: HangTask
@@ -62,10 +62,6 @@ class HangPlan:
     # search's number of restarts
     search: tuple[HangProblem, np.random.Generator, int | None] | None = field(
         default=None, repr=False)
-
-    @property
-    def scene(self) -> Scene:
-        return self.task.scene
 
     @property
     def solved(self) -> bool:
