@@ -38,7 +38,7 @@ from robotplan.program.push_program import PushProgram
 from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import Solution
-from robotplan.scene import Scene
+from robotplan.scene.task import PushTask
 
 __all__ = ["ChainPushProgram", "chain_guess", "objects_touch", "touching_distance"]
 
@@ -46,10 +46,10 @@ __all__ = ["ChainPushProgram", "chain_guess", "objects_touch", "touching_distanc
 class ChainPushProgram(PushProgram):
     """A skeleton with chained push phases (``Phase.chain``) as one nonlinear program."""
 
-    def __init__(self, scene: Scene, skeleton: Skeleton, model: PushDynamics | None,
+    def __init__(self, task: PushTask, skeleton: Skeleton, model: PushDynamics | None,
                  space: SkeletonSpace, settings: ProgramSettings = DEFAULT_SETTINGS,
                  guess: dict[str, np.ndarray] | None = None) -> None:
-        super().__init__(scene, skeleton, model, space, settings, guess)
+        super().__init__(task, skeleton, model, space, settings, guess)
         self._add_chain(model)
 
     # ------------------------------------------------------------------ hooks
