@@ -80,8 +80,9 @@ class ArmPushProgram(PushProgram):
         if len(names) == 2:
             a, b = names
             H = ArmSeparation(self.kin[a], self.kin[b])
-            self._add_rows(H, [self.QJ[a][1:], self.QJ[b][1:]], 1, 100.0,
-                           (settings.row("arm_separation").gap * 100, np.inf), "arm_gap")  # cm
+            k = self.spec("arm_separation").scale  # cm
+            self._add_rows(H, [self.QJ[a][1:], self.QJ[b][1:]], 1, k,
+                           (settings.row("arm_separation").gap * k, np.inf), "arm_gap")
 
     # ------------------------------------------------------------ structure
     def _actors(self) -> list[str]:
@@ -118,28 +119,28 @@ class ArmPushProgram(PushProgram):
                 np.concatenate((Q[t], Q[t - 1])), is_convex=True)
         acting = [t for t in range(1, N + 1) if self.actor_of_state[t] == name]
         if acting:
-            self._add_rows(TipCoupling(kin), [Q[acting], self.Q2[acting]], 2, 100.0, (0.0, 0.0),
-                           f"tip_{name}")  # cm
+            self._add_rows(TipCoupling(kin), [Q[acting], self.Q2[acting]], 2,
+                           self.spec("tip_coupling").scale, (0.0, 0.0), f"tip_{name}")
         r, top = self.tip_radius, objects_top(self.scene)
-        height = s.row("tip_height")
+        height, k = s.row("tip_height"), self.spec("tip_height").scale  # cm
         low = self._push_states(name)
         if low:
-            self._add_rows(TipHeight(kin), [Q[low]], 1, 100.0, (r * 100, r * 100),
+            self._add_rows(TipHeight(kin), [Q[low]], 1, k, (r * k, r * k),
                            f"push_height_{name}")
         reaching = [t for t in acting if t not in low]
         if reaching:
-            self._add_rows(TipHeight(kin), [Q[reaching]], 1, 100.0, (r * 100, np.inf),
+            self._add_rows(TipHeight(kin), [Q[reaching]], 1, k, (r * k, np.inf),
                            f"above_table_{name}")
         # idle: lifted over the objects, from the second state after it last acted
         idle = [t for t in range(2, N + 1) if self.actor_of_state[t] != name
                 and self.actor_of_state[t - 1] != name]
         if idle:
-            self._add_rows(TipHeight(kin), [Q[idle]], 1, 100.0,
-                           ((top + height.idle_lift + r) * 100, np.inf), f"idle_lift_{name}")
+            self._add_rows(TipHeight(kin), [Q[idle]], 1, k,
+                           ((top + height.idle_lift + r) * k, np.inf), f"idle_lift_{name}")
         bounds = np.array([top + height.flange_clearance]
                           + [height.link_min] * (len(kin._frames) - 2))
-        self._add_rows(CheckPointHeights(kin), [Q[1:]], len(bounds), 100.0,
-                       (bounds[None] * 100, np.inf), f"links_{name}")
+        self._add_rows(CheckPointHeights(kin), [Q[1:]], len(bounds), k,
+                       (bounds[None] * k, np.inf), f"links_{name}")
 
     def _limit_tip_steps(self) -> None:
         """|Δx| per step and axis of the acting tip ≤ tip_reach.step while reaching and ≤

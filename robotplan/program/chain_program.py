@@ -106,51 +106,57 @@ class ChainPushProgram(PushProgram):
         face = min(np.ptp(b.shape.outline(), axis=0).min() for b in (obj, target))
         coll = s.row("H_coll")
         touch = face * (1.0 / coll.a + coll.contact_depth)
-        self._add_rows(Collision(obj, target, a=coll.a), [Q1[1:], Q3[1:]], 1, 1e4, (0.0,
-                       touch * 1e4), "H_coll_chain")  # cm²
+        k = self.spec("H_coll_chain").scale  # cm²
+        self._add_rows(Collision(obj, target, a=coll.a), [Q1[1:], Q3[1:]], 1, k, (0.0,
+                       touch * k), "H_coll_chain")
         clear = face_contact_overlap(self.pusher, coll.a, -coll.clearance)
+        k = self.spec("H_coll_pusher_chain").scale
         self._add_rows(Collision(target, self.pusher, a=coll.a), [Q3[1:], self.Q2[1:]], 1,
-                       1e4, (0.0, clear * 1e4), "H_coll_pusher_chain")
+                       k, (0.0, clear * k), "H_coll_pusher_chain")
         pushing = set(self.push_steps.tolist())
         free = np.array([t for t in range(1, N + 1) if t not in pushing], dtype=int)
         if s.row("swept").samples > 0 and len(free):
-            k = s.row("swept").samples
-            self._add_rows(SweptClearance(target, self.pusher, k),
-                           [Q3[free], self.Q2[free - 1], self.Q2[free]], k, 100,
-                           (-100 * s.row("swept").tolerance, np.inf), "swept_chain")
+            n, k = s.row("swept").samples, self.spec("swept_chain").scale
+            self._add_rows(SweptClearance(target, self.pusher, n),
+                           [Q3[free], self.Q2[free - 1], self.Q2[free]], n, k,
+                           (-k * s.row("swept").tolerance, np.inf), "swept_chain")
+        k = self.spec("H_coll_obstacles_chain").scale
         for spec in self.scene.obstacles:
             wall = self.scene.bodies[spec.name]
-            self._add_rows(FixedCollision(target, wall, coll.a), [Q3[1:]], 1, 1e4, (0.0,
-                           s.row("H_coll_obstacles").overlap * 1e4), f"H_coll_{spec.name}_chain")
+            self._add_rows(FixedCollision(target, wall, coll.a), [Q3[1:]], 1, k, (0.0,
+                           s.row("H_coll_obstacles").overlap * k), f"H_coll_{spec.name}_chain")
         self.chain_dynamics = None
         if not len(self.chain_steps):
             return
         steps = self.chain_steps
-        self._add_rows(ContactPoint(obj, target), [Q1[steps], Q3[steps], P3], 2, 100, (0.0, 0.0),
-                       "H_PoC_chain")  # cm
+        self._add_rows(ContactPoint(obj, target), [Q1[steps], Q3[steps], P3], 2,
+                       self.spec("H_PoC_chain").scale, (0.0, 0.0), "H_PoC_chain")  # cm
         if model is None:
             i = np.arange(1, len(steps))
             pairs = i[(steps[i] == steps[i - 1] + 1) & ((steps[i] - 1) % self.T != 0)]
             if len(pairs):
                 a, b = steps[pairs - 1], steps[pairs]
+                k = self.spec("sticking_chain").scale
                 for Q in (Q1, Q3):  # the contact point sticks to both objects
                     self._add_rows(StickingContact(), [Q[a], P3[pairs - 1], Q[b], P3[pairs]], 2,
-                                   100, (0.0, 0.0), "sticking_chain")
-            self._add_object_push(turn=True)
+                                   k, (0.0, 0.0), "sticking_chain")
+            self._add_object_push(turn=True, row="quasi_static_chain")
             self._add_motion_cost(Q3)
             return
         self.chain_dynamics = self._add_dynamics(model, (target, Q3), (obj, Q1),
                                                  self.guess["q_chain"], "H_F_chain")
         if s.row("friction_cone").active and s.row("quasi_static").friction > 0:
-            self._add_object_push(turn=s.row("friction_cone").turn)
+            self._add_object_push(turn=s.row("friction_cone").turn, row="friction_cone_chain")
 
-    def _add_object_push(self, turn: bool) -> None:
-        """QuasiStaticObjectPush rows of the target at ``p_chain`` in chained push steps."""
+    def _add_object_push(self, turn: bool, row: str) -> None:
+        """QuasiStaticObjectPush rows of the target at ``p_chain`` in chained push steps, at
+        the scale of the table's ``row``."""
         target, k = self.target, self.chain_steps
         push = self.settings.row("quasi_static")
         radius = turning_radius(target.shape, push.turn_gain)
         H = QuasiStaticObjectPush(target, radius, push.friction, turn=turn)
-        self._add_quasi_static_rows(H, [self.Q3[k - 1], self.Q3[k], self.P3], "_chain")
+        self._add_quasi_static_rows(H, [self.Q3[k - 1], self.Q3[k], self.P3], "_chain",
+                                    scale=self.spec(row).scale)
 
 
 def _world_outline(body, X: np.ndarray) -> torch.Tensor:

@@ -85,7 +85,7 @@ class PushProgram(PushRows):
         self._bound_to_workspace(self.Q1[:, :2], self.Q2, self.P)
         self.model, self.dynamics = model, None
         # the rows of the table (skeletons/rows.yaml) of this stage, in its order
-        for spec in rows_for_stage(learned=model is not None):
+        for spec in rows_for_stage(learned=model is not None, goal=task.goal):
             if spec.enabled is None or settings.value(spec.enabled):
                 self.add_row(spec)
 

@@ -46,7 +46,9 @@ ROW_BUILDERS = {  # a row of skeletons/rows.yaml → the PushRows method that ad
     "swept": "_add_swept",
     "H_coll_obstacles": "_add_obstacle_collision",
     "H_PoC": "_add_contact",
-    "goal": "_add_goal",
+    "goal": "_add_region_goal",
+    "H_pose": "_add_pose_goal",
+    "H_touch": "_add_touch_goal",
     "acceleration": "_add_costs",
     "lever": "_add_lever_cost",
 }
@@ -187,7 +189,7 @@ class PushRows(DynamicsRows):
 
         self._add_cost(total, variables, spec.row)
 
-    def _add_quasi_static(self, turn: bool, scale: float = 100.0) -> None:
+    def _add_quasi_static(self, turn: bool, scale: float) -> None:
         """QuasiStaticPush rows in every push step: the friction cone, and with ``turn`` the
         limit surface's turning rate (the kinematic stage, and the learned stage with
         ``friction_cone.turn``; otherwise the learned stage keeps the cone only and H_F alone
@@ -200,8 +202,9 @@ class PushRows(DynamicsRows):
                                     scale=scale)
 
     def _add_quasi_static_rows(self, H: QuasiStaticPush, blocks: list[np.ndarray],
-                               suffix: str = "", scale: float = 100.0) -> None:
-        """``H``'s rows on ``blocks``: [turn (= 0)], cone edge, cone edge (≥ 0), in cm."""
+                               suffix: str = "", *, scale: float) -> None:
+        """``H``'s rows on ``blocks``: [turn (= 0)], cone edge, cone edge (≥ 0), at
+        ``scale`` (the table's: cm)."""
         m = 3 if H.turn else 2
         lb, ub = np.zeros((1, m)), np.full((1, m), np.inf)
         if H.turn:
@@ -228,27 +231,29 @@ class PushRows(DynamicsRows):
                                                 self.Q2[self.push_steps], self.P],
                            1, spec.scale, (0.0, np.inf), spec.row)
 
-    def _add_goal(self, spec: RowSpec) -> None:
-        if self.task.goal == "touch":
-            # the touching tip is the last phase's actor; it ends on the object (H_PoC)
-            self.P_touch = self.prog.NewContinuousVariables(1, 2, "p_touch")
-            H = ContactPoint(self.obj, self.scene.bodies[self.task.touch_actor])
-            self._add_rows(H, [self.Q1[-1:], self.Q2[-1:], self.P_touch], 2, 100, (0.0, 0.0),
-                           "H_touch")  # cm, as H_PoC
-            return
-        if self.task.goal == "pose":
-            # the object's own footprint at the target pose: each component of the pose
-            # error within tol/√3 (cm), so that at most goal.tol of the area is off target
-            outline = self.goal_body.shape.outline()
-            H = PoseError(outline, tuple(self.scene.goal.pose))
-            bound = 100 * H.tolerance(outline, self.settings.row("goal").tol) / np.sqrt(3)
-            self._add_rows(H, [self.goal_Q[self.N:]], 3, 100, (-bound, bound), "H_pose")
-            return
+    def _add_touch_goal(self, spec: RowSpec) -> None:
+        """The touching tip is the last phase's actor; it ends on the object (H_PoC)."""
+        self.P_touch = self.prog.NewContinuousVariables(1, 2, "p_touch")
+        H = ContactPoint(self.obj, self.scene.bodies[self.task.touch_actor])
+        self._add_rows(H, [self.Q1[-1:], self.Q2[-1:], self.P_touch], 2, spec.scale,
+                       (0.0, 0.0), spec.row)
+
+    def _add_pose_goal(self, spec: RowSpec) -> None:
+        """The object's own footprint at the target pose: each component of the pose error
+        within tol/√3, so that at most ``H_pose.tol`` of the area is off target."""
+        outline = self.goal_body.shape.outline()
+        H = PoseError(outline, tuple(self.scene.goal.pose))
+        k = spec.scale
+        bound = k * H.tolerance(outline, self.settings.row("H_pose").tol) / np.sqrt(3)
+        self._add_rows(H, [self.goal_Q[self.N:]], 3, k, (-bound, bound), spec.row)
+
+    def _add_region_goal(self, spec: RowSpec) -> None:
+        """H_g (eq. 8) over the object's area at the last state ≤ ``goal.tol``."""
         if self.region is None:
             return
         body = self.goal_body
         H = region_goal(body, self.region, self.settings)
-        scale = 1.0 / body.area
+        scale = spec.scale / body.area
 
         def fn(x: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
             X = torch.from_numpy(x.reshape(1, 3))
@@ -258,7 +263,7 @@ class PushRows(DynamicsRows):
             return r[:, 0].numpy() * scale, J[:, 0].numpy() * scale
 
         self.prog.AddConstraint(bridge(fn, self.timings, "H_g"), np.zeros(1),
-                                np.array([self.settings.row("goal").tol]),
+                                np.array([spec.scale * self.settings.row("goal").tol]),
                                 self.goal_Q[self.N], "H_g")
 
     def _add_costs(self, spec: RowSpec) -> None:

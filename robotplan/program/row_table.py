@@ -1,7 +1,7 @@
 """The table of a push program's rows (``skeletons/rows.yaml``): which functional couples
 which bodies in which steps, as which kind of row, at which scale, in which stage, with
 which constants. One builder (:class:`~robotplan.program.push_program.PushProgram`) reads
-it; the arm program adds its rows (stage ``arms``) after the table's."""
+it; the arm and chain programs add their rows (stages ``arms``, ``chain…``) after these."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ import yaml
 from robotplan.base.resources import skeletons_dir
 from robotplan.scene.reader import SchemaError, read, show
 
-__all__ = ["RowSpec", "load_rows", "row_parameters", "rows_for_stage"]
+__all__ = ["RowSpec", "load_rows", "row_parameters", "row_spec", "rows_for_stage"]
 
 Param = float | bool | None
 
@@ -31,8 +31,10 @@ class RowSpec:
     type: Literal["eq", "ineq", "cost"]
     scale: float
     bounds: str
-    stage: Literal["kinematic", "learned", "both", "arms"]
+    stage: Literal["kinematic", "learned", "both", "arms", "chain", "chain_kinematic",
+                   "chain_learned"]
     enabled: str | None = None
+    goals: list[Literal["region", "pose", "touch"]] | None = None
     params: dict[str, Param] = field(default_factory=dict)
 
 
@@ -88,7 +90,18 @@ def row_parameters(path: Path | None = None) -> dict[str, Param]:
             for name, value in spec.params.items()}
 
 
-def rows_for_stage(learned: bool, path: Path | None = None) -> list[RowSpec]:
-    """The rows of the learned stage (with H_F) or of the kinematic one, in table order."""
+def row_spec(name: str) -> RowSpec:
+    """The row ``name`` of ``skeletons/rows.yaml`` (its first entry)."""
+    for spec in load_rows():
+        if spec.row == name:
+            return spec
+    raise KeyError(f"skeletons/rows.yaml has no row {name!r}")
+
+
+def rows_for_stage(learned: bool, goal: str | None = None,
+                   path: Path | None = None) -> list[RowSpec]:
+    """The rows of the learned stage (with H_F) or of the kinematic one, in table order;
+    with ``goal``, those for that goal kind."""
     stage = "learned" if learned else "kinematic"
-    return [r for r in load_rows(path) if r.stage in (stage, "both")]
+    return [r for r in load_rows(path) if r.stage in (stage, "both")
+            and (goal is None or r.goals is None or goal in r.goals)]

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from robotplan.program.bridge import bridge, stepwise, stepwise_sparsity
+from robotplan.program.row_table import RowSpec, row_spec
 
 __all__ = ["ProgramRows"]
 
@@ -13,6 +14,11 @@ __all__ = ["ProgramRows"]
 class ProgramRows:
     """Helpers of a program that has ``prog`` (a ``MathematicalProgram``), ``settings``,
     ``timings``, ``N`` states after the start and ``push_steps``."""
+
+    @staticmethod
+    def spec(row: str) -> RowSpec:
+        """The row ``row`` of the row table (its scale, its constants' names)."""
+        return row_spec(row)
 
     def _hold(self, Q: np.ndarray, t: int) -> None:
         """Pose row t of ``Q`` equals row t − 1."""

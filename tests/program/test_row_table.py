@@ -15,13 +15,29 @@ from tests.conftest import TASKS, assert_each_refused
 
 def test_every_row_of_the_table_has_a_builder_and_a_known_setting():
     rows = load_rows()
-    assert rows and all(r.row in ROW_BUILDERS for r in rows if r.stage != "arms")
+    added_after = ("arms", "chain", "chain_kinematic", "chain_learned")
+    assert rows and all(r.row in ROW_BUILDERS for r in rows if r.stage not in added_after)
     for r in rows:
         assert r.enabled is None or isinstance(DEFAULT_SETTINGS.value(r.enabled), bool)
-        assert set(r.bodies) <= {"object", "actor", "contact", "obstacles", "region", "joints"}
+        assert set(r.bodies) <= {"object", "actor", "contact", "obstacles", "region", "joints",
+                                 "chained"}
     kinematic, learned = rows_for_stage(False), rows_for_stage(True)
     assert "H_F" in [r.row for r in learned] and "H_F" not in [r.row for r in kinematic]
     assert "sticking" in [r.row for r in kinematic] and "sticking" not in [r.row for r in learned]
+
+
+def test_every_row_a_program_adds_is_a_row_of_the_table():
+    """The arm and chain programs name their rows after the table's: no row (and no scale)
+    of theirs lives in code alone."""
+    import re
+
+    names = {r.row for r in load_rows()}
+    program = TASKS.parent / "robotplan" / "program"
+    used = set()
+    for path in ("arm_program.py", "chain_program.py", "push_rows.py"):
+        used |= set(re.findall(r'self\.spec\("(\w+)"\)', (program / path).read_text()))
+    assert used and used <= names, used - names
+    assert {"H_coll_chain", "H_PoC_chain", "tip_height", "tip_coupling"} <= used
 
 
 def test_every_constant_of_the_table_is_read_by_the_program():
@@ -49,7 +65,7 @@ def test_row_constants_are_settings_overlays_and_users_change():
     from robotplan.program.row_table import row_parameters
 
     assert DEFAULT_SETTINGS.row("goal").tol == row_parameters()["goal.tol"] == 0.003
-    assert settings_for("pose").row("goal").tol == 0.02
+    assert settings_for("pose").row("H_pose").tol == 0.02
     moved = DEFAULT_SETTINGS.with_values({"goal.tol": 0.01, "iterations": 5})
     assert moved.row("goal").tol == 0.01 and moved.iterations == 5
     assert moved.row("goal").a == DEFAULT_SETTINGS.row("goal").a
@@ -79,7 +95,8 @@ def test_the_program_adds_the_rows_in_table_order(learned, monkeypatch):
         from robotplan.models.dynamics import load_model
         model = load_model(learned_dir())
     prog = PushProgram(task, sk, model, load_skeleton_space(), ProgramSettings())
-    expected = [r.row for r in rows_for_stage(learned)]
+    expected = [r.row for r in rows_for_stage(learned, task.goal)]
+    assert "goal" in expected and "H_pose" not in expected  # a region goal's rows
     assert added == expected
     names = [b.evaluator().get_description() for b in prog.prog.GetAllConstraints()]
     assert "H_coll" in names and "H_coll_wall" in names and "H_PoC" in names
@@ -87,9 +104,8 @@ def test_the_program_adds_the_rows_in_table_order(learned, monkeypatch):
 
     without = tuple(r for r in load_rows() if r.row != "swept")
     monkeypatch.setattr("robotplan.program.push_program.rows_for_stage",
-                        lambda learned: [r for r in without
-                                         if r.stage in ("both", "learned" if learned
-                                                        else "kinematic")])
+                        lambda learned, goal: [r for r in rows_for_stage(learned, goal)
+                                               if r in without])
     prog = PushProgram(task, sk, model, load_skeleton_space(), ProgramSettings())
     assert "swept" not in {b.evaluator().get_description()
                            for b in prog.prog.GetAllConstraints()}

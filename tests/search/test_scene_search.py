@@ -168,7 +168,7 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
         assert guesses[sk]["q_obj"].shape == (states, 3)
         assert abs(guesses[sk]["q_obj"][-1, 2] - (yaw + 0.8)) < 0.02  # the guess turns
     # the pose overlay
-    assert settings.row("quasi_static").turn_gain != 1.0 and settings.row("goal").tol == 0.02
+    assert settings.row("quasi_static").turn_gain != 1.0 and settings.row("H_pose").tol == 0.02
     monkeypatch.setattr(pose_search, "pose_candidates", lambda *a, **k: (space, [], {}))
     search_module.search_scene(request)
     plain, plain_space, none, _ = calls[-1]
