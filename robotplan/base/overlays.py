@@ -12,7 +12,7 @@ from typing import TypeVar
 
 import yaml
 
-__all__ = ["apply_overlays", "parse_overrides", "read_overlays"]
+__all__ = ["apply_overlays", "check_overlays", "parse_overrides", "read_overlays"]
 
 S = TypeVar("S")
 
@@ -31,22 +31,29 @@ def read_overlays(path: Path, defaults: object, classes: tuple[str, ...],
     a value of its type (an int where a float is expected is fine). Raises ValueError
     naming the file and the field; ``what`` says what the fields are (e.g. "program
     setting")."""
-    data = yaml.safe_load(path.read_text()) or {}
+    return check_overlays(yaml.safe_load(path.read_text()) or {}, defaults, classes, what,
+                          str(path))
+
+
+def check_overlays(data: object, defaults: object, classes: tuple[str, ...] | None,
+                   what: str, where: str) -> dict[str, dict]:
+    """:func:`read_overlays` of data already read (``where`` names it in messages;
+    ``classes`` None: any name)."""
     if not isinstance(data, dict):
-        raise ValueError(f"{path}: must map scene classes to overlays")
+        raise ValueError(f"{where}: must map scene classes to overlays")
     known = _defaults(defaults)
     for name, overlay in data.items():
-        if name not in classes:
-            raise ValueError(f"{path}: {name}: not a scene class; one of {classes}")
+        if classes is not None and name not in classes:
+            raise ValueError(f"{where}: {name}: not a scene class; one of {classes}")
         if not isinstance(overlay, dict):
-            raise ValueError(f"{path}: {name}: must map {what}s to values")
+            raise ValueError(f"{where}: {name}: must map {what}s to values")
         for key, value in overlay.items():
             if key not in known:
-                raise ValueError(f"{path}: {name}.{key}: not a {what}")
+                raise ValueError(f"{where}: {name}.{key}: not a {what}")
             default = known[key]
             if default is not None and type(value) is not type(default) and not (
                     isinstance(default, float) and type(value) is int):
-                raise ValueError(f"{path}: {name}.{key}: must be a {type(default).__name__}")
+                raise ValueError(f"{where}: {name}.{key}: must be a {type(default).__name__}")
     return data
 
 

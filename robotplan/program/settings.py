@@ -116,8 +116,8 @@ class ProgramSettings:
 
 
 DEFAULT_SETTINGS = ProgramSettings()  # the free pushers' settings
-# "replan": a search warm started from an earlier plan (the closed loop's re-plans), last
-SCENE_CLASSES = ("arms", "routes", "pose", "rigid", "replan")
+# the classes of the overlays (the re-plans' budget is a tier's: skeletons/tiers.yaml)
+SCENE_CLASSES = ("arms", "routes", "pose", "rigid")
 
 
 @cache

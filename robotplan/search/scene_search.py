@@ -32,10 +32,10 @@ from robotplan.search.pose_search import (
 )
 from robotplan.search.request import SearchRequest
 from robotplan.search.route import routed_candidates
-from robotplan.search.tiers import Tier, load_tiers
+from robotplan.search.tiers import Tier, budget_settings, load_budgets, load_tiers
 
 __all__ = ["budget_spent", "candidate_table", "candidate_tiers", "metres", "search_scene",
-           "settings_for"]
+           "task_settings"]
 
 
 def budget_spent(result: SearchResult, time_budget: float | None) -> bool:
@@ -140,7 +140,7 @@ def candidate_table(result: SearchResult, dynamics: str = "flow") -> str:
     return "\n".join(lines)
 
 
-def settings_for(task: PushTask, solver: str = "snopt", dynamics: str = "flow"
+def task_settings(task: PushTask, solver: str = "snopt", dynamics: str = "flow"
                  ) -> ProgramSettings:
     """The program settings of a task's actors (the arms' overlay, or the free pusher's),
     goal (the pose goals' overlay) and learned dynamics (F_q's overlay, ``rigid``)."""
@@ -233,14 +233,14 @@ def search_scene(request: SearchRequest) -> tuple[SearchResult, dict[int, Skelet
     :mod:`robotplan.search.tiers`): each tier the task and the request qualify for, while
     the result so far lets it run, until one ends the search; the result and each
     candidate's skeleton space (by ``id`` of its solution). A warm start
-    (``request.guesses``) solves with the re-plans' budget (the ``replan`` overlay); a
-    tier's ``replan`` budget is tried only in a re-plan (``request.replan``). The time
-    budget counts the seconds of the charged tiers."""
+    (``request.guesses``) solves with the re-plans' budget (``replan`` of the table's
+    budgets); a tier's ``replan`` budget is tried only in a re-plan (``request.replan``).
+    The time budget counts the seconds of the charged tiers."""
     task = request.task
-    own = with_overrides(settings_for(task, request.solver, dynamics_kind(request.model_dir)),
+    own = with_overrides(task_settings(task, request.solver, dynamics_kind(request.model_dir)),
                          request.program)
-    replan_budget = program_settings("replan", base=own)  # the re-plans' solver budget
-    named = {"own": replan_budget if request.guesses else own, "replan": replan_budget}
+    named = {name: budget_settings(name, own) for name in load_budgets()}
+    named["own"] = named["replan"] if request.guesses else own  # a warm start: a re-plan
     space = space_for(task)
     apart, charged, spaces = SearchResult(None), SearchResult(None), {}
     for tier in load_tiers():

@@ -11,11 +11,13 @@ from typing import Literal
 
 import yaml
 
+from robotplan.base.overlays import check_overlays
 from robotplan.base.resources import skeletons_dir
+from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings
 from robotplan.scene.reader import read
 from robotplan.search.request import SearchRequest
 
-__all__ = ["Tier", "TierCondition", "load_tiers"]
+__all__ = ["Tier", "TierCondition", "budget_settings", "load_budgets", "load_tiers"]
 
 
 @dataclass(frozen=True)
@@ -51,7 +53,7 @@ class Tier:
     candidates: Literal["pose_fits", "region_fits", "plain", "routes"]
     when: TierCondition = field(default_factory=TierCondition)
     runs: Literal["always", "unsolved", "unsolved_in_budget"] = "always"
-    budgets: list[Literal["own", "replan"]] = field(default_factory=lambda: ["own"])
+    budgets: list[str] = field(default_factory=lambda: ["own"])
     ends: Literal["never", "candidates", "settled", "solved"] = "never"
     charged: bool = True
 
@@ -65,4 +67,33 @@ class TierTable:
 def load_tiers(path: Path | None = None) -> tuple[Tier, ...]:
     """The tiers of ``path`` (default ``skeletons/tiers.yaml``), in order."""
     path = path or skeletons_dir() / "tiers.yaml"
-    return tuple(read(TierTable, yaml.safe_load(path.read_text())).tiers)
+    data = yaml.safe_load(path.read_text())
+    tiers = read(TierTable, {"tiers": (data or {}).get("tiers")} if isinstance(data, dict)
+                 else data).tiers
+    budgets = set(load_budgets(path)) | {"own"}
+    for i, tier in enumerate(tiers):
+        for name in tier.budgets:
+            if name not in budgets:
+                raise ValueError(f"{path}: tiers[{i}].budgets: {name!r} is not a budget; one "
+                                 f"of {sorted(budgets)}")
+    return tuple(tiers)
+
+
+@cache
+def load_budgets(path: Path | None = None) -> dict[str, dict]:
+    """The named budgets of ``path`` (``budgets:`` of ``skeletons/tiers.yaml``): program
+    settings a tier applies over the task's, checked against the settings' names."""
+    path = path or skeletons_dir() / "tiers.yaml"
+    data = yaml.safe_load(path.read_text()) or {}
+    budgets = data.get("budgets", {}) if isinstance(data, dict) else {}
+    if isinstance(budgets, dict) and "own" in budgets:
+        raise ValueError(f"{path}: budgets.own: 'own' is the task's settings, not a budget")
+    return check_overlays(budgets, DEFAULT_SETTINGS.values(), None, "program setting",
+                          f"{path}: budgets")
+
+
+def budget_settings(name: str, base: ProgramSettings) -> ProgramSettings:
+    """``base`` with the budget ``name`` applied, then the user's overrides ``base``
+    carries (they win over every budget)."""
+    settings = base.with_values(load_budgets()[name])
+    return settings.with_values(dict(settings.overrides)) if settings.overrides else settings

@@ -11,7 +11,7 @@ from robotplan.program.solution import FEASIBLE
 from robotplan.scene.loader import parse_scene
 from robotplan.scene.task import make_task
 from robotplan.search.pose_search import pose_candidates
-from robotplan.search.scene_search import settings_for
+from robotplan.search.scene_search import task_settings
 from tests.search.test_pose_pushes import BOX, scene_doc
 
 
@@ -20,7 +20,7 @@ def test_kinematic_program_solves_a_turn_from_the_fitted_guess():
     row exactly, and SNOPT's kinematic stage ends feasible from it."""
     task = make_task(parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)])))
     assert (task.obj, task.actors, task.goal) == ("object", ("pusher",), "pose")
-    settings = settings_for(task)
+    settings = task_settings(task)
     space, skeletons, guesses = pose_candidates(task, load_skeleton_space(), settings)
     assert skeletons
     sk = skeletons[0]
@@ -42,7 +42,7 @@ def test_a_given_skeleton_fixes_the_faces_of_the_fit():
     from robotplan.program.skeleton import parse_skeleton
 
     task = make_task(parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)])))
-    settings = settings_for(task)
+    settings = task_settings(task)
     given = parse_skeleton("push@1,push@2", "pusher", "object")
     space, skeletons, guesses = pose_candidates(task, load_skeleton_space(), settings,
                                                 given=given)
@@ -59,7 +59,7 @@ def test_without_a_close_fit_the_fits_within_fit_tolerance_are_candidates(monkey
 
     task = make_task(parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)])))
     scene = task.scene
-    settings = settings_for(task)
+    settings = task_settings(task)
     space = load_skeleton_space()
     _, close, _ = pose_candidates(task, space, settings)
     monkeypatch.setattr(pose_pushes, "FIT_SHARE", 0.0)
@@ -100,7 +100,7 @@ def test_a_region_target_meets_the_goal_row_with_the_least_turn():
 
     task = make_task(parse_scene(region_doc([0.22, 0.16], 0.5, [0.4, 0.4])))
     scene = task.scene
-    settings = settings_for(task)
+    settings = task_settings(task)
     x, y, yaw = region_target(task, settings)
     assert np.allclose([x, y], [0.35, 0.02], atol=1e-9)  # a box's centroid is its origin
     bound = REGION_SLACK * settings.row("goal").tol
@@ -119,7 +119,7 @@ def test_a_region_target_without_room_to_spare_takes_the_least_turn_to_the_best_
     from robotplan.search.pose_search import region_target
 
     task = make_task(parse_scene(region_doc([0.26, 0.18], 0.5, [0.4, 0.4])))
-    yaw = region_target(task, settings_for(task))[2]
+    yaw = region_target(task, task_settings(task))[2]
     assert abs(yaw) < math.radians(5.0)
 
 
@@ -127,7 +127,7 @@ def test_a_region_target_keeps_a_fitting_yaw_and_refuses_a_region_too_small():
     from robotplan.search.pose_search import region_target
 
     small = make_task(parse_scene(region_doc([0.1, 0.06], 0.37, [0.4, 0.4])))
-    settings = settings_for(small)
+    settings = task_settings(small)
     assert region_target(small, settings)[2] == pytest.approx(0.37)  # fits as is
     # larger than the 7 cm wide region in every direction: more than half outside at any yaw
     narrow = make_task(parse_scene(region_doc([0.18, 0.18], 0.0, [0.5, 0.07])))

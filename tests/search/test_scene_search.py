@@ -95,8 +95,8 @@ def test_a_warm_started_search_plans_with_the_replan_overlay(monkeypatch):
     over its scene's settings; the same search without a guess does not."""
     import numpy as np
 
-    from robotplan.program.settings import load_overlays
     from robotplan.program.skeleton import parse_skeleton
+    from robotplan.search.tiers import load_budgets
 
     calls = []
 
@@ -113,8 +113,8 @@ def test_a_warm_started_search_plans_with_the_replan_overlay(monkeypatch):
     search_module.search_scene(request.but(guesses={sk: guess}))
     search_module.search_scene(request)
     warm, fresh = calls
-    overlay = load_overlays()["replan"]
-    assert overlay, "skeletons/settings.yaml has a replan overlay"
+    overlay = load_budgets()["replan"]
+    assert overlay, "skeletons/tiers.yaml has a replan budget"
     for key, value in overlay.items():
         assert getattr(warm, key) == value, key
     assert any(getattr(fresh, key) != value for key, value in overlay.items())
@@ -180,7 +180,7 @@ def test_a_fresh_search_while_executing_a_pose_goal_plans_with_the_replan_overla
     ``replan`` overlay's budget, and where that solves nothing its own; a region goal's
     fresh search starts with its fitted pushes at that budget, then at its scene's
     settings, then the plain tier where nothing solves."""
-    from robotplan.program.settings import load_overlays
+    from robotplan.search.tiers import load_budgets
 
     calls = []
 
@@ -190,7 +190,7 @@ def test_a_fresh_search_while_executing_a_pose_goal_plans_with_the_replan_overla
 
     region, pose = _box_pose_goal(monkeypatch, record)
     model = TASKS.parent / "learned" / "push_rigid"
-    overlay = load_overlays()["replan"]
+    overlay = load_budgets()["replan"]
     for task in (pose, region):
         for replan in (False, True):
             calls.clear()
@@ -249,7 +249,7 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
     gain = overlay("pose").row("quasi_static").turn_gain
     assert settings.row("quasi_static").turn_gain == gain != 1.0
     # the region's tolerance
-    assert settings.row("goal").tol == search_module.settings_for(task).row("goal").tol
+    assert settings.row("goal").tol == search_module.task_settings(task).row("goal").tol
     body = scene.bodies[scene.objects[0].name]
     H = region_goal(body, scene.goal_region, settings)
     for sk in fitted:

@@ -113,3 +113,18 @@ def test_a_bad_tier_table_is_refused_naming_the_field(tmp_path):
     path.write_text("tiers:\n  - {name: x, candidates: plain, when: {arms: true}}\n")
     with pytest.raises(SchemaError, match=r"tiers\[0\]\.when"):
         load_tiers.__wrapped__(path)
+
+
+def test_a_tier_names_only_budgets_of_the_table(tmp_path):
+    from robotplan.search.tiers import load_budgets
+
+    path = tmp_path / "tiers.yaml"
+    path.write_text("budgets: {fast: {iterations: 5}}\n"
+                    "tiers:\n  - {name: x, candidates: plain, budgets: [fast, slow]}\n")
+    with pytest.raises(ValueError, match=r"tiers\[0\]\.budgets: 'slow' is not a budget"):
+        load_tiers.__wrapped__(path)
+    path.write_text("budgets: {fast: {no_such: 5}}\ntiers: []\n")
+    with pytest.raises(ValueError, match=r"budgets: fast\.no_such: not a program setting"):
+        load_budgets.__wrapped__(path)
+    path.write_text("budgets: {fast: {iterations: 5}}\ntiers: []\n")
+    assert load_budgets.__wrapped__(path) == {"fast": {"iterations": 5}}
