@@ -30,10 +30,10 @@ from robotplan.program.solution import Solution
 from robotplan.program.solve import warm_guess
 from robotplan.scene import Scene
 from robotplan.scene.task import PushTask, TaskPlan
+from robotplan.search.default_dynamics import default_dynamics
 from robotplan.search.fallback import side_by_side, tail_and_fresh
 from robotplan.search.planner import merge_results
 from robotplan.search.request import SearchRequest
-from robotplan.search.scene_classes import default_dynamics
 from robotplan.search.scene_search import candidate_table, metres, search_scene
 from robotplan.viz.viewer import write_playback as write_playback_html
 
@@ -100,7 +100,7 @@ class PushPlanner:
         """Search the task's skeletons and solve their programs; no simulator runs.
 
         ``model``: the learned dynamics' folder (default: the shipped model of the task's
-        class, :func:`~robotplan.search.scene_classes.default_dynamics`). ``search``: the
+        class, :func:`~robotplan.search.default_dynamics.default_dynamics`). ``search``: the
         fields of :class:`~robotplan.search.request.SearchRequest` (``solver``, ``workers``,
         ``skeleton``, ``max_pushes``, ``time_budget``, ``program``, ``replan``,
         ``last_resort``, ``exhaustive``, ``progress``, ``quiet``). ``warm_start``: an

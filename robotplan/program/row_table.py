@@ -6,7 +6,7 @@ it; the arm and chain programs add their rows (stages ``arms``, ``chain…``) af
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cache
 from pathlib import Path
 from typing import Literal
@@ -56,13 +56,7 @@ def _check_params(row: int, params: object) -> dict[str, Param]:
                               f"{show(value)}")
         if isinstance(value, float) and not math.isfinite(value):
             raise SchemaError(f"{where}.{name}", f"must be finite, got {value}")
-    return {k: float(v) if isinstance(v, int) and not isinstance(v, bool) and
-            not _whole(k) else v for k, v in params.items()}
-
-
-def _whole(name: str) -> bool:
-    """Parameters that count things (``samples``) stay integers."""
-    return name == "samples"
+    return params
 
 
 @cache
@@ -73,7 +67,7 @@ def load_rows(path: Path | None = None) -> tuple[RowSpec, ...]:
     rows = (data or {}).get("rows") if isinstance(data, dict) else None
     params = [r.pop("params", {}) if isinstance(r, dict) else {} for r in rows or []]
     table = read(RowTable, data)
-    out = tuple(RowSpec(**{**spec.__dict__, "params": _check_params(i, p)})
+    out = tuple(replace(spec, params=_check_params(i, p))
                 for i, (spec, p) in enumerate(zip(table.rows, params, strict=True)))
     seen: dict[str, dict] = {}
     for i, spec in enumerate(out):

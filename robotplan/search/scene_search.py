@@ -179,12 +179,6 @@ def _pose_fits(request: SearchRequest, budgets: tuple[ProgramSettings, ...],
     return search_pose_budgets(request, budgets, space, given)
 
 
-def _region_fits(request: SearchRequest, budgets: tuple[ProgramSettings, ...],
-                 space: SkeletonSpace) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
-    """The pushes fitted to a pose inside the goal region."""
-    return search_region_fits_budgets(request, budgets, space)
-
-
 def _plain(request: SearchRequest, budgets: tuple[ProgramSettings, ...],
            space: SkeletonSpace) -> tuple[SearchResult, dict[int, SkeletonSpace]]:
     """The space's candidates sub-tier by sub-tier (:func:`candidate_tiers`), until one
@@ -207,8 +201,8 @@ def _routes(request: SearchRequest, budgets: tuple[ProgramSettings, ...],
     return result, {id(s): routed for s in result.candidates}
 
 
-TIER_SEARCHES = {"pose_fits": _pose_fits, "region_fits": _region_fits, "plain": _plain,
-                 "routes": _routes}
+TIER_SEARCHES = {"pose_fits": _pose_fits, "region_fits": search_region_fits_budgets,
+                 "plain": _plain, "routes": _routes}
 """The search of each kind of tier candidates (``skeletons/tiers.yaml``)."""
 
 
