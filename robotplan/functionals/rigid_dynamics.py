@@ -11,7 +11,7 @@ about the pivot (the centroid of the object's footprint), then a shift of the pi
 with ρ the footprint's radius of gyration about the pivot: H_q,t is then the mean squared
 displacement between the footprint where the plan puts it and where F_q puts it (to first
 order in the angle). The row is the same kind of number as H_F's mean squared SDF residual,
-and plays the same part in a program (:mod:`robotplan.program.dynamics_rows`).
+and plays the same part in a program (:mod:`robotplan.program.rows_dynamics`).
 
 Gradients: the three grids of a step are rendered with their tangents
 (:class:`~robotplan.functionals.grid_render.GridTangents`) and the gradient G of the

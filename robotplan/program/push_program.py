@@ -1,26 +1,18 @@
-"""The trajectory optimisation of one skeleton as a Drake ``MathematicalProgram`` (paper eq. 2).
+"""The trajectory optimisation of one skeleton as a Drake ``MathematicalProgram`` (paper
+eq. 2): :class:`PushProgram`.
 
-Decision variables over N = K·T steps (states 0…N): the planar pose of the pushed object
-``q_obj (N+1, 3)``, the pusher position ``q_pusher (N+1, 2)`` and, in push phases, contact
-points ``p (·, 2)``. State 0 is the scene's start. Through the fast evaluators, one Python
-callback per functional covering every step:
-
-* H_F (learned dynamics, eq. 5) in every step: a cost on the mean squared SDF residual
-  (``H_F.weight``), or a bound on it;
-* H_coll (eq. 7) between pusher and object in every step, bounded by what a face contact
-  costs in push steps and by ``H_coll.clearance`` of free space in the other steps; along
-  each free move of a free pusher, its gap to the object (SweptClearance) at a few points;
-* H_PoC (eq. 9, decision-variable form) in push steps: φ_obj(p) = φ_pusher(p) = 0;
-* H_g (eq. 8) at the last state: at most ``goal.tol`` of the object's area outside the goal
-  region shrunk by ``goal.inset``;
-* the object holds still in reach phases.
-
-Costs: squared accelerations of the pusher and of the contact points, with the prefix
-q_{−2} = q_{−1} = q_0, and the lever arm of the push about the object's centroid.
-
-:func:`solve_skeleton` solves in two stages: the kinematic program (``model=None``: sticking
-contact and pushing direction instead of H_F, pusher ≤ 3 cm per push step) converges in a
-few seconds from the circle-and-push guess; the learned program starts from its solution.
+Decision variables over N = K·T steps (states 0…N,
+:class:`~robotplan.program.variables.ProgramVariables`): the pushed object's planar poses,
+the actor's positions and the contact points of push steps; a chained object's poses and
+contact points, a touch goal's point, each arm's joint angles where the task has them.
+State 0 is the scene's start. The rows are those of the row table
+(``skeletons/rows.yaml``) for the program's stages, added by the one builder
+(:func:`~robotplan.program.builder.add_rows`): the kinematic stage (``model=None``:
+sticking contact, pushing direction and the quasi-static law instead of H_F) or the
+learned one (H_F, eq. 5); the chain's rows for a skeleton with chained pushes; the arms'
+rows, after their joint variables, for a task with arms.
+:func:`~robotplan.program.solve.solve_skeleton` solves the kinematic program from the
+circle-and-push guess and starts the learned one from its solution.
 """
 
 from __future__ import annotations
@@ -28,75 +20,88 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import torch
 from pydrake.solvers import IpoptSolver, MathematicalProgram, SnoptSolver, SolverOptions
 
+from robotplan.functionals.kinematics import arm_kinematics
 from robotplan.models.dynamics import PushDynamics
-from robotplan.program.dynamics_rows import Dynamics, mm2_per_unit
+from robotplan.program.builder import add_rows
+from robotplan.program.chain_guess import chain_guess
 from robotplan.program.guess import initial_guess
-from robotplan.program.push_rows import PushRows
-from robotplan.program.row_table import rows_for_stage
-from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings
+from robotplan.program.rows_arm import joint_guess
+from robotplan.program.rows_dynamics import residual_mm2
+from robotplan.program.rows_push import swept_shortfall
+from robotplan.program.settings import ARM_PROGRAM_SETTINGS, DEFAULT_SETTINGS, ProgramSettings
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import FEASIBLE, SNOPT_MINOR_DEFAULT, WARM_USABLE, Solution, rank
+from robotplan.program.variables import ProgramVariables, StepSets
 from robotplan.scene.task import PushTask
 
 __all__ = ["PushProgram"]
 
-class PushProgram(PushRows):
-    """One skeleton of a single-pusher, single-object scene as a nonlinear program."""
 
-    # the pusher moves in the table's plane between its states (a free sphere); an arm's tip
-    # moves in 3-D and may pass over the object while reaching (ArmPushProgram)
-    planar_pusher = True
+class PushProgram:
+    """One skeleton of a push task as a nonlinear program."""
 
     def __init__(self, task: PushTask, skeleton: Skeleton, model: PushDynamics | None,
-                 space: SkeletonSpace, settings: ProgramSettings = DEFAULT_SETTINGS,
+                 space: SkeletonSpace, settings: ProgramSettings | None = None,
                  guess: dict[str, np.ndarray] | None = None) -> None:
-        """``model=None`` builds the kinematic program (sticking contact and pushing
-        direction instead of H_F); ``guess`` replaces the circle-and-push initial guess."""
-        self.task, self.scene = task, task.scene
-        self.skeleton, self.settings, self.space = skeleton, settings, space
+        """``model=None`` builds the kinematic program; ``guess`` replaces the
+        circle-and-push initial guess; ``settings`` default to the free pushers' or, with
+        arms, the arms' program settings."""
         scene = task.scene
+        if settings is None:
+            settings = ARM_PROGRAM_SETTINGS if task.arms else DEFAULT_SETTINGS
+        self.task, self.scene, self.skeleton, self.space = task, scene, skeleton, space
+        self.settings, self.model = settings, model
         first = skeleton.phases[0]
-        self.obj = scene.bodies[first.object]
-        self.pusher = scene.bodies[first.actor]
+        self.obj, self.pusher = scene.bodies[first.object], scene.bodies[first.actor]
         self.region = task.region
-        T = space.steps_per_phase
-        self.T, self.N = T, T * len(skeleton.phases)
-        N = self.N
-        self.push_steps = np.array([k * T + s + 1 for k, ph in enumerate(skeleton.phases)
-                                    if ph.mode == "push" for s in range(T)], dtype=int)
+        self.T = space.steps_per_phase
+        self.steps = StepSets(skeleton, self.T, task.touch_actor)
+        self.N = self.steps.N
+        self.push_steps = self.steps.named("push")
+        chained = skeleton.chained
+        self.target = scene.bodies[chained] if chained else None
+        self.chain_steps = self.steps.named("chain_push")
         self.timings: dict[str, float] = {}  # seconds inside each functional's callback
-        prog = self.prog = MathematicalProgram()
-        self.Q1 = prog.NewContinuousVariables(N + 1, 3, "q_obj")
-        self.Q2 = prog.NewContinuousVariables(N + 1, 2, "q_pusher")
-        self.P = prog.NewContinuousVariables(len(self.push_steps), 2, "p")
-        self.P_touch: np.ndarray | None = None
-        self.goal_body, self.goal_Q = self.obj, self.Q1  # the body H_g moves into the region
-        self._add_variables()
-        self.guess = guess if guess is not None else self._initial_guess()
+        self.prog = MathematicalProgram()
+        self.variables = ProgramVariables.make(
+            self.prog, self.steps, chain=chained is not None, touch=task.goal == "touch",
+            goal_chained=chained is not None and task.goal_object == chained)
+        self.goal_body = self.target if self.variables.goal_chained else self.obj
+        self.dynamics = self.chain_dynamics = None
+        self.swept_check: tuple[np.ndarray, float] | None = None
+        self.guess = guess if guess is not None else (
+            chain_guess(self) if chained else initial_guess(self))
         self.keep_start = guess is not None  # a given start is a plan worth keeping
-        # state 0 is the scene's start
-        prog.AddBoundingBoxConstraint(np.array(self.obj.pose), np.array(self.obj.pose),
-                                      self.Q1[0])
-        prog.AddBoundingBoxConstraint(np.array(self.pusher.pose[:2]),
-                                      np.array(self.pusher.pose[:2]), self.Q2[0])
-        self._bound_to_workspace(self.Q1[:, :2], self.Q2, self.P)
-        self.model, self.dynamics = model, None
-        # the rows of the table (skeletons/rows.yaml) of this stage, in its order
-        for spec in rows_for_stage(learned=model is not None, goal=task.goal):
-            if spec.enabled is None or settings.value(spec.enabled):
-                self.add_row(spec)
-
-    # ------------------------------------------------------------------ hooks
-    def _add_variables(self) -> None:
-        """More decision variables, before the guess (none here; see ChainPushProgram)."""
-
-    def _initial_guess(self) -> dict[str, np.ndarray]:
-        return initial_guess(self)
+        learned = model is not None
+        stages = ("both", "learned" if learned else "kinematic")
+        if chained:
+            stages += ("chain", "chain_learned" if learned else "chain_kinematic")
+        add_rows(self, stages)
+        self.kin = {r.name: arm_kinematics(r) for r in scene.robots} if task.arms else {}
+        if self.kin:
+            radii = {scene.bodies[name].shape.radius for name in self.kin}
+            if len(radii) > 1:
+                raise ValueError("robots: arms with different tip radii are not planned yet")
+            self.tip_radius = radii.pop()
+            self.variables.add_joints(self.prog, {n: k.dof for n, k in self.kin.items()})
+            if "q_joints" not in self.guess:
+                self.guess["q_joints"] = joint_guess(self)
+            add_rows(self, ("arms",))
 
     # ------------------------------------------------------------------ solve
+    def _guess_pairs(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """(variables, initial values) for SetInitialGuess."""
+        v, g = self.variables, self.guess
+        pairs = [(v.q_obj, g["q_obj"]), (v.q_actor, g["q_pusher"]), (v.contact, g["p"])]
+        if v.touch is not None:
+            pairs.append((v.touch, g.get("p_touch", g["q_pusher"][-1:])))
+        if v.chained is not None:
+            pairs += [(v.chained, g["q_chain"]), (v.chain_contact, g["p_chain"])]
+        pairs += [(Q, g["q_joints"][name]) for name, Q in v.joints.items()]
+        return pairs
+
     def _set_start(self) -> None:
         for V, value in self._guess_pairs():
             if V.size:
@@ -113,10 +118,8 @@ class PushProgram(PushRows):
         return self._solution(x, violations, cost, "the start, not solved",
                               time.perf_counter() - t0, {})
 
-    def solve(self) -> Solution:
-        s = self.settings
-        prog = self.prog
-        self._set_start()
+    def _solver(self) -> tuple[SnoptSolver | IpoptSolver, SolverOptions]:
+        s, prog = self.settings, self.prog
         iterations = s.iterations if self.dynamics is not None else s.warm_iterations
         opts = SolverOptions()
         if s.solver == "snopt":
@@ -127,11 +130,17 @@ class PushProgram(PushRows):
             rows = sum(b.evaluator().num_constraints() for b in prog.GetAllConstraints())
             opts.SetOption(solver.id(), "Iterations limit",
                            max(SNOPT_MINOR_DEFAULT, s.minor_iterations_per_row * rows))
-        else:
-            solver = IpoptSolver()
-            opts.SetOption(solver.id(), "tol", s.optimality_tol)
-            opts.SetOption(solver.id(), "acceptable_tol", 10 * s.optimality_tol)
-            opts.SetOption(solver.id(), "max_iter", iterations)
+            return solver, opts
+        solver = IpoptSolver()
+        opts.SetOption(solver.id(), "tol", s.optimality_tol)
+        opts.SetOption(solver.id(), "acceptable_tol", 10 * s.optimality_tol)
+        opts.SetOption(solver.id(), "max_iter", iterations)
+        return solver, opts
+
+    def solve(self) -> Solution:
+        s, prog = self.settings, self.prog
+        self._set_start()
+        solver, opts = self._solver()
         t0 = time.perf_counter()  # the clock of the per-functional timings
         result = solver.Solve(prog, None, opts)
         seconds = time.perf_counter() - t0
@@ -165,29 +174,18 @@ class PushProgram(PushRows):
     def _solution(self, x: np.ndarray, violations: dict[str, float], cost: float, status: str,
                   seconds: float, timings: dict) -> Solution:
         """The full decision vector ``x`` with its worst violations and cost as a Solution."""
-        q1, q2, p = (self._values(x, V) for V in (self.Q1, self.Q2, self.P))
+        v = self.variables
+        q1, q2, p = (self._values(x, V) for V in (v.q_obj, v.q_actor, v.contact))
         violation = max(violations.values(), default=0.0)
-        touch = None if self.P_touch is None else self._values(x, self.P_touch)
-        others, contacts = self._other_values(x)
+        touch = None if v.touch is None else self._values(x, v.touch)
+        others, contacts = {}, {}
+        if v.chained is not None:
+            others[self.target.name] = self._values(x, v.chained)
+            contacts[self.target.name] = self._values(x, v.chain_contact).reshape(-1, 2)
+        joints = {name: self._values(x, Q) for name, Q in v.joints.items()}
         return Solution(self.skeleton, violation <= FEASIBLE, status, violation, cost, seconds,
                         q1, q2, p.reshape(-1, 2), self.dynamics_mm2(q1, q2, others), timings,
-                        violations, self._joint_values(x), touch, others, contacts)
-
-    def _guess_pairs(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """(variables, initial values) for SetInitialGuess."""
-        pairs = [(self.Q1, self.guess["q_obj"]), (self.Q2, self.guess["q_pusher"]),
-                 (self.P, self.guess["p"])]
-        if self.P_touch is not None:
-            pairs.append((self.P_touch, self.guess.get("p_touch", self.guess["q_pusher"][-1:])))
-        return pairs
-
-    def _other_values(self, x: np.ndarray) -> tuple[dict, dict]:
-        """Other objects' poses and contact points by name (see ChainPushProgram)."""
-        return {}, {}
-
-    def _joint_values(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        """Joint trajectories by robot (none for free pushers; see ArmPushProgram)."""
-        return {}
+                        violations, joints, touch, others, contacts)
 
     def _values(self, x: np.ndarray, V: np.ndarray) -> np.ndarray:
         """The entries of the full decision vector ``x`` for the variable array ``V``."""
@@ -198,6 +196,11 @@ class PushProgram(PushRows):
         guess = {"q_obj": sol.q_obj, "q_pusher": sol.q_pusher, "p": sol.contact}
         if sol.touch_point is not None:
             guess["p_touch"] = sol.touch_point
+        if self.target is not None:
+            name = self.target.name
+            guess.update(q_chain=sol.q_others[name], p_chain=sol.contact_others[name])
+        if self.kin:
+            guess["q_joints"] = sol.q_joints
         return guess
 
     def _status(self, result) -> str:
@@ -221,17 +224,15 @@ class PushProgram(PushRows):
     def dynamics_mm2(self, q_obj: np.ndarray, q_pusher: np.ndarray,
                      others: dict | None = None) -> np.ndarray:
         """H_F per step as the mean squared SDF residual over the table, mm² (none in the
-        kinematic program; ``others``: other objects' poses, see ChainPushProgram)."""
+        kinematic program); with a chain, the object–chained pair's after the actor's
+        (``others``: the chained object's poses by name)."""
         if self.dynamics is None:
             return np.zeros(0)
-        return self._residual_mm2(self.dynamics, q_obj, q_pusher)
-
-    def _residual_mm2(self, dynamics: Dynamics, q_obj: np.ndarray, q_actor: np.ndarray
-                      ) -> np.ndarray:
-        """``dynamics``' H_F per step as the mean squared SDF residual over the table (mm²)."""
-        H, _, _ = dynamics.evaluate(torch.from_numpy(q_obj), torch.from_numpy(q_actor),
-                                    jacobian=False)
-        return H.double().numpy() * mm2_per_unit(dynamics, self.scene)
+        first = residual_mm2(self.dynamics, self.scene, q_obj, q_pusher)
+        if self.chain_dynamics is None or not others:
+            return first
+        return np.concatenate((first, residual_mm2(self.chain_dynamics, self.scene,
+                                                   others[self.target.name], q_obj)))
 
     def evaluate(self, x: np.ndarray) -> tuple[dict[str, float], float]:
         """At the full decision vector ``x``: the largest violation of each named constraint
@@ -248,6 +249,7 @@ class PushProgram(PushRows):
                               float(np.max(np.maximum(lb - v, 0.0), initial=0.0)),
                               float(np.max(np.maximum(v - ub, 0.0), initial=0.0)))
         if "swept" in worst:
-            q1, q2 = self._values(x, self.Q1), self._values(x, self.Q2)
-            worst["swept"] = max(worst["swept"], self.swept_shortfall(q1, q2))
+            v = self.variables
+            q1, q2 = self._values(x, v.q_obj), self._values(x, v.q_actor)
+            worst["swept"] = max(worst["swept"], swept_shortfall(self, q1, q2))
         return worst, cost if np.isfinite(cost) else float("inf")

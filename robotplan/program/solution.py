@@ -28,7 +28,7 @@ class Solution:
     violations: dict = field(default_factory=dict)  # worst violation per constraint name
     q_joints: dict = field(default_factory=dict)  # robot name → (N+1, dof) joint angles
     touch_point: np.ndarray | None = None  # (1, 2): the touch goal's contact point
-    # a chained object's (N+1, 3) poses and its (·, 2) contact points (ChainPushProgram)
+    # a chained object's (N+1, 3) poses and its (·, 2) contact points (a chain)
     q_others: dict = field(default_factory=dict)
     contact_others: dict = field(default_factory=dict)
     # least distance (m) of the moved objects from the obstacles along the plan (the search

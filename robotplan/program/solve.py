@@ -5,27 +5,15 @@ from __future__ import annotations
 import numpy as np
 
 from robotplan.models.dynamics import PushDynamics
-from robotplan.program.arm_program import ArmPushProgram
-from robotplan.program.chain_program import ChainPushProgram
 from robotplan.program.push_program import PushProgram
 from robotplan.program.settings import DEFAULT_SETTINGS, ProgramSettings
 from robotplan.program.skeleton import Skeleton, SkeletonSpace
 from robotplan.program.solution import WARM_USABLE, Solution
 from robotplan.scene.task import PushTask
 
-__all__ = ["TURN_LENGTH", "program_class", "solve_skeleton", "warm_guess"]
+__all__ = ["TURN_LENGTH", "solve_skeleton", "warm_guess"]
 
 TURN_LENGTH = 0.1  # m of travel a radian of turn counts as when a re-anchored plan fades
-
-
-def program_class(task: PushTask, skeleton: Skeleton) -> type[PushProgram]:
-    """The program of a task's actors: arm tips (joints), an object that pushes another
-    (a chain), or a free pusher."""
-    if task.arms:
-        return ArmPushProgram
-    if skeleton.chained:
-        return ChainPushProgram
-    return PushProgram
 
 
 def solve_skeleton(task: PushTask, skeleton: Skeleton, model: PushDynamics, space: SkeletonSpace,
@@ -37,17 +25,16 @@ def solve_skeleton(task: PushTask, skeleton: Skeleton, model: PushDynamics, spac
     program (``warm_from_guess``) and starts the learned program, which is not run when
     the start is kept (:func:`_kept_start`). Without ``learned_stage`` the kinematic
     program's solution is the plan."""
-    program = program_class(task, skeleton)
     states = len(skeleton.phases) * space.steps_per_phase + 1
     if guess is not None and len(guess["q_obj"]) != states:
         raise ValueError(f"a guess of {len(guess['q_obj'])} states for {skeleton.describe()} "
                          f"at {space.steps_per_phase} steps per phase ({states} states)")
     if not settings.learned_stage:
-        return program(task, skeleton, None, space, settings, guess=guess).solve()
+        return PushProgram(task, skeleton, None, space, settings, guess=guess).solve()
     warm_seconds = 0.0
     given = guess is not None
     if settings.warm_start and guess is None:
-        kin = program(task, skeleton, None, space, settings)
+        kin = PushProgram(task, skeleton, None, space, settings)
         warm = kin.solve()
         warm_seconds = warm.seconds
         if warm.violation > WARM_USABLE:
@@ -59,12 +46,12 @@ def solve_skeleton(task: PushTask, skeleton: Skeleton, model: PushDynamics, spac
     elif settings.warm_start and guess is not None and settings.warm_from_guess:
         # an earlier plan re-anchored at a moved start: the kinematic program repairs it
         # first, where it can (measured: docs/experiments.md#closed-loop)
-        kin = program(task, skeleton, None, space, settings, guess=guess)
+        kin = PushProgram(task, skeleton, None, space, settings, guess=guess)
         warm = kin.solve()
         warm_seconds = warm.seconds
         if warm.violation <= WARM_USABLE:
             guess = kin.as_guess(warm)
-    learned = program(task, skeleton, model, space, settings, guess=guess)
+    learned = PushProgram(task, skeleton, model, space, settings, guess=guess)
     sol = None
     if given and (settings.accept_good_start or settings.learned_start_violation is not None):
         sol = _kept_start(learned.start_solution(), settings)

@@ -22,7 +22,7 @@ import torch
 
 from robotplan.functionals.sticking import centroid
 from robotplan.geometry.transforms import wrap_angle
-from robotplan.program.push_rows import region_goal
+from robotplan.program.rows_goal import region_goal
 from robotplan.program.settings import ProgramSettings
 from robotplan.program.settings import settings_for as program_settings
 from robotplan.program.skeleton import Phase, Skeleton, SkeletonSpace
@@ -178,7 +178,7 @@ def pose_candidates(task: PushTask, space: SkeletonSpace,
         return space, [], {}
     body = TurningBody(scene, obj, gain)
     T = max(space.steps_per_phase, max(_steps_for(body, f, settings.guess_speed,
-                                                  settings.row("step_limits").turn) for f in fits))
+                                                  settings.row("turn_limits").turn) for f in fits))
     posed = replace(space, steps_per_phase=T, init_frame="object",
                     init_directions_deg=INIT_DIRECTIONS_DEG)
     skeletons, guesses = [], {}

@@ -11,8 +11,8 @@ from dataclasses import replace
 
 from robotplan.functionals.clearance import OBSTACLE_MARGIN
 from robotplan.models.loading import dynamics_kind
-from robotplan.program.arm_program import reach_check
-from robotplan.program.chain_program import objects_touch
+from robotplan.program.chain_guess import objects_touch
+from robotplan.program.reach import reach_check
 from robotplan.program.settings import ProgramSettings, with_overrides
 from robotplan.program.settings import settings_for as program_settings
 from robotplan.program.skeleton import (

@@ -10,7 +10,8 @@ from robotplan import load_scene
 from robotplan.execution.execute import execute_push
 from robotplan.functionals.coverage import coverage
 from robotplan.functionals.sticking import QuasiStaticObjectPush
-from robotplan.program.chain_program import ChainPushProgram, objects_touch, touching_distance
+from robotplan.program.chain_guess import objects_touch, touching_distance
+from robotplan.program.push_program import PushProgram
 from robotplan.program.settings import ProgramSettings
 from robotplan.program.skeleton import chain_candidates, load_skeleton_space, parse_skeleton
 from robotplan.scene.task import make_task
@@ -26,7 +27,7 @@ def scene():
 
 def build(scene, text=THREE_PUSHES):
     sk = parse_skeleton(text, "pusher", "red")
-    return ChainPushProgram(make_task(scene), sk, None, load_skeleton_space(), ProgramSettings())
+    return PushProgram(make_task(scene), sk, None, load_skeleton_space(), ProgramSettings())
 
 
 def test_chained_skeletons_parse_and_enumerate():
@@ -84,9 +85,10 @@ def test_object_push_rows_match_finite_differences(scene):
 def test_chain_guess_is_consistent(scene):
     prog = build(scene)
     g = prog.guess
-    assert prog.Q3.shape == (prog.N + 1, 3) and prog.P3.shape == (20, 2)
+    v = prog.variables
+    assert v.chained.shape == (prog.N + 1, 3) and v.chain_contact.shape == (20, 2)
     assert list(prog.chain_steps) == list(range(31, 41)) + list(range(51, 61))
-    assert prog.goal_Q is prog.Q3  # the goal moves blue
+    assert v.body("goal") is v.chained  # the goal moves blue
     assert np.allclose(g["q_chain"][:31], scene.bodies["blue"].pose)  # blue waits
     assert g["q_chain"][-1, 0] > scene.bodies["blue"].pose[0] + 0.2  # then rides along
     # red touches blue at the first chained state, and p_chain lies on both surfaces

@@ -57,7 +57,7 @@ def test_reach_pruning_keeps_the_arms_that_can_reach(task, expected, frame):
     """Before any program: the left-only scene keeps left pushes only, from faces of the
     box whose straight pushes reach the goal; the handover scene keeps left-then-right
     only (the box starts beyond the right arm's reach, the goal beyond the left's)."""
-    from robotplan.program.arm_program import reach_check
+    from robotplan.program.reach import reach_check
     from robotplan.scene.task import load_task
     from robotplan.search.request import SearchRequest
     from robotplan.search.scene_search import candidate_tiers

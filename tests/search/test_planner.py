@@ -30,7 +30,7 @@ def test_search_solves_box_push_and_the_plan_works_in_pybullet():
     assert best.skeleton == skeletons[1]
     assert best.violation <= FEASIBLE and best.dynamics_rms_mm <= GOOD_RMS_MM
     assert np.allclose(best.q_obj[0], scene.bodies["box"].pose)
-    assert {"warm_start", "H_F", "H_coll", "H_PoC", "H_g", "solver"} <= set(best.timings)
+    assert {"warm_start", "H_F", "H_coll", "H_PoC", "goal", "solver"} <= set(best.timings)
     assert 0 < sum(best.timings.values()) <= 1.01 * best.seconds + 0.01
     ex = execute_push(task, best.q_pusher)
     assert ex.coverage >= 0.95

@@ -85,7 +85,7 @@ def region_doc(size: list[float], yaw: float, region: list[float]) -> dict:
 def _outside_share(scene, pose, settings) -> float:
     import torch
 
-    from robotplan.program.push_rows import region_goal
+    from robotplan.program.rows_goal import region_goal
 
     body = scene.bodies["object"]
     H = region_goal(body, scene.goal_region, settings)

@@ -219,7 +219,7 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
     import torch
 
     import robotplan.search.pose_search as pose_search
-    from robotplan.program.push_rows import region_goal
+    from robotplan.program.rows_goal import region_goal
     from robotplan.program.settings import settings_for as overlay
     from robotplan.program.solution import Solution
 
