@@ -1,11 +1,12 @@
 """The package's layers: each imports only the layers below it, no import cycles (a lazy
 import counts like any other), no private names across modules, no module over the limit.
 
-Mug hanging is a vertical slice, ``robotplan.hanging``, with the core's layers inside it: a
-module ``robotplan.hanging.<layer>...`` ranks as that core layer and may import the core and
-the slice at or below it. The core reaches into the slice only from its top layers
-(:data:`ENTERS_HANGING`: the facade and the commands dispatch to it), at or below their rank,
-and no module outside the slice is named after hanging.
+Mug hanging and pushing are vertical slices, ``robotplan.hanging`` and ``robotplan.pushing``
+(:data:`SLICES`), with the core's layers inside them: a module ``robotplan.<slice>.<layer>...``
+ranks as that core layer and may import the core and its own slice at or below it, never the
+other slice. The core reaches into a slice only from its top layers (:data:`ENTERS_SLICES`:
+the facade and the commands dispatch to it), at or below their rank, and no module outside
+the hanging slice is named after hanging.
 
 A scene is classified once into its task (``robotplan.scene.task``): no condition outside the
 scene file layer reads the kind of a scene from its raw fields. The search and the programs
@@ -39,19 +40,26 @@ LAYERS = [
     "cli",          # the command line
 ]
 MAX_LINES = 300
-SLICE = "hanging"  # robotplan.hanging.<layer>...: mug hanging, layered as the core
-ENTERS_HANGING = ("api", "bench", "cli")  # the core layers that may import the slice
+SLICES = ("hanging", "pushing")  # robotplan.<slice>.<layer>...: a family, layered as the core
+HANGING = "hanging"
+ENTERS_SLICES = ("api", "bench", "cli")  # the core layers that may import a slice
+
+
+def _slice(module: str) -> str | None:
+    """The slice a module lives in (None: the core)."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 and parts[1] in SLICES else None
 
 
 def _in_slice(module: str) -> bool:
-    return module.split(".")[1:2] == [SLICE]
+    return _slice(module) is not None
 
 
 def _layer(module: str) -> int:
-    """The rank of ``robotplan.<layer>...`` and of ``robotplan.hanging.<layer>...`` (the
-    package root, and the slice's own root, rank above everything)."""
+    """The rank of ``robotplan.<layer>...`` and of ``robotplan.<slice>.<layer>...`` (the
+    package root, and each slice's own root, rank above everything)."""
     parts = module.split(".")
-    if len(parts) > 1 and parts[1] == SLICE:
+    if _in_slice(module):
         return LAYERS.index(parts[2]) if len(parts) > 2 else len(LAYERS)
     return LAYERS.index(parts[1]) if len(parts) > 1 else len(LAYERS)
 
@@ -109,7 +117,7 @@ GRAPH = {m: _imports(m, p, set(MODULES)) for m, p in MODULES.items()}
 
 
 def _layer_name(module: str) -> str | None:
-    """The layer package a module lives in (None: a root, the package's or the slice's)."""
+    """The layer package a module lives in (None: a root, the package's or a slice's)."""
     parts = module.split(".")
     if _in_slice(module):
         return parts[2] if len(parts) > 2 else None
@@ -118,9 +126,9 @@ def _layer_name(module: str) -> str | None:
 
 def test_every_module_belongs_to_a_layer():
     for module in MODULES:
-        if module not in ("robotplan", f"robotplan.{SLICE}"):
+        if module not in ("robotplan", *(f"robotplan.{s}" for s in SLICES)):
             assert _layer_name(module) in LAYERS, (
-                f"{module}: add its package to LAYERS (under {SLICE}: a layer's name)")
+                f"{module}: add its package to LAYERS (under a slice: a layer's name)")
 
 
 def test_imports_go_down_the_layers():
@@ -137,38 +145,45 @@ def test_imports_go_down_the_layers():
 
 
 def _slice_entries(module: str, imports) -> list[str]:
-    """The imports of the slice by a core module that the slice's rule forbids."""
-    if _in_slice(module) or module == "robotplan":
+    """The imports of a slice that the slices' rule forbids: by a core module outside the
+    top layers (or above its rank), or by the other slice."""
+    if module == "robotplan":
         return []
+    own = _slice(module)
+    if own is not None:
+        return [f"{module}:{line} imports {target} (the {own} slice may not import the "
+                f"{_slice(target)} slice)"
+                for target, _names, line in imports if _slice(target) not in (None, own)]
     return [f"{module}:{line} imports {target} ({LAYERS[_layer(module)]} may not reach into "
-            f"{SLICE}: only {', '.join(ENTERS_HANGING)} may, at or below their rank)"
+            f"{_slice(target)}: only {', '.join(ENTERS_SLICES)} may, at or below their rank)"
             for target, _names, line in imports if _in_slice(target)
-            and (_layer_name(module) not in ENTERS_HANGING or _layer(target) > _layer(module))]
+            and (_layer_name(module) not in ENTERS_SLICES or _layer(target) > _layer(module))]
 
 
 def _named_after_hanging(module: str) -> bool:
-    """A module outside the slice whose own name speaks of hanging."""
-    return not _in_slice(module) and any("hang" in p for p in module.split(".")[1:])
+    """A module outside the hanging slice whose own name speaks of hanging."""
+    return _slice(module) != HANGING and any("hang" in p for p in module.split(".")[1:])
 
 
-def test_hanging_lives_in_its_package():
-    """Everything only mug hanging uses is under ``robotplan/hanging`` (no core module is
-    named after it), and the core reaches into the slice only from its top layers."""
+def test_each_family_lives_in_its_package():
+    """Everything only mug hanging uses is under ``robotplan/hanging`` (no other module is
+    named after it), and the core reaches into a slice only from its top layers."""
     named = sorted(m for m in MODULES if _named_after_hanging(m))
-    assert not named, f"move into robotplan/{SLICE}/<layer>/ (or rename): {named}"
+    assert not named, f"move into robotplan/{HANGING}/<layer>/ (or rename): {named}"
     bad = [entry for module, imports in GRAPH.items() for entry in _slice_entries(module, imports)]
     assert not bad, "\n".join(bad)
 
 
-def test_the_slice_has_a_subpackage_per_layer():
-    """The slice's structure is visible: each layer it uses is a package of its own."""
-    root = PACKAGE / SLICE
+@pytest.mark.parametrize("name", SLICES)
+def test_each_slice_has_a_subpackage_per_layer(name):
+    """A slice's structure is visible: each layer it uses is a package of its own."""
+    root = PACKAGE / name
     assert (root / "__init__.py").is_file()
     subs = {p.name for p in root.iterdir() if p.is_dir() and p.name != "__pycache__"}
     assert subs <= set(LAYERS), f"not layers: {subs - set(LAYERS)}"
     assert all((root / s / "__init__.py").is_file() for s in subs)
     assert not [p.name for p in root.glob("*.py") if p.name != "__init__.py"], (
-        "the slice's modules live in its layer packages")
+        "a slice's modules live in its layer packages")
 
 
 def test_no_import_cycles():
@@ -218,15 +233,22 @@ def test_the_checks_see_a_wrong_import(tmp_path):
     imports = _imports("robotplan.sdf.low", low, set(MODULES))
     assert imports == [("robotplan.cli.main", ["main"], 2)]
     assert _layer(imports[0][0]) > _layer("robotplan.sdf.low")
-    # the slice: ranked by its inner layer, above its rank is up, the core's low layers stay out
+    # a slice: ranked by its inner layer, above its rank is up, the core's low layers stay out
     assert _layer("robotplan.hanging.program.x") == _layer("robotplan.program.x")
+    assert _layer("robotplan.pushing.program.x") == _layer("robotplan.program.x")
     assert _layer("robotplan.hanging.cli.x") > _layer("robotplan.hanging.search.x")
-    assert _named_after_hanging("robotplan.search.hang_x")
+    assert _named_after_hanging("robotplan.geometry.hang_x")
+    assert _named_after_hanging("robotplan.pushing.search.hang_x")
     assert not _named_after_hanging("robotplan.hanging.search.hang_x")
-    entry = [("robotplan.hanging.search.optimise", [], 3)]
-    assert _slice_entries("robotplan.search.planner", entry)
-    assert not _slice_entries("robotplan.api", entry)
+    for entry in ([("robotplan.hanging.search.optimise", [], 3)],
+                  [("robotplan.pushing.search.x", [], 3)]):
+        assert _slice_entries("robotplan.functionals.x", entry)
+        assert not _slice_entries("robotplan.api", entry)
     assert _slice_entries("robotplan.api", [("robotplan.hanging.cli.commands", [], 3)])
+    # a slice imports the core and itself, never the other slice
+    assert not _slice_entries("robotplan.pushing.api.x", [("robotplan.pushing.search.x", [], 3),
+                                                          ("robotplan.functionals.x", [], 4)])
+    assert _slice_entries("robotplan.hanging.api.x", [("robotplan.pushing.search.x", [], 3)])
 
 
 # a condition that tells a scene's kind from its raw fields: arms or pushers present, the
@@ -313,7 +335,7 @@ def test_program_settings_stay_few():
     constants are the row table's (``skeletons/rows.yaml``)."""
     from dataclasses import fields
 
-    from robotplan.program.settings import ProgramSettings
+    from robotplan.pushing.program.settings import ProgramSettings
 
     names = [f.name for f in fields(ProgramSettings)]
     assert len(names) <= MAX_PROGRAM_SETTINGS, names

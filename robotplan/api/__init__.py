@@ -5,8 +5,8 @@ composes them and writes ``result.json``, as ``robotplan solve`` does.
 A scene is classified once into its task (:func:`~robotplan.scene.task.make_task`): a
 :class:`~robotplan.scene.task.PushTask` or a :class:`~robotplan.scene.task.HangTask`. Each
 call dispatches once, by the task's family, to that family's planner
-(:class:`~robotplan.api.push.PushPlanner`, :class:`~robotplan.hanging.api.planner.HangPlanner`),
-which returns the family's plan type.
+(:class:`~robotplan.pushing.api.push.PushPlanner`,
+:class:`~robotplan.hanging.api.planner.HangPlanner`), which returns the family's plan type.
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import overload
 
-from robotplan.api.push import PushPlan, PushPlanner
-from robotplan.execution.execute import Execution
 from robotplan.hanging.api.planner import HangExecution, HangPlan, HangPlanner
+from robotplan.pushing.api.push import PushPlan, PushPlanner
+from robotplan.pushing.execution.execute import Execution
 from robotplan.scene import Scene
 from robotplan.scene.task import HangTask, PushTask, Task, UnsupportedScene, load_task, make_task
 

@@ -95,7 +95,7 @@ def _trained(steps: Steps, kind: str, key: str, cfg: dict, data: Path) -> str:
     """Train (or reuse) one ``kind`` model (``"rigid"``: F_q, ``"flow"``: F_flow) of
     representation ``key`` on ``data`` with the TrainConfig fields ``cfg``: the step's
     folder (under the output folder)."""
-    from robotplan.training.rigid import train_rigid
+    from robotplan.pushing.training.rigid import train_rigid
     from robotplan.training.train import TrainConfig, train
 
     fit = train_rigid if kind == "rigid" else train
@@ -114,7 +114,7 @@ def _representations(steps: Steps, sizes: ReproduceSizes, train: Path,
     """F_q trained alike on each of :data:`REPRESENTATIONS` (the shipped F_q's architecture,
     the same ``train`` data, seed and steps) and evaluated on each set: ``reps_<set>`` →
     key → the step result, and each key's model folder."""
-    from robotplan.training.rigid_evaluation import evaluate_rigid
+    from robotplan.pushing.training.rigid_evaluation import evaluate_rigid
 
     n, per = sizes.representation_steps, sizes.per_scene
     results: dict[str, dict] = {f"reps_{name}": {} for name in sets}
@@ -138,7 +138,7 @@ def _flow_representations(steps: Steps, sizes: ReproduceSizes, data: Path, test:
     """Tab. 4: F_flow trained alike on the SDFs and on each occupancy measure (the same data,
     seed and steps), scored on the held-out set in what it reads (φ in mm, ψ × 1000): key →
     the evaluation step's result."""
-    from robotplan.training.evaluation import evaluate_push
+    from robotplan.pushing.training.evaluation import evaluate_push
 
     n, per = sizes.flow_steps, sizes.per_scene
     results: dict[str, dict] = {}
@@ -160,13 +160,13 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
     """Run (or reuse) every item at ``sizes`` and write ``out/report.md`` and
     ``out/report.html``; returns the Markdown report's path. ``workers`` and ``ray`` as for
     ``data push`` and ``bench push``."""
-    from robotplan.bench.contact_push import plan_from_contact, plot_contact_pushes
-    from robotplan.bench.push import run_bench_push
     from robotplan.hanging.bench.bench import run_bench_hang
-    from robotplan.training.evaluation import evaluate_push
-    from robotplan.training.pose_fit import evaluate_pose_fit
+    from robotplan.pushing.bench.contact_push import plan_from_contact, plot_contact_pushes
+    from robotplan.pushing.bench.push import run_bench_push
+    from robotplan.pushing.training.evaluation import evaluate_push
+    from robotplan.pushing.training.pose_fit import evaluate_pose_fit
+    from robotplan.pushing.training.rigid_evaluation import evaluate_rigid
     from robotplan.training.push_data import PushDataSpec, generate
-    from robotplan.training.rigid_evaluation import evaluate_rigid
 
     out.mkdir(parents=True, exist_ok=True)
     steps = Steps(out, inputs_digest(), progress)

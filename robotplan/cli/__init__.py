@@ -1,5 +1,14 @@
-"""The command line: ``robotplan`` and ``python -m robotplan.cli``."""
+"""The command line: ``robotplan`` and ``python -m robotplan.cli``.
 
-from robotplan.cli.main import main
+:func:`main` imports :mod:`robotplan.cli.main` when called: the slices' commands import
+``robotplan.cli.common``, and running this package must not import them back half-run.
+"""
 
 __all__ = ["main"]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``robotplan``: :func:`robotplan.cli.main.main`."""
+    from robotplan.cli.main import main as run
+
+    return run(argv)

@@ -169,7 +169,7 @@ def add_loop_option(parser) -> None:
 def loop_overrides(args) -> dict | None:
     """The ``--loop`` settings as LoopSettings fields; None after printing one line on a
     bad item (the caller exits with status 2)."""
-    from robotplan.execution.loop_settings import parse_loop_overrides
+    from robotplan.pushing.execution.loop_settings import parse_loop_overrides
 
     try:
         return parse_loop_overrides(args.loop)
@@ -190,7 +190,7 @@ def add_program_option(parser) -> None:
 def program_overrides(args) -> dict | None:
     """The ``--program`` settings (ProgramSettings fields, rows' ROW.NAME); None after
     printing one line on a bad item (the caller exits with status 2)."""
-    from robotplan.program.settings import parse_program_overrides
+    from robotplan.pushing.program.settings import parse_program_overrides
 
     try:
         return parse_program_overrides(args.program)
@@ -203,7 +203,7 @@ def perturbation(seed: int | None):
     """The perturbed world of ``--perturb SEED`` (None without it)."""
     if seed is None:
         return None
-    from robotplan.execution.perturb import Perturbation
+    from robotplan.pushing.execution.perturb import Perturbation
 
     return Perturbation(seed)
 

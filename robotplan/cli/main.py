@@ -24,7 +24,15 @@ from robotplan.cli.common import (
     add_ray_option,
     add_rehearse_option,
 )
-from robotplan.cli.model_commands import (
+from robotplan.cli.reproduce_commands import add_reproduce_parser
+from robotplan.cli.scene_commands import cmd_check, cmd_diagnose, cmd_render, cmd_solve, cmd_view
+from robotplan.hanging.cli.data_parsers import add_hang_data_parsers
+from robotplan.hanging.cli.parsers import (
+    add_bench_hang_parser,
+    add_eval_hang_parser,
+    add_train_hang_parser,
+)
+from robotplan.pushing.cli.model_commands import (
     cmd_bench,
     cmd_bench_contact_push,
     cmd_bench_functional,
@@ -32,16 +40,8 @@ from robotplan.cli.model_commands import (
     cmd_data_push,
     cmd_eval_push,
 )
-from robotplan.cli.reproduce_commands import add_reproduce_parser
-from robotplan.cli.scene_commands import cmd_check, cmd_diagnose, cmd_render, cmd_solve, cmd_view
-from robotplan.cli.train_push_parser import add_train_push_parser
-from robotplan.hanging.cli.data_parsers import add_hang_data_parsers
-from robotplan.hanging.cli.parsers import (
-    add_bench_hang_parser,
-    add_eval_hang_parser,
-    add_train_hang_parser,
-)
-from robotplan.models.symmetry import VIEW_COUNTS
+from robotplan.pushing.cli.train_push_parser import add_train_push_parser
+from robotplan.pushing.models.symmetry import VIEW_COUNTS
 from robotplan.scene import SceneError
 
 

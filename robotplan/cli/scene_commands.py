@@ -104,7 +104,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    from robotplan.training.diagnose import check_steps, summarize, table, to_json
+    from robotplan.pushing.training.diagnose import check_steps, summarize, table, to_json
 
     path = Path(args.dir) / "result.json"
     if not path.is_file():

@@ -98,7 +98,7 @@ class SceneWorld:
                                   if world.pusher_touches_other(i))
 
     def observe(self) -> Observation:
-        """The true state of the world (see :func:`robotplan.execution.perturb.noisy` for
+        """The true state of the world (see :func:`robotplan.pushing.execution.perturb.noisy` for
         what a perception system would deliver)."""
         world = self.world
         poses = {self.obj: world.object_pose()[0],

@@ -3,8 +3,8 @@
 Open-loop pushing drifts (README, known limits): a plan that meets H_coll by skimming an
 obstacle by a centimetre hits it in pybullet. :func:`obstacle_clearance` measures how close
 a planned motion comes; the skeleton search asks for :data:`OBSTACLE_MARGIN` before it
-calls a plan around obstacles good (``robotplan.search.planner``), and routes are laid out with a
-margin of their own (``robotplan.search.route``).
+calls a plan around obstacles good (``robotplan.pushing.search.planner``), and routes are laid out
+with a margin of their own (``robotplan.pushing.search.route``).
 """
 
 from __future__ import annotations

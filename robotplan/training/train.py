@@ -36,7 +36,7 @@ __all__ = ["AUGMENTS", "WINDOW_AUGMENTS", "TrainConfig", "augmented", "framed", 
 AUGMENTS = ("none", "turns", "headings", "placements")
 WINDOW_AUGMENTS = ("headings", "placements")
 """Augmentations that place an object-frame F_q's window about the object (drawn where
-its frame is built, :func:`robotplan.training.rigid.window_placements`)."""
+its frame is built, :func:`robotplan.pushing.training.rigid.window_placements`)."""
 
 
 @dataclass
@@ -71,7 +71,7 @@ class TrainConfig:
     # model sees each footprint at every heading, as a table-frame model does; "placements":
     # also the window's origin, the pivot, moved up to a few cm from the object's centroid
     augment: str = "none"
-    placement_reach: float = 0.06  # m, "placements": see robotplan.training.rigid
+    placement_reach: float = 0.06  # m, "placements": see robotplan.pushing.training.rigid
     anneal_by_time: bool = False  # the cosine also ends when ``minutes`` run out
 
 

@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from robotplan.base.resources import DYNAMICS_FOLDERS
-from robotplan.search.default_dynamics import load_default_dynamics
+from robotplan.pushing.search.default_dynamics import load_default_dynamics
 from tests.conftest import ROOT, TASKS
 
 

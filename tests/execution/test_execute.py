@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from robotplan.execution.execute import REACH_SPEED, execute_push, reach_substeps
+from robotplan.pushing.execution.execute import REACH_SPEED, execute_push, reach_substeps
 from robotplan.scene import parse_scene
 from robotplan.scene.bodies import Body
 from robotplan.scene.task import load_task, make_task
@@ -53,8 +53,8 @@ def test_arm_execution_tracks_the_plan_and_pushes_with_its_tip(tmp_path):
     """The left iiwa follows an IK'd push path under position control: its tip stays on
     Drake's forward kinematics of the planned angles, the box moves, the idle right arm
     holds still; the playback draws both arms."""
-    from robotplan.execution.execute import execute_arms
     from robotplan.functionals.kinematics import arm_kinematics, track_tip_path
+    from robotplan.pushing.execution.execute import execute_arms
 
     task = load_task(TASKS / "two_arm_left_only.yaml")
     scene = task.scene
@@ -122,9 +122,9 @@ def test_every_object_is_simulated_and_forbidden_touches_are_reported():
 
 
 def test_guess_routes_the_object_around_the_obstacle():
-    from robotplan.program.guess import object_route
-    from robotplan.program.push_program import PushProgram
-    from robotplan.program.skeleton import parse_skeleton, space_for
+    from robotplan.pushing.program.guess import object_route
+    from robotplan.pushing.program.push_program import PushProgram
+    from robotplan.pushing.program.skeleton import parse_skeleton, space_for
 
     task = load_task(TASKS / "obstacle_push.yaml")
     scene = task.scene

@@ -8,10 +8,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from robotplan.execution.loop_settings import LoopSettings
 from robotplan.execution.scene_world import SceneWorld
-from robotplan.execution.steering import steer_actor
-from robotplan.program.skeleton import Phase, Skeleton
+from robotplan.pushing.execution.loop_settings import LoopSettings
+from robotplan.pushing.execution.steering import steer_actor
+from robotplan.pushing.program.skeleton import Phase, Skeleton
 from robotplan.scene.task import load_task
 from tests.conftest import TASKS
 

@@ -4,7 +4,6 @@ PointNet encoder of F_q."""
 import pytest
 import torch
 
-from robotplan.functionals.rigid_dynamics import RigidDynamics
 from robotplan.models.pointnet import (
     PointNet2Encoder,
     PointNetEncoder,
@@ -14,6 +13,7 @@ from robotplan.models.pointnet import (
 )
 from robotplan.models.rigid import RigidMotion
 from robotplan.models.spec import DynamicsSpec
+from robotplan.pushing.functionals.rigid_dynamics import RigidDynamics
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, Workspace
 

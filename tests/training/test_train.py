@@ -7,9 +7,9 @@ import pytest
 import torch
 
 from robotplan.models.dynamics import load_model
-from robotplan.training.evaluation import evaluate_push
+from robotplan.pushing.training.evaluation import evaluate_push
+from robotplan.pushing.training.rigid import train_rigid
 from robotplan.training.model_card import record_heldout, write_model_card
-from robotplan.training.rigid import train_rigid
 from robotplan.training.train import TrainConfig, train
 from tests.conftest import TINY_SPEC
 
@@ -123,7 +123,7 @@ def test_a_flow_on_an_occupancy_measure_predicts_it(tiny_push_data, tmp_path, re
     is the RMSE of ψ1_t − ψ1_{t−1} over X_h, computed here from the samples themselves."""
     import numpy as np
 
-    from robotplan.training.evaluation import pick_samples
+    from robotplan.pushing.training.evaluation import pick_samples
     from robotplan.training.samples import PushSamples
 
     cfg = config(tiny_push_data, tmp_path / "m", 40)
@@ -196,7 +196,7 @@ def test_an_object_frame_flow_learns_and_is_scored_on_the_tables_grid(tiny_push_
     from dataclasses import replace
 
     from robotplan.models.spec import OBJECT_WINDOW
-    from robotplan.training.evaluation import pick_samples
+    from robotplan.pushing.training.evaluation import pick_samples
     from robotplan.training.samples import PushSamples
     from robotplan.training.train import grid_rmse
 

@@ -10,7 +10,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from robotplan.execution.execute import execute_push, reach_substeps
+from robotplan.pushing.execution.execute import execute_push, reach_substeps
 from robotplan.scene.task import load_task
 from robotplan.viz.viewer import Layer, write_playback
 from tests.conftest import TASKS

@@ -1,0 +1,298 @@
+"""Commands on data, models and benchmarks: ``data``, ``train``, ``eval``, ``bench``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+from robotplan.base.resources import DYNAMICS_FOLDERS
+from robotplan.cli.common import (
+    EXIT_BAD_INPUT,
+    device_name,
+    load_footprint_scene,
+    loop_overrides,
+    model_folder,
+    not_a_model,
+    print_result,
+    program_overrides,
+    training_folders_problem,
+)
+from robotplan.pushing.cli.push_options import architecture, architecture_problem
+
+__all__ = ["cmd_bench", "cmd_bench_contact_push", "cmd_bench_functional", "cmd_bench_push",
+           "cmd_data_push", "cmd_eval_push", "cmd_train_push"]
+
+
+def cmd_data_push(args: argparse.Namespace) -> int:
+    from robotplan.training.push_data import PushDataSpec, generate
+
+    t0 = time.time()
+    try:
+        summary = generate(Path(args.out), args.scenes, args.seed, workers=args.workers,
+                           shard_size=args.shard_size, spec=PushDataSpec(shapes=args.shapes),
+                           ray=args.ray)
+    except ValueError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    seconds = time.time() - t0
+    summary["seconds"] = round(seconds, 1)
+    if summary["new_samples"]:
+        summary["samples_per_second"] = round(summary["new_samples"] / seconds, 1)
+    print(json.dumps(summary))
+    return 0
+
+
+def cmd_train_push(args: argparse.Namespace) -> int:
+    import torch
+
+    from robotplan.training.model_card import write_model_card
+    from robotplan.training.train import TrainConfig, train
+
+    out = Path(args.out)
+    problem = (training_folders_problem(args.data, args.out, args.resume, args.overwrite)
+               or architecture_problem(args))
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    ckpt = out / "checkpoint.pt"
+    device = device_name(args.device)
+    torch.set_num_threads(args.threads)
+    cfg = TrainConfig(data=args.data, out=args.out, kind=args.model, steps=args.steps,
+                      batch=args.batch, lr=args.lr, points=args.points, seed=args.seed,
+                      scenes=args.scenes, device=device, minutes=args.minutes,
+                      val_every=args.val_every, contact_share=args.contact_share,
+                      warmup=args.warmup, rigid_loss=args.rigid_loss,
+                      near_share=args.near_share, spec=architecture(args),
+                      augment=args.augment, anneal_by_time=args.anneal_by_time,
+                      init_weights=args.init_weights,
+                      command=" ".join(["robotplan", *sys.argv[1:]]))
+    if args.placement_reach is not None:
+        cfg = replace(cfg, placement_reach=args.placement_reach)
+    if args.resume:  # the run's settings come from its checkpoint; only the budget may change
+        saved = json.loads(torch.load(ckpt, weights_only=True)["config"])
+        cfg = TrainConfig(**{**saved, "steps": args.steps or saved["steps"],
+                             "minutes": args.minutes, "device": device,
+                             "out": args.out, "data": args.data,
+                             "contact_share": args.contact_share
+                             if args.contact_share is not None
+                             else saved.get("contact_share")})
+    if cfg.kind == "rigid":
+        from robotplan.pushing.training.rigid import train_rigid
+
+        last = train_rigid(cfg, resume=args.resume)
+    else:
+        last = train(cfg, resume=args.resume)
+        write_model_card(out)
+    print(json.dumps(last))
+    return 0
+
+
+def cmd_eval_push(args: argparse.Namespace) -> int:
+    import torch
+
+    from robotplan.pushing.training.evaluation import evaluate_push
+
+    torch.set_num_threads(args.threads)
+    device = device_name(args.device)
+    for path, what in ((args.model, "--model"), (args.data, "--data")):
+        if not Path(path).is_dir():
+            print(f"error: {path}: {what}: no such folder", file=sys.stderr)
+            return EXIT_BAD_INPUT
+    spec = json.loads((Path(args.model) / "spec.json").read_text()) if (
+        Path(args.model) / "spec.json").is_file() else {}
+    problem = views_problem(args, spec)
+    if problem:
+        print(f"error: {args.model}: --views: {problem}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if spec.get("kind") == "rigid":
+        from robotplan.pushing.training.rigid_evaluation import evaluate_rigid
+
+        if args.pose_fit > 0 or args.record:
+            print("note: --pose-fit and --record apply to F_flow and F; F_q predicts Δq "
+                  "itself (delta_q_error, turn_gain)", file=sys.stderr)
+
+        print_result(evaluate_rigid(args.model, args.data, scenes=args.scenes,
+                                    per_scene=args.per_scene or None, seed=args.seed,
+                                    device=device, views=args.views), args.json)
+        return 0
+    result = evaluate_push(args.model, args.data, scenes=args.scenes,
+                           per_scene=args.per_scene or None, seed=args.seed, device=device,
+                           views=args.views)
+    if args.pose_fit > 0:
+        from robotplan.pushing.training.pose_fit import evaluate_pose_fit
+
+        fit = evaluate_pose_fit(args.model, args.data, samples=args.pose_fit, seed=args.seed,
+                                scenes=args.scenes)
+        result["pose_fit"] = fit
+        # the Tab. 5 columns and turn gains as F_q reports them, read through the fit
+        if "delta_q_error" in fit:
+            result["delta_q_error"] = fit["delta_q_error"]
+        result["turn_gain"] = {k: v["turn_gain"] for k, v in fit.items()
+                               if isinstance(v, dict) and "turn_gain" in v and k != "all"}
+    if args.record:
+        from robotplan.training.model_card import record_heldout
+
+        record_heldout(Path(args.model), result)
+    print_result(result, args.json)
+    return 0
+
+
+def views_problem(args: argparse.Namespace, spec: dict) -> str | None:
+    """What is wrong with ``eval push --views`` for a model of ``spec`` (None: nothing)."""
+    if args.views == 1:
+        return None
+    if spec.get("representation") == "pointcloud":
+        return "a point-cloud F_q reads no grid to turn; give --views 1"
+    if args.record or args.pose_fit > 0:
+        return "--record and --pose-fit read the network alone; give --views 1"
+    if spec.get("frame", "table") == "object" and spec.get("kind") != "rigid":
+        return "an object-frame F_flow or F turns its grid with the object; give --views 1"
+    return None
+
+
+def dynamics_list_problem(kinds: list[str], model: str | None) -> str | None:
+    """What is wrong with ``--dynamics`` given as ``kinds`` (None: nothing)."""
+    known = ["auto", *sorted(DYNAMICS_FOLDERS)]
+    bad = next((k for k in kinds if k not in known), None)
+    if bad is not None:
+        return f"{bad!r} is not one of {', '.join(known)}"
+    if len(kinds) > 1 and ("auto" in kinds or model):
+        return "a list names shipped kinds only (flow, rigid, direct), without auto or --model"
+    return None
+
+
+def cmd_bench_push(args: argparse.Namespace) -> int:
+    from robotplan.pushing.bench.push import run_bench_push
+
+    kinds = args.dynamics.split(",")
+    problem = dynamics_list_problem(kinds, args.model)
+    if problem:
+        print(f"error: --dynamics: {problem}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    args.loop, args.program = loop_overrides(args), program_overrides(args)
+    if args.loop is None or args.program is None:
+        return EXIT_BAD_INPUT
+    if len(kinds) == 1:
+        args.model = model_folder(args)
+    if not_a_model(args.model):
+        return EXIT_BAD_INPUT
+    if args.scenes < 1:
+        print("error: --scenes: must be at least 1", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    bad = set(args.shapes.split(",")) - {"box", "lshape", "ood", "pose"}
+    if bad:
+        print(f"error: --shapes: unknown shape type {sorted(bad)[0]!r} (box, lshape, ood, "
+              "pose)",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    out = Path(args.out)
+    if len(kinds) > 1:
+        return _bench_compare(args, kinds, out)
+    summary_path = out / "summary.json"
+    if summary_path.exists() and not args.overwrite:
+        print(f"error: {out}: --out: holds a finished benchmark; pass --overwrite to redo it",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.overwrite and out.exists():
+        for name in ("summary.json", "rows.jsonl", "results.csv", "coverage.png"):
+            (out / name).unlink(missing_ok=True)
+    summary = run_bench_push(args.scenes, args.seed, out, args.model, args.workers,
+                             tuple(args.shapes.split(",")), args.exhaustive, args.time_budget,
+                             args.perturb, args.loop, args.ray, args.program,
+                             rehearse=not args.no_rehearse)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        for kind, q in summary["coverage"].items():
+            o = summary["open_loop_coverage"][kind]
+            t = summary["plan_seconds"][kind]
+            r, a = summary["replans"][kind], summary["replans_adopted"][kind]
+            c, w = summary["closed_loop_seconds"][kind], summary["open_loop_seconds"][kind]
+            print(f"{kind:>7}: coverage median closed loop {q['median']:.3f} (quartiles "
+                  f"{q['q1']:.3f}–{q['q3']:.3f}, min {q['min']:.3f}), open loop "
+                  f"{o['median']:.3f} ({o['q1']:.3f}–{o['q3']:.3f}, min {o['min']:.3f}), "
+                  f"n={q['n']}; re-plans per scene median {r['median']:.0f} ({a['adopted']} "
+                  f"of {a['of']} adopted); plan time median "
+                  f"{t['median']:.1f} s; plan + execution median {c['median']:.1f} s closed, "
+                  f"{w['median']:.1f} s open loop")
+        prof = summary["time_profile"]
+        if prof["candidate_seconds"]:
+            top = ", ".join(f"{k} {100 * v:.0f} %" for k, v in list(prof["share"].items())[:6])
+            print(f"time: {prof['programs']} programs, {prof['candidate_seconds']:.0f} s in "
+                  f"their callbacks and solver: {top}")
+        print(f"wrote {out / 'results.csv'}, {out / 'coverage.png'}, {summary_path}")
+    return 0
+
+
+def _bench_compare(args: argparse.Namespace, kinds: list[str], out: Path) -> int:
+    """``bench push --dynamics A,B,…``: one benchmark per kind, then the comparison."""
+    from robotplan.pushing.bench.compare import run_bench_compare
+
+    if (out / "compare.json").exists() and not args.overwrite:
+        print(f"error: {out}: --out: holds a finished comparison; pass --overwrite to redo it",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.overwrite:
+        for kind in kinds:
+            for name in ("summary.json", "rows.jsonl", "results.csv", "coverage.png"):
+                (out / kind / name).unlink(missing_ok=True)
+    result = run_bench_compare(kinds, args.scenes, args.seed, out, args.workers,
+                               tuple(args.shapes.split(",")), args.exhaustive,
+                               args.time_budget, args.perturb, args.loop, args.ray,
+                               args.program, rehearse=not args.no_rehearse)
+    if args.json:
+        print(json.dumps(result))
+        return 0
+    for kind, shapes in result["models"].items():
+        for shape, v in shapes.items():
+            c, o, t = v["closed_loop"], v["open_loop"], v["plan_seconds"]
+            print(f"{kind:>7} {shape:>7}: closed loop {c['median']:.3f} (q1 {c['q1']:.3f}), "
+                  f"open loop {o['median']:.3f} (q1 {o['q1']:.3f}); below 0.9 "
+                  f"{v['below_0_9']['closed_loop']} / {v['below_0_9']['open_loop']}; "
+                  f"unsolved {v['unsolved']} of {c['n']}; plan time median {t['median']:.1f} s")
+    print(f"wrote {out / 'compare.json'}, {out / 'compare.png'}")
+    return 0
+
+
+def cmd_bench_functional(args: argparse.Namespace) -> int:
+    import torch
+
+    from robotplan.pushing.bench.functional import bench_functional
+
+    torch.set_num_threads(args.threads)
+    if not_a_model(args.model):
+        return EXIT_BAD_INPUT
+    result = bench_functional(args.model, configurations=args.configurations,
+                              repeats=args.repeats,
+                              naive=not args.no_naive)
+    print_result(result, args.json)
+    return 0
+
+
+def cmd_bench_contact_push(args: argparse.Namespace) -> int:
+    from robotplan.pushing.bench.contact_push import plan_from_contact
+
+    if not_a_model(args.model):
+        return EXIT_BAD_INPUT
+    result = plan_from_contact(args.model)
+    if not args.json:
+        result = {k: v for k, v in result.items() if k not in ("q_obj", "q_pusher")}
+    print_result(result, args.json)
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    import torch
+
+    from robotplan.bench.sdf import bench_sdf
+
+    torch.set_num_threads(args.threads)
+    scene = load_footprint_scene(args.scene, "bench sdf")
+    dtype = {"float32": torch.float32, "float64": torch.float64}[args.dtype]
+    result = bench_sdf(scene, steps=args.steps, repeats=args.repeats, dtype=dtype)
+    print_result(result, args.json)
+    return 0

@@ -1,0 +1,1 @@
+"""The pushing slice's functionals layer."""
