@@ -40,7 +40,7 @@ def box_scene():
 @pytest.fixture(scope="session")
 def tiny_push_data(tmp_path_factory) -> Path:
     """12 real pybullet scenes (seed 5), in shards of 4: a few seconds."""
-    from robotplan.training.push_data import generate
+    from robotplan.pushing.training.push_data import generate
 
     out = tmp_path_factory.mktemp("push") / "data"
     generate(out, scenes=12, seed=5, workers=1, shard_size=4, progress=False)
@@ -50,7 +50,7 @@ def tiny_push_data(tmp_path_factory) -> Path:
 @pytest.fixture(scope="session")
 def tiny_ood_push_data(tmp_path_factory) -> Path:
     """8 real pybullet scenes of the unseen footprints (seed 5), one of each family."""
-    from robotplan.training.push_data import PushDataSpec, generate
+    from robotplan.pushing.training.push_data import PushDataSpec, generate
 
     out = tmp_path_factory.mktemp("push_ood") / "data"
     generate(out, scenes=8, seed=5, workers=1, shard_size=4, progress=False,

@@ -96,7 +96,7 @@ def _trained(steps: Steps, kind: str, key: str, cfg: dict, data: Path) -> str:
     representation ``key`` on ``data`` with the TrainConfig fields ``cfg``: the step's
     folder (under the output folder)."""
     from robotplan.pushing.training.rigid import train_rigid
-    from robotplan.training.train import TrainConfig, train
+    from robotplan.pushing.training.train import TrainConfig, train
 
     fit = train_rigid if kind == "rigid" else train
     spec = dict(cfg["spec"])
@@ -165,8 +165,8 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
     from robotplan.pushing.bench.push import run_bench_push
     from robotplan.pushing.training.evaluation import evaluate_push
     from robotplan.pushing.training.pose_fit import evaluate_pose_fit
+    from robotplan.pushing.training.push_data import PushDataSpec, generate
     from robotplan.pushing.training.rigid_evaluation import evaluate_rigid
-    from robotplan.training.push_data import PushDataSpec, generate
 
     out.mkdir(parents=True, exist_ok=True)
     steps = Steps(out, inputs_digest(), progress)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import platform
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -19,7 +20,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-__all__ = ["Run", "epoch_batch", "load_checkpoint", "lr_at", "run_steps"]
+__all__ = ["Run", "epoch_batch", "hardware", "load_checkpoint", "lr_at", "run_steps",
+           "write_json"]
 
 
 @dataclass
@@ -122,3 +124,20 @@ def run_steps(cfg, run: Run, model: torch.nn.Module, opt: torch.optim.Optimizer,
     if not run.history or run.history[-1]["step"] != run.step:
         validate()
     return run.history[-1]
+
+
+def hardware(device: torch.device) -> dict:
+    """Where a model was trained: device, CPU, cores, torch threads and version."""
+    info = {"device": str(device), "cpu": platform.processor() or platform.machine(),
+            "cores": os.cpu_count(), "threads": torch.get_num_threads(),
+            "torch": torch.__version__}
+    if device.type == "cuda":
+        info["gpu"] = torch.cuda.get_device_name(device)
+    return info
+
+
+def write_json(path: Path, data: dict) -> None:
+    """``data`` as JSON at ``path``, whole or not at all (written beside it, then moved)."""
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(data, indent=1))
+    os.replace(tmp, path)

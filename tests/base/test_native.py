@@ -10,11 +10,11 @@ import torch
 from torch import nn
 
 from robotplan.base import native
-from robotplan.models import encoder_passes as passes
-from robotplan.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.pushing.functionals import dynamics as fd
 from robotplan.pushing.functionals import grid_render
 from robotplan.pushing.functionals.dynamics import render_on_grid
+from robotplan.pushing.models import encoder_passes as passes
+from robotplan.pushing.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape, Polygon, Workspace
 

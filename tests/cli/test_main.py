@@ -123,8 +123,8 @@ def test_bench_contact_push_refuses_a_non_model_and_plans_with_a_point_cloud_mod
         tmp_path, capsys):
     import torch
 
-    from robotplan.models.dynamics import DynamicsSpec
-    from robotplan.models.rigid import RigidMotion, save_rigid
+    from robotplan.pushing.models.dynamics import DynamicsSpec
+    from robotplan.pushing.models.rigid import RigidMotion, save_rigid
 
     res = call(capsys, "bench", "contact-push", "--model", str(tmp_path))
     assert res.returncode == 2 and "--model" in res.stderr

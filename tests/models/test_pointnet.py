@@ -11,9 +11,9 @@ from robotplan.models.pointnet import (
     boundary_points,
     farthest_points,
 )
-from robotplan.models.rigid import RigidMotion
 from robotplan.models.spec import DynamicsSpec
 from robotplan.pushing.functionals.rigid_dynamics import RigidDynamics
+from robotplan.pushing.models.rigid import RigidMotion
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, Workspace
 

@@ -4,8 +4,8 @@ first convolution reads, and reverse mode through ψ against autograd (float64).
 import pytest
 import torch
 
-from robotplan.models.dynamics import DynamicsSpec, PushDynamics
-from robotplan.models.rigid import RigidMotion
+from robotplan.pushing.models.dynamics import DynamicsSpec, PushDynamics
+from robotplan.pushing.models.rigid import RigidMotion
 
 TINY_SPEC = {"channels": (2, 3, 3), "sdf_features": 8, "point_features": 8,
              "hidden": (16, 16)}

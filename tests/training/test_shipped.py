@@ -5,8 +5,8 @@ import json
 import pytest
 
 from robotplan.hanging.models.hang_model import HANG_THRESHOLDS, load_hang_model
-from robotplan.models.dynamics import load_model
-from robotplan.models.rigid import load_rigid
+from robotplan.pushing.models.dynamics import load_model
+from robotplan.pushing.models.rigid import load_rigid
 from robotplan.pushing.training.evaluation import evaluate_push
 from robotplan.pushing.training.rigid_evaluation import evaluate_rigid
 from tests.conftest import DATA, ROOT

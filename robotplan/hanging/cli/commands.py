@@ -149,7 +149,7 @@ def cmd_eval_hang(args: argparse.Namespace) -> int:
     samples = HangSamples(args.data, model.spec, args.scenes)
     result = hang_metrics(model, samples, np.arange(len(samples)))
     if args.record:
-        from robotplan.training.train import write_json
+        from robotplan.training.loop import write_json
 
         path = Path(args.model) / "metrics.json"
         metrics = json.loads(path.read_text()) if path.is_file() else {}

@@ -25,8 +25,14 @@ from robotplan.hanging.models.hang_model import (
     save_hang_model,
 )
 from robotplan.hanging.training.data import decode_hook, load_hang_shards
-from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
-from robotplan.training.train import hardware, write_json
+from robotplan.training.loop import (
+    Run,
+    epoch_batch,
+    hardware,
+    load_checkpoint,
+    run_steps,
+    write_json,
+)
 
 __all__ = ["HangSamples", "HangTrainConfig", "hang_metrics", "train_hang"]
 

@@ -16,8 +16,6 @@ import torch
 from robotplan.base.native import kernels
 from robotplan.base.resources import learned_dir
 from robotplan.functionals import Collision, GoalRegion, Quadrature
-from robotplan.models.dynamics import DynamicsSpec, load_model
-from robotplan.models.rigid import load_rigid
 from robotplan.models.spec import read_spec
 from robotplan.pushing.functionals.dynamics import (
     QUADRATURE_COARSE,
@@ -27,10 +25,12 @@ from robotplan.pushing.functionals.dynamics import (
 )
 from robotplan.pushing.functionals.framed_dynamics import FramedDynamics
 from robotplan.pushing.functionals.rigid_dynamics import RigidDynamics
+from robotplan.pushing.models.dynamics import DynamicsSpec, load_model
 from robotplan.pushing.models.loading import dynamics_kind
+from robotplan.pushing.models.rigid import load_rigid
+from robotplan.pushing.training.push_data import simulate_scene
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, Workspace
-from robotplan.training.push_data import simulate_scene
 
 __all__ = ["bench_analytic", "bench_functional", "bench_rigid", "realistic_pushes"]
 

@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 
-from robotplan.training.footprints import OOD_FAMILIES, draw_ood_shape
-from robotplan.training.push_data import PushDataSpec, draw_shape
+from robotplan.pushing.training.footprints import OOD_FAMILIES, draw_ood_shape
+from robotplan.pushing.training.push_data import PushDataSpec, draw_shape
 
 __all__ = ["OOD_FAMILIES", "POSE_FAMILIES", "draw_ood_shape", "draw_scene", "family_of"]
 

@@ -28,7 +28,7 @@ __all__ = ["cmd_bench", "cmd_bench_contact_push", "cmd_bench_functional", "cmd_b
 
 
 def cmd_data_push(args: argparse.Namespace) -> int:
-    from robotplan.training.push_data import PushDataSpec, generate
+    from robotplan.pushing.training.push_data import PushDataSpec, generate
 
     t0 = time.time()
     try:
@@ -49,8 +49,8 @@ def cmd_data_push(args: argparse.Namespace) -> int:
 def cmd_train_push(args: argparse.Namespace) -> int:
     import torch
 
-    from robotplan.training.model_card import write_model_card
-    from robotplan.training.train import TrainConfig, train
+    from robotplan.pushing.training.model_card import write_model_card
+    from robotplan.pushing.training.train import TrainConfig, train
 
     out = Path(args.out)
     problem = (training_folders_problem(args.data, args.out, args.resume, args.overwrite)
@@ -134,7 +134,7 @@ def cmd_eval_push(args: argparse.Namespace) -> int:
         result["turn_gain"] = {k: v["turn_gain"] for k, v in fit.items()
                                if isinstance(v, dict) and "turn_gain" in v and k != "all"}
     if args.record:
-        from robotplan.training.model_card import record_heldout
+        from robotplan.pushing.training.model_card import record_heldout
 
         record_heldout(Path(args.model), result)
     print_result(result, args.json)

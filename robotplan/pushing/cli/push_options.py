@@ -27,7 +27,7 @@ def architecture(args: argparse.Namespace) -> dict:
 def architecture_problem(args: argparse.Namespace) -> str | None:
     """Why the widths given to ``train push`` cannot build a model, or None."""
     from robotplan.models.spec import DynamicsSpec, conv_output_side
-    from robotplan.training.train import WINDOW_AUGMENTS
+    from robotplan.pushing.training.train import WINDOW_AUGMENTS
 
     if args.frame == "object":
         if args.augment == "turns":

@@ -18,8 +18,8 @@ import torch
 from robotplan.execution.scene_world import Observation
 from robotplan.execution.sim import PHYSICS, Physics
 from robotplan.geometry.transforms import planar_to_world
-from robotplan.models.rigid import RigidMotion, moved_pose
 from robotplan.pushing.functionals.rigid_dynamics import RigidDynamics
+from robotplan.pushing.models.rigid import RigidMotion, moved_pose
 from robotplan.scene.task import PushTask
 
 __all__ = ["CONTACT_GAP", "ImaginedWorld", "rigid_step"]

@@ -21,10 +21,10 @@ import numpy as np
 
 from robotplan.base.resources import REHEARSAL_FOLDERS, learned_dir
 from robotplan.execution.sim import PHYSICS, Physics
-from robotplan.models.rigid import RigidMotion
 from robotplan.pushing.execution.closed_loop import Replanner, execute_closed_loop
 from robotplan.pushing.execution.imagined_world import ImaginedWorld
 from robotplan.pushing.execution.loop_settings import LoopSettings
+from robotplan.pushing.models.rigid import RigidMotion
 from robotplan.pushing.program.solution import Solution
 from robotplan.scene.task import PushTask
 

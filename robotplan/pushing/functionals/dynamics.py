@@ -40,7 +40,7 @@ through the whole network, autograd) in far less time:
   encoder's). Its hidden-to-hidden products run in the model's dtype: float32, or bfloat16
   (float32 accumulation) only where the user opts in (``ROBOTPLAN_HEAD_BFLOAT16=1``) and
   the CPU multiplies bfloat16 natively
-  (:func:`~robotplan.models.dynamics.head_matmul_dtype`); a float64 model (the tests)
+  (:func:`~robotplan.pushing.models.dynamics.head_matmul_dtype`); a float64 model (the tests)
   computes in float64 throughout;
 * **one-pass rendering**: circles, boxes and L-shapes are rendered on the grid by the same
   C kernels (φ, ∇φ and the body-frame coordinates in one vectorized pass over the
@@ -63,7 +63,6 @@ from torch import Tensor
 
 from robotplan.base.memory import keep_freed_memory
 from robotplan.functionals.base import Quadrature
-from robotplan.models.dynamics import PushDynamics, head_matmul_dtype
 from robotplan.pushing.functionals.grid_render import (
     GridTangents,
     grid_with_tangents,
@@ -74,6 +73,7 @@ from robotplan.pushing.functionals.quadrature import (
     QUADRATURE_LEVELS,
     phase_quadrature,
 )
+from robotplan.pushing.models.dynamics import PushDynamics, head_matmul_dtype
 from robotplan.pushing.models.folded_layer import FoldedLayer
 from robotplan.pushing.models.tiled_head import TiledHead, tile_points
 from robotplan.scene.bodies import Body

@@ -21,9 +21,9 @@ from torch import Tensor
 
 from robotplan.functionals.base import Quadrature
 from robotplan.geometry.transforms import planar_to_body, planar_to_world
-from robotplan.models.dynamics import PushDynamics
-from robotplan.models.rigid import object_frame
 from robotplan.pushing.functionals.dynamics import LearnedDynamics
+from robotplan.pushing.models.dynamics import PushDynamics
+from robotplan.pushing.models.rigid import object_frame
 from robotplan.scene.bodies import Body
 from robotplan.sdf.footprint import footprint_centroid
 

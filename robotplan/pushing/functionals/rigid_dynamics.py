@@ -18,7 +18,7 @@ Gradients: the three grids of a step are rendered with their tangents
 network's outputs with respect to the grid values is contracted with them. For an F_q on
 grids (SDFs or occupancy), G comes without autograd through the grids: the small head is
 differentiated by autograd, the encoder in reverse mode by hand
-(:class:`~robotplan.models.encoder_passes.EncoderPasses`), one pass back per step. A
+(:class:`~robotplan.pushing.models.encoder_passes.EncoderPasses`), one pass back per step. A
 point-cloud F_q (:mod:`robotplan.models.pointnet`) is differentiated by autograd through
 the whole model, the marching-squares vertices included: each vertex is the linear
 interpolation of φ on a grid edge where φ changes sign, so G reaches only the grid points
@@ -39,9 +39,9 @@ import math
 import torch
 from torch import Tensor
 
-from robotplan.models.rigid import RigidMotion, delta_in_frame
 from robotplan.pushing.functionals.grid_render import render_on_grid
 from robotplan.pushing.models.folded_layer import FoldedLayer
+from robotplan.pushing.models.rigid import RigidMotion, delta_in_frame
 from robotplan.scene.bodies import Body
 
 __all__ = ["RigidDynamics", "footprint_moments"]

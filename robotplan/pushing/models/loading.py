@@ -6,9 +6,9 @@ from pathlib import Path
 
 import torch
 
-from robotplan.models.dynamics import PushDynamics, load_model
-from robotplan.models.rigid import RigidMotion, load_rigid
 from robotplan.models.spec import read_spec
+from robotplan.pushing.models.dynamics import PushDynamics, load_model
+from robotplan.pushing.models.rigid import RigidMotion, load_rigid
 
 __all__ = ["dynamics_kind", "load_dynamics"]
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import torch
 from torch import Tensor, nn
 
-from robotplan.models.dynamics import PushDynamics, relu_backward
+from robotplan.pushing.models.dynamics import PushDynamics, relu_backward
 
 __all__ = ["TILE_POINTS", "TiledHead", "tile_points"]
 

@@ -23,7 +23,7 @@ import numpy as np
 from pydrake.solvers import IpoptSolver, MathematicalProgram, SnoptSolver, SolverOptions
 
 from robotplan.functionals.kinematics import arm_kinematics
-from robotplan.models.dynamics import PushDynamics
+from robotplan.pushing.models.dynamics import PushDynamics
 from robotplan.pushing.program.builder import add_rows
 from robotplan.pushing.program.chain_guess import chain_guess
 from robotplan.pushing.program.guess import initial_guess

@@ -13,8 +13,6 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from robotplan.models.dynamics import PushDynamics
-from robotplan.models.rigid import RigidMotion
 from robotplan.pushing.functionals.dynamics import (
     QUADRATURE_COARSE,
     LearnedDynamics,
@@ -22,6 +20,8 @@ from robotplan.pushing.functionals.dynamics import (
 )
 from robotplan.pushing.functionals.framed_dynamics import FramedDynamics, field_dynamics
 from robotplan.pushing.functionals.rigid_dynamics import RigidDynamics
+from robotplan.pushing.models.dynamics import PushDynamics
+from robotplan.pushing.models.rigid import RigidMotion
 
 __all__ = ["Dynamics", "add_dynamics", "mm2_per_unit", "residual_mm2"]
 

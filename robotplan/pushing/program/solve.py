@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotplan.models.dynamics import PushDynamics
+from robotplan.pushing.models.dynamics import PushDynamics
 from robotplan.pushing.program.push_program import PushProgram
 from robotplan.pushing.program.settings import DEFAULT_SETTINGS, ProgramSettings
 from robotplan.pushing.program.skeleton import Skeleton, SkeletonSpace

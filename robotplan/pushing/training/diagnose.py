@@ -25,8 +25,8 @@ import torch
 
 from robotplan.execution.sim import PHYSICS, PushWorld
 from robotplan.geometry.transforms import wrap_angle
-from robotplan.models.dynamics import load_model
 from robotplan.pushing.execution.execute import obstacle_bodies
+from robotplan.pushing.models.dynamics import load_model
 from robotplan.pushing.training.pose_fit import fit_step
 from robotplan.scene.task import PushTask
 

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from robotplan.models.dynamics import load_model
+from robotplan.pushing.models.dynamics import load_model
 from robotplan.pushing.models.symmetry import symmetric_field
-from robotplan.training.samples import PushSamples, SampleBatch
-from robotplan.training.train import framed, scored_workspace
+from robotplan.pushing.training.samples import PushSamples, SampleBatch
+from robotplan.pushing.training.train import framed, scored_workspace
 
 __all__ = ["evaluate_push", "pick_samples"]
 

@@ -26,16 +26,16 @@ from scipy.optimize import minimize
 
 from robotplan.functionals.base import Quadrature
 from robotplan.geometry.transforms import wrap_angle
-from robotplan.models.dynamics import PushDynamics, load_model
-from robotplan.models.rigid import moved_pivot_delta
 from robotplan.pushing.functionals.framed_dynamics import field_dynamics
+from robotplan.pushing.models.dynamics import PushDynamics, load_model
+from robotplan.pushing.models.rigid import moved_pivot_delta
+from robotplan.pushing.training.footprints import BOX, LSHAPE
+from robotplan.pushing.training.push_data import scene_footprint
 from robotplan.pushing.training.rigid import table5_errors
+from robotplan.pushing.training.samples import PushSamples
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Circle
 from robotplan.sdf.footprint import footprint_centroid
-from robotplan.training.footprints import BOX, LSHAPE
-from robotplan.training.push_data import scene_footprint
-from robotplan.training.samples import PushSamples
 
 __all__ = ["evaluate_pose_fit", "fit_step"]
 

@@ -1,12 +1,12 @@
-"""Training and evaluating F_q (:mod:`robotplan.models.rigid`) on push data.
+"""Training and evaluating F_q (:mod:`robotplan.pushing.models.rigid`) on push data.
 
 Two losses (``TrainConfig.rigid_loss``): ``"delta"``, the ground-truth Δq of each step from
 the simulator's poses about the pivot the SDF defines
-(:func:`~robotplan.models.rigid.moved_pivot_delta`), its squared error in units of the
+(:func:`~robotplan.pushing.models.rigid.moved_pivot_delta`), its squared error in units of the
 spec's ``out_scale`` (m) and ``turn_scale`` (rad); ``"sdf"``, the SDFs alone: eq. (5)
 through the transform, φ1_{t−1}(T(Δq)⁻¹x) against φ1_t(x) at query points
 (:func:`sdf_space_loss`), in units of ``out_scale``. The
-run is seeded and resumable as :func:`robotplan.training.train.train` is (batches from a
+run is seeded and resumable as :func:`robotplan.pushing.training.train.train` is (batches from a
 permutation per ``(seed, epoch)``, ``checkpoint.pt`` every few minutes and at the end).
 """
 
@@ -21,7 +21,8 @@ import torch
 from torch import Tensor
 
 from robotplan.geometry.transforms import planar_to_world
-from robotplan.models.rigid import (
+from robotplan.models.spec import DynamicsSpec
+from robotplan.pushing.models.rigid import (
     RigidMotion,
     delta_in_frame,
     moved_pivot_delta,
@@ -30,18 +31,22 @@ from robotplan.models.rigid import (
     sdf_pivot,
     transform_points,
 )
-from robotplan.models.spec import DynamicsSpec
 from robotplan.pushing.models.symmetry import symmetric_delta_q
-from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
-from robotplan.training.model_card import earlier_stages
-from robotplan.training.samples import PushSamples, SampleBatch
-from robotplan.training.train import (
+from robotplan.pushing.training.model_card import earlier_stages
+from robotplan.pushing.training.samples import PushSamples, SampleBatch
+from robotplan.pushing.training.train import (
     WINDOW_AUGMENTS,
     TrainConfig,
     augmented,
-    hardware,
     query_points,
     validation_indices,
+)
+from robotplan.training.loop import (
+    Run,
+    epoch_batch,
+    hardware,
+    load_checkpoint,
+    run_steps,
     write_json,
 )
 

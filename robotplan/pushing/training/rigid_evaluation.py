@@ -17,13 +17,13 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from robotplan.models.rigid import load_rigid, moved_pose
 from robotplan.models.spec import DynamicsSpec
+from robotplan.pushing.models.rigid import load_rigid, moved_pose
 from robotplan.pushing.training.evaluation import pick_samples
+from robotplan.pushing.training.footprints import BOX, LSHAPE
+from robotplan.pushing.training.push_data import scene_families
 from robotplan.pushing.training.rigid import delta_q_predictions, table5_errors, turn_gain
-from robotplan.training.footprints import BOX, LSHAPE
-from robotplan.training.push_data import scene_families
-from robotplan.training.samples import PushSamples, SampleBatch
+from robotplan.pushing.training.samples import PushSamples, SampleBatch
 
 __all__ = ["evaluate_rigid", "moved_sdf_rmse"]
 

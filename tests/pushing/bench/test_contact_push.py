@@ -6,8 +6,6 @@ import numpy as np
 import pytest
 import torch
 
-from robotplan.models.dynamics import DynamicsSpec
-from robotplan.models.rigid import RigidMotion, save_rigid
 from robotplan.pushing.bench.contact_push import (
     CONTACT_PUSH_SETTINGS,
     GAP,
@@ -18,6 +16,8 @@ from robotplan.pushing.bench.contact_push import (
     plot_contact_pushes,
     still_guess,
 )
+from robotplan.pushing.models.dynamics import DynamicsSpec
+from robotplan.pushing.models.rigid import RigidMotion, save_rigid
 from tests.conftest import TINY_SPEC
 
 SPEC = {k: v for k, v in TINY_SPEC.items() if k != "point_features"}

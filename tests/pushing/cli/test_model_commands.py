@@ -47,7 +47,7 @@ def test_train_push_builds_an_occupancy_baseline(tiny_push_data, tmp_path, capsy
     and predicts."""
     import torch
 
-    from robotplan.models.rigid import load_rigid
+    from robotplan.pushing.models.rigid import load_rigid
 
     assert _train(tiny_push_data, tmp_path / "fq", "--representation", "smooth_occupancy",
                   "--sharpness", "1000") == 0
@@ -93,7 +93,7 @@ def test_data_push_on_ray_without_the_package_is_one_line_and_writes_nothing(
 
 def test_train_push_builds_an_object_frame_f_q(tiny_push_data, tmp_path, capsys):
     """``--frame object``: the spec carries the frame and the window X_h of 64 × 64 cm."""
-    from robotplan.models.rigid import load_rigid
+    from robotplan.pushing.models.rigid import load_rigid
 
     assert _train(tiny_push_data, tmp_path / "fq", "--frame", "object") == 0
     spec = json.loads((tmp_path / "fq" / "spec.json").read_text())

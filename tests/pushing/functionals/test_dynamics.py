@@ -4,13 +4,13 @@ import pytest
 import torch
 
 from robotplan.functionals import Quadrature
-from robotplan.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.pushing.functionals.dynamics import (
     LearnedDynamics,
     grid_with_tangents,
     phase_quadrature,
     render_on_grid,
 )
+from robotplan.pushing.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape, Workspace
 from tests.functionals.conftest import F64, assert_step_jacobians

@@ -7,9 +7,9 @@ import pytest
 import torch
 
 from robotplan.functionals import Quadrature
-from robotplan.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.models.spec import OBJECT_WINDOW
 from robotplan.pushing.functionals.framed_dynamics import FramedDynamics
+from robotplan.pushing.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape
 from tests.functionals.conftest import F64, assert_step_jacobians
@@ -47,11 +47,11 @@ def bodies():
 @pytest.mark.parametrize("kind", ["flow", "direct"])
 def test_h_f_is_the_training_loss_of_the_step(kind):
     """Per step, H_t is Σ_n w_n (φ1_t(x_n) − F̂_t(x_n))² with F̂_t what training predicts
-    for the same push (``robotplan.training.train.framed``: the window placed at the
+    for the same push (``robotplan.pushing.training.train.framed``: the window placed at the
     footprint's centroid, the points read in its frame)."""
+    from robotplan.pushing.training.samples import SampleBatch
+    from robotplan.pushing.training.train import framed
     from robotplan.sdf.footprint import footprint_centroid
-    from robotplan.training.samples import SampleBatch
-    from robotplan.training.train import framed
 
     m, (obj, pusher) = model(kind), bodies()
     X1, X2 = trajectory()

@@ -6,9 +6,9 @@ import math
 import pytest
 import torch
 
-from robotplan.models.dynamics import DynamicsSpec
-from robotplan.models.rigid import RigidMotion
 from robotplan.pushing.functionals.rigid_dynamics import RigidDynamics, footprint_moments
+from robotplan.pushing.models.dynamics import DynamicsSpec
+from robotplan.pushing.models.rigid import RigidMotion
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape
 from tests.functionals.conftest import F64, assert_step_jacobians

@@ -5,9 +5,9 @@ import math
 import pytest
 import torch
 
-from robotplan.models.dynamics import PushDynamics
-from robotplan.models.rigid import RigidMotion
 from robotplan.models.spec import DynamicsSpec
+from robotplan.pushing.models.dynamics import PushDynamics
+from robotplan.pushing.models.rigid import RigidMotion
 from robotplan.pushing.models.symmetry import grid_views, symmetric_delta_q, symmetric_field
 from robotplan.sdf import Workspace
 from tests.conftest import TINY_SPEC

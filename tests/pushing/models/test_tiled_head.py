@@ -1,7 +1,7 @@
 import pytest
 import torch
 
-from robotplan.models.dynamics import DynamicsSpec, PushDynamics
+from robotplan.pushing.models.dynamics import DynamicsSpec, PushDynamics
 from robotplan.pushing.models.tiled_head import TiledHead, tile_points
 from tests.conftest import TINY_SPEC
 

@@ -9,8 +9,8 @@ import torch
 from pydrake.autodiffutils import ExtractGradient, ExtractValue, InitializeAutoDiff
 
 from robotplan.functionals.collision import crossing_depth
-from robotplan.models.dynamics import DynamicsSpec, PushDynamics
-from robotplan.models.rigid import RigidMotion
+from robotplan.pushing.models.dynamics import DynamicsSpec, PushDynamics
+from robotplan.pushing.models.rigid import RigidMotion
 from robotplan.pushing.program.push_program import PushProgram
 from robotplan.pushing.program.rows_push import swept_shortfall
 from robotplan.pushing.program.settings import ProgramSettings

@@ -122,7 +122,7 @@ def test_the_program_adds_the_rows_in_table_order(learned, monkeypatch):
     model = None
     if learned:
         from robotplan.base.resources import learned_dir
-        from robotplan.models.dynamics import load_model
+        from robotplan.pushing.models.dynamics import load_model
         model = load_model(learned_dir())
     prog = PushProgram(task, sk, model, load_skeleton_space(), ProgramSettings())
     stage = ("both", "learned" if learned else "kinematic")

@@ -4,12 +4,12 @@ import numpy as np
 import torch
 
 from robotplan.functionals.base import Quadrature
-from robotplan.models.dynamics import load_model
 from robotplan.pushing.functionals.dynamics import LearnedDynamics
+from robotplan.pushing.models.dynamics import load_model
 from robotplan.pushing.training.pose_fit import _local_quadrature, evaluate_pose_fit, fit_step
+from robotplan.pushing.training.samples import PushSamples
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Box, Circle, LShape
-from robotplan.training.samples import PushSamples
 from tests.conftest import DATA, ROOT
 
 FLOW = ROOT / "learned" / "push_flow"
@@ -70,9 +70,9 @@ def test_evaluate_pose_fit_reports_both_shapes():
 def test_an_object_frame_model_is_fitted_through_its_own_h_f():
     """An object-frame F_flow is read as the planner reads it (H_F with the grid about the
     object): the fitted pose has a lower H_t than the start and than small moves around it."""
-    from robotplan.models.dynamics import DynamicsSpec, PushDynamics
     from robotplan.models.spec import OBJECT_WINDOW
     from robotplan.pushing.functionals.framed_dynamics import FramedDynamics
+    from robotplan.pushing.models.dynamics import DynamicsSpec, PushDynamics
 
     torch.manual_seed(2)
     spec = DynamicsSpec(kind="flow", frame="object", channels=(2, 3, 3), sdf_features=16,

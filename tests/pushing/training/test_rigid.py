@@ -9,10 +9,10 @@ from dataclasses import replace
 import pytest
 import torch
 
-from robotplan.models.rigid import load_rigid
+from robotplan.pushing.models.rigid import load_rigid
 from robotplan.pushing.training.rigid import train_rigid
 from robotplan.pushing.training.rigid_evaluation import evaluate_rigid
-from robotplan.training.train import TrainConfig
+from robotplan.pushing.training.train import TrainConfig
 from tests.conftest import TINY_SPEC
 
 
@@ -79,8 +79,8 @@ def test_f_q_is_scored_in_tab_2_terms_beside_f_flow(tiny_push_data, tiny_ood_pus
     from robotplan.pushing.training.evaluation import evaluate_push
     from robotplan.pushing.training.rigid import rigid_targets
     from robotplan.pushing.training.rigid_evaluation import moved_sdf_rmse
-    from robotplan.training.samples import PushSamples
-    from robotplan.training.train import train
+    from robotplan.pushing.training.samples import PushSamples
+    from robotplan.pushing.training.train import train
 
     ws = DynamicsSpec().workspace()
     table = ws.points(torch.float64).reshape(-1, 2)
@@ -110,10 +110,10 @@ def test_f_q_is_scored_in_tab_2_terms_beside_f_flow(tiny_push_data, tiny_ood_pus
 def test_the_sdf_space_loss_has_the_gradient_of_its_finite_differences():
     """Eq. (5) through T(Δq), φ1_{t−1} read from a grid: float64 gradient in Δq against
     finite differences, and zero loss at the true Δq of an exactly rendered rigid motion."""
-    from robotplan.models.rigid import moved_pivot_delta, sdf_pivot
+    from robotplan.pushing.models.rigid import moved_pivot_delta, sdf_pivot
     from robotplan.pushing.training.rigid import sdf_space_loss
+    from robotplan.pushing.training.samples import object_sdf
     from robotplan.sdf import Workspace
-    from robotplan.training.samples import object_sdf
 
     ws = Workspace((0.0, 0.0), (0.6, 0.6), 0.01)
     grid = ws.points(torch.float64)
@@ -175,8 +175,8 @@ def test_quarter_turns_turn_the_rendered_inputs_and_the_delta_q(tiny_push_data,
     ``turns`` augmentation relies on, for boxes, L-shapes and the unseen footprints."""
     from robotplan.models.spec import DynamicsSpec
     from robotplan.pushing.training.rigid import rigid_targets
+    from robotplan.pushing.training.samples import PushSamples
     from robotplan.sdf import Workspace
-    from robotplan.training.samples import PushSamples
 
     spec = DynamicsSpec(kind="rigid")
     ws = Workspace(spec.workspace_center, spec.workspace_size,
@@ -208,10 +208,10 @@ def test_object_frame_inputs_and_delta_q_do_not_change_with_the_scenes_place(tin
     table-frame Δq about that centroid."""
     from dataclasses import replace as with_fields
 
-    from robotplan.models.rigid import delta_in_frame, moved_pivot_delta, object_frame
     from robotplan.models.spec import OBJECT_WINDOW, DynamicsSpec
+    from robotplan.pushing.models.rigid import delta_in_frame, moved_pivot_delta, object_frame
     from robotplan.pushing.training.rigid import rigid_targets
-    from robotplan.training.samples import PushSamples, object_sdf
+    from robotplan.pushing.training.samples import PushSamples, object_sdf
 
     ws = DynamicsSpec(kind="rigid", frame="object", **OBJECT_WINDOW).workspace()
     grid = ws.points(torch.float64).reshape(-1, 2)
@@ -267,10 +267,10 @@ def test_a_placed_object_frame_keeps_the_table_frame_delta_q(tiny_push_data, off
     its origin is the same step on the table as the simulator's poses give about that
     point."""
     from robotplan.geometry.transforms import planar_to_body, planar_to_world
-    from robotplan.models.rigid import delta_in_frame, moved_pivot_delta, object_frame
     from robotplan.models.spec import OBJECT_WINDOW, DynamicsSpec
+    from robotplan.pushing.models.rigid import delta_in_frame, moved_pivot_delta, object_frame
     from robotplan.pushing.training.rigid import rigid_targets
-    from robotplan.training.samples import PushSamples, object_sdf
+    from robotplan.pushing.training.samples import PushSamples, object_sdf
 
     ws = DynamicsSpec(kind="rigid", frame="object", **OBJECT_WINDOW).workspace()
     grid = ws.points(torch.float64).reshape(-1, 2)
@@ -305,7 +305,7 @@ def test_window_placements_are_drawn_per_step_within_reach():
     """Headings move no origin; placements stay within PLACEMENT_REACH, cover it, and are
     the same for a step whenever it is drawn (a resumed run sees the same ones)."""
     from robotplan.pushing.training.rigid import PLACEMENT_REACH, window_placements
-    from robotplan.training.train import TrainConfig
+    from robotplan.pushing.training.train import TrainConfig
 
     cfg = TrainConfig(data="d", out="o", kind="rigid", augment="headings")
     headings = window_placements(cfg, 7, 4000)

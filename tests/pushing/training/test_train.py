@@ -6,11 +6,11 @@ import math
 import pytest
 import torch
 
-from robotplan.models.dynamics import load_model
+from robotplan.pushing.models.dynamics import load_model
 from robotplan.pushing.training.evaluation import evaluate_push
+from robotplan.pushing.training.model_card import record_heldout, write_model_card
 from robotplan.pushing.training.rigid import train_rigid
-from robotplan.training.model_card import record_heldout, write_model_card
-from robotplan.training.train import TrainConfig, train
+from robotplan.pushing.training.train import TrainConfig, train
 from tests.conftest import TINY_SPEC
 
 
@@ -124,7 +124,7 @@ def test_a_flow_on_an_occupancy_measure_predicts_it(tiny_push_data, tmp_path, re
     import numpy as np
 
     from robotplan.pushing.training.evaluation import pick_samples
-    from robotplan.training.samples import PushSamples
+    from robotplan.pushing.training.samples import PushSamples
 
     cfg = config(tiny_push_data, tmp_path / "m", 40)
     cfg.spec = {**TINY_SPEC, "representation": representation}
@@ -154,10 +154,10 @@ def test_an_object_frame_field_moves_with_the_scene(tiny_push_data):
 
     import numpy as np
 
-    from robotplan.models.dynamics import DynamicsSpec, PushDynamics
     from robotplan.models.spec import OBJECT_WINDOW
-    from robotplan.training.samples import PushSamples
-    from robotplan.training.train import framed, scored_workspace
+    from robotplan.pushing.models.dynamics import DynamicsSpec, PushDynamics
+    from robotplan.pushing.training.samples import PushSamples
+    from robotplan.pushing.training.train import framed, scored_workspace
 
     samples = PushSamples(tiny_push_data)
     batch = samples.batch(np.arange(0, len(samples), 9), dtype=torch.float64)
@@ -197,8 +197,8 @@ def test_an_object_frame_flow_learns_and_is_scored_on_the_tables_grid(tiny_push_
 
     from robotplan.models.spec import OBJECT_WINDOW
     from robotplan.pushing.training.evaluation import pick_samples
-    from robotplan.training.samples import PushSamples
-    from robotplan.training.train import grid_rmse
+    from robotplan.pushing.training.samples import PushSamples
+    from robotplan.pushing.training.train import grid_rmse
 
     cfg = config(tiny_push_data, tmp_path / "obj", 60)
     cfg.spec = {**cfg.spec, "frame": "object", **OBJECT_WINDOW}

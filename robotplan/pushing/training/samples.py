@@ -17,11 +17,11 @@ import torch
 from torch import Tensor
 
 from robotplan.geometry.transforms import planar_to_body, planar_to_world
+from robotplan.pushing.training.footprints import LSHAPE
+from robotplan.pushing.training.push_data import load_shards, scene_footprint
 from robotplan.sdf import Shape2D
 from robotplan.sdf.closed_form import lshape_sdf, safe_hypot
 from robotplan.sdf.footprint import footprint_centroid
-from robotplan.training.footprints import LSHAPE
-from robotplan.training.push_data import load_shards, scene_footprint
 
 __all__ = ["PushSamples", "SampleBatch", "object_sdf", "pusher_sdf"]
 

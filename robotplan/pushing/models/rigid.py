@@ -24,9 +24,9 @@ from torch import Tensor, nn
 
 from robotplan.geometry.transforms import planar_to_world
 from robotplan.models.encoder import SDFEncoder
-from robotplan.models.encoder_passes import EncoderPasses
 from robotplan.models.pointnet import cloud_encoder
 from robotplan.models.spec import DynamicsSpec, read_model_folder, write_model_folder
+from robotplan.pushing.models.encoder_passes import EncoderPasses
 
 __all__ = ["RigidMotion", "delta_in_frame", "load_rigid", "moved_pivot_delta", "moved_pose",
            "object_frame", "save_rigid", "sdf_pivot", "transform_points"]

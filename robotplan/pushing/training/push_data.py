@@ -26,9 +26,7 @@ import numpy as np
 
 from robotplan.base.units import check_ray
 from robotplan.execution.sim import PHYSICS, PushWorld
-from robotplan.sdf import Box, LShape, Shape2D
-from robotplan.sdf.footprint import footprint_centroid
-from robotplan.training.footprints import (
+from robotplan.pushing.training.footprints import (
     BOX,
     LSHAPE,
     MAX_VERTICES,
@@ -37,6 +35,8 @@ from robotplan.training.footprints import (
     draw_ood_shape,
     encode_footprint,
 )
+from robotplan.sdf import Box, LShape, Shape2D
+from robotplan.sdf.footprint import footprint_centroid
 from robotplan.training.shards import make_shards, prepare_folder
 
 __all__ = ["PushDataSpec", "SceneRecord", "generate", "load_shards", "scene_families",
@@ -225,7 +225,7 @@ def load_shards(folder: Path, scenes: int | None = None) -> dict[str, np.ndarray
     """All shards of ``folder`` concatenated (first ``scenes`` scenes if given).
 
     Returns arrays per scene (``shape_type, size, thickness, vertices, pusher_radius,
-    scene_index``, ``offsets (S+1,)``; see :mod:`robotplan.training.footprints`) and per
+    scene_index``, ``offsets (S+1,)``; see :mod:`robotplan.pushing.training.footprints`) and per
     state (``object_pose, pusher_xy, contact``).
     """
     paths = sorted(Path(folder).glob("shard_*.npz"))

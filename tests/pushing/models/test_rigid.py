@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 import torch
 
-from robotplan.models.rigid import (
+from robotplan.models.spec import DynamicsSpec
+from robotplan.pushing.models.rigid import (
     RigidMotion,
     load_rigid,
     moved_pivot_delta,
@@ -15,9 +16,8 @@ from robotplan.models.rigid import (
     sdf_pivot,
     transform_points,
 )
-from robotplan.models.spec import DynamicsSpec
+from robotplan.pushing.training.samples import object_sdf
 from robotplan.sdf import Workspace
-from robotplan.training.samples import object_sdf
 
 
 @pytest.fixture

@@ -21,13 +21,13 @@ import torch
 from torch import Tensor, nn
 
 from robotplan.models.encoder import EncoderPass, SDFEncoder, live_columns, relu_backward
-from robotplan.models.encoder_passes import EncoderPasses
 from robotplan.models.spec import (
     DynamicsSpec,
     head_matmul_dtype,
     read_model_folder,
     write_model_folder,
 )
+from robotplan.pushing.models.encoder_passes import EncoderPasses
 
 __all__ = ["DynamicsSpec", "EncoderPass", "PushDynamics", "head_matmul_dtype", "load_model",
            "relu_backward", "save_model"]

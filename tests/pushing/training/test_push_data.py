@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import torch
 
+from robotplan.pushing.training.push_data import generate, load_shards, simulate_scene
+from robotplan.pushing.training.samples import PushSamples, object_sdf
 from robotplan.sdf import Box, LShape, Workspace
-from robotplan.training.push_data import generate, load_shards, simulate_scene
-from robotplan.training.samples import PushSamples, object_sdf
 
 
 def test_scene_is_deterministic_for_seed_and_index():
@@ -130,9 +130,9 @@ def test_unseen_footprints_are_pushed_stored_and_rendered_exactly(tiny_ood_push_
 def test_scene_families_name_each_scene_footprint(tiny_push_data, tiny_ood_push_data):
     """Training data: box or lshape as stored; unseen footprints: family i mod 8, each one
     the footprint the scene holds (a disc for the circle, polygons of its vertex count)."""
+    from robotplan.pushing.training.footprints import OOD_FAMILIES
+    from robotplan.pushing.training.push_data import scene_families, scene_footprint
     from robotplan.sdf import Box, Circle, LShape, Polygon
-    from robotplan.training.footprints import OOD_FAMILIES
-    from robotplan.training.push_data import scene_families, scene_footprint
 
     d = load_shards(tiny_push_data)
     names = scene_families(tiny_push_data, d)

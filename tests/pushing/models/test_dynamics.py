@@ -1,7 +1,7 @@
 import pytest
 import torch
 
-from robotplan.models.dynamics import DynamicsSpec, PushDynamics, load_model, save_model
+from robotplan.pushing.models.dynamics import DynamicsSpec, PushDynamics, load_model, save_model
 from tests.conftest import TINY_SPEC
 
 

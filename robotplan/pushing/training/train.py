@@ -11,10 +11,7 @@ model card) is refreshed at every validation.
 
 from __future__ import annotations
 
-import json
 import math
-import os
-import platform
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -22,16 +19,22 @@ import numpy as np
 import torch
 
 from robotplan.geometry.transforms import planar_to_body
-from robotplan.models.dynamics import DynamicsSpec, PushDynamics, save_model
-from robotplan.models.rigid import object_frame
+from robotplan.pushing.models.dynamics import DynamicsSpec, PushDynamics, save_model
+from robotplan.pushing.models.rigid import object_frame
+from robotplan.pushing.training.model_card import earlier_stages
+from robotplan.pushing.training.samples import PushSamples, SampleBatch
 from robotplan.sdf import Workspace
-from robotplan.training.loop import Run, epoch_batch, load_checkpoint, run_steps
-from robotplan.training.model_card import earlier_stages
-from robotplan.training.samples import PushSamples, SampleBatch
+from robotplan.training.loop import (
+    Run,
+    epoch_batch,
+    hardware,
+    load_checkpoint,
+    run_steps,
+    write_json,
+)
 
 __all__ = ["AUGMENTS", "WINDOW_AUGMENTS", "TrainConfig", "augmented", "framed", "grid_rmse",
-           "hardware", "query_points", "scored_workspace", "train", "validation_indices",
-           "write_json"]
+           "query_points", "scored_workspace", "train", "validation_indices"]
 
 AUGMENTS = ("none", "turns", "headings", "placements")
 WINDOW_AUGMENTS = ("headings", "placements")
@@ -122,7 +125,7 @@ def framed(spec: DynamicsSpec, batch: SampleBatch, grid: torch.Tensor,
     and the query ``points (B or 1, P, 2)`` (table frame) as the model reads them: as they
     are for a table-frame model; for an object-frame one (``spec.frame == "object"``) X_h
     is attached to the object at t−1 (origin at the footprint's centroid, the body's axes,
-    :func:`~robotplan.models.rigid.object_frame`) and the points are given in that frame.
+    :func:`~robotplan.pushing.models.rigid.object_frame`) and the points are given in that frame.
     The predicted field is a function on the table either way: the frame moves with the
     object, the points with it."""
     shape = tuple(spec.grid)
@@ -246,16 +249,3 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
                      progress)
 
 
-def hardware(device: torch.device) -> dict:
-    info = {"device": str(device), "cpu": platform.processor() or platform.machine(),
-            "cores": os.cpu_count(), "threads": torch.get_num_threads(),
-            "torch": torch.__version__}
-    if device.type == "cuda":
-        info["gpu"] = torch.cuda.get_device_name(device)
-    return info
-
-
-def write_json(path: Path, data: dict) -> None:
-    tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(data, indent=1))
-    os.replace(tmp, path)

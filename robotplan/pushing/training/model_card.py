@@ -97,7 +97,7 @@ def write_model_card(model_dir: Path) -> None:
         "",
         "Predicts the SDF φ1_t of a pushed object from φ1_{t−1}, φ2_{t−1}, φ2_t (pusher) on "
         + _grid_words(spec) + ", queryable at any point (paper §5.1, appendix I.1).",
-        "Load with `robotplan.models.dynamics.load_model(folder)` (weights_only).",
+        "Load with `robotplan.pushing.models.dynamics.load_model(folder)` (weights_only).",
         "",
         "## Data",
         f"- command: `robotplan data push --scenes {data_meta.get('scenes', '?')} "

@@ -4,14 +4,14 @@ import numpy as np
 import pytest
 import torch
 
-from robotplan.sdf import Box, Circle, LShape, Polygon
-from robotplan.training.footprints import (
+from robotplan.pushing.training.footprints import (
     MAX_VERTICES,
     OOD_FAMILIES,
     decode_footprint,
     draw_ood_shape,
     encode_footprint,
 )
+from robotplan.sdf import Box, Circle, LShape, Polygon
 
 
 @pytest.fixture

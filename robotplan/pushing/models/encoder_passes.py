@@ -1,7 +1,8 @@
 """Reverse mode through the SDF encoder without autograd, for every model built on it
-(F_flow and F in :mod:`robotplan.models.dynamics`, F_q in :mod:`robotplan.models.rigid`):
-a forward pass that keeps each layer's ReLU outputs and live channels, and the transposed
-pass that pulls feature gradients back to the input grids."""
+(F_flow and F in :mod:`robotplan.pushing.models.dynamics`, F_q in
+:mod:`robotplan.pushing.models.rigid`): a forward pass that keeps each layer's ReLU outputs
+and live channels, and the transposed pass that pulls feature gradients back to the input
+grids."""
 
 from __future__ import annotations
 
