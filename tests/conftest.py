@@ -61,7 +61,7 @@ def tiny_ood_push_data(tmp_path_factory) -> Path:
 @pytest.fixture(scope="session")
 def tiny_hang_data(tmp_path_factory) -> Path:
     """3 real hanging scenes (seed 0) made by ``robotplan data hang``: a few seconds."""
-    from robotplan.cli.main import main
+    from robotplan.cli.app import main
 
     out = tmp_path_factory.mktemp("hang") / "data"
     assert main(["data", "hang", "--scenes", "3", "--seed", "0", "--out", str(out),

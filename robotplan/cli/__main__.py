@@ -2,6 +2,6 @@
 
 import sys
 
-from robotplan.cli.main import main
+from robotplan.cli.app import main
 
 sys.exit(main())

@@ -21,7 +21,7 @@ import numpy as np
 import torch
 
 __all__ = ["Run", "epoch_batch", "hardware", "load_checkpoint", "lr_at", "run_steps",
-           "write_json"]
+           "write_json", "write_training_record"]
 
 
 @dataclass
@@ -134,6 +134,16 @@ def hardware(device: torch.device) -> dict:
     if device.type == "cuda":
         info["gpu"] = torch.cuda.get_device_name(device)
     return info
+
+
+def write_training_record(out: Path, cfg, run: Run, samples: dict[str, int],
+                          device: torch.device, **sections: object) -> None:
+    """``out/training.json`` beside the weights: the config ``cfg`` (a dataclass), any
+    further ``sections`` (e.g. the training stages), the validation history, the sample
+    counts and where it ran (:func:`hardware`)."""
+    write_json(out / "training.json", {"config": asdict(cfg), **sections,
+                                       "history": run.history, "samples": samples,
+                                       "hardware": hardware(device)})
 
 
 def write_json(path: Path, data: dict) -> None:

@@ -19,7 +19,7 @@ from robotplan.bench.reproduce import (
 )
 from robotplan.bench.reproduce_report import _analytic_rows, _tab2, _tab4, _tab56
 from robotplan.bench.steps import Steps
-from robotplan.cli.main import main
+from robotplan.cli.app import main
 from robotplan.hanging.bench.report import tab3_blocks
 from robotplan.hanging.bench.reproduce import HANG_REPRESENTATIONS, hang_representations
 

@@ -9,7 +9,7 @@ end; the model folder (weights, spec, metrics) is refreshed at every validation.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -28,10 +28,9 @@ from robotplan.hanging.training.data import decode_hook, load_hang_shards
 from robotplan.training.loop import (
     Run,
     epoch_batch,
-    hardware,
     load_checkpoint,
     run_steps,
-    write_json,
+    write_training_record,
 )
 
 __all__ = ["HangSamples", "HangTrainConfig", "hang_metrics", "train_hang"]
@@ -189,10 +188,8 @@ def train_hang(cfg: HangTrainConfig, resume: bool = False, progress: bool = True
         model.train()
         run.history.append(row)
         save_hang_model(model, out)
-        write_json(out / "training.json", {"config": asdict(cfg), "history": run.history,
-                                             "samples": {"train": len(train_idx),
-                                                         "val": len(val_idx)},
-                                             "hardware": hardware(device)})
+        write_training_record(out, cfg, run, {"train": len(train_idx), "val": len(val_idx)},
+                              device)
         return row
 
     def step_loss(step: int) -> torch.Tensor:

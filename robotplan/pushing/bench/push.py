@@ -26,14 +26,18 @@ from robotplan.base.units import UnitsReport, check_ray, run_units
 from robotplan.pushing.bench.push_scenes import draw_scene, family_of
 from robotplan.scene import parse_scene
 
-__all__ = ["candidate_timings", "run_bench_push", "summarize", "time_profile"]
+__all__ = ["candidate_timings", "finished_rows", "quartiles", "run_bench_push", "summarize",
+           "time_profile", "time_profile_line"]
 
-def _quartiles(values: list[float]) -> dict:
+
+def quartiles(values: list[float]) -> dict:
+    """``n``, the quartiles ``q1``, ``median``, ``q3`` and the extremes ``min``, ``max``."""
     if not values:
         return {"n": 0}
     q = np.percentile(values, [25, 50, 75])
     return {"n": len(values), "q1": round(float(q[0]), 4), "median": round(float(q[1]), 4),
-            "q3": round(float(q[2]), 4), "min": round(float(min(values)), 4)}
+            "q3": round(float(q[2]), 4), "min": round(float(min(values)), 4),
+            "max": round(float(max(values)), 4)}
 
 
 def candidate_timings(candidates: list[dict]) -> dict[str, float]:
@@ -47,6 +51,15 @@ def candidate_timings(candidates: list[dict]) -> dict[str, float]:
         for name, seconds in (cand.get("timings") or {}).items():
             out[name] = out.get(name, 0.0) + float(seconds)
     return {k: round(v, 3) for k, v in out.items()}
+
+
+def finished_rows(rows_path: Path) -> dict[str, dict]:
+    """The rows of a ``rows.jsonl`` (one JSON object per finished scene) by scene name;
+    empty where the file is not there yet (a benchmark continues where it stopped)."""
+    if not rows_path.exists():
+        return {}
+    rows = (json.loads(line) for line in rows_path.read_text().splitlines() if line.strip())
+    return {row["scene"]: row for row in rows}
 
 
 def time_profile(rows: list[dict]) -> dict:
@@ -64,6 +77,16 @@ def time_profile(rows: list[dict]) -> dict:
             "share": {k: round(v / total, 3) if total else 0.0 for k, v in seconds.items()}}
 
 
+def time_profile_line(profile: dict, top: int = 6) -> str | None:
+    """One line of a :func:`time_profile`: its programs, their seconds and the ``top``
+    timers' shares; None where no program was timed."""
+    if not profile["candidate_seconds"]:
+        return None
+    shares = ", ".join(f"{k} {100 * v:.0f} %" for k, v in list(profile["share"].items())[:top])
+    return (f"time: {profile['programs']} programs, {profile['candidate_seconds']:.0f} s in "
+            f"their callbacks and solver: {shares}")
+
+
 def summarize(rows: list[dict]) -> dict:
     """Quartiles per shape type: coverage closed loop (``coverage``) and open loop, plan
     time (the rehearsal's included), the rehearsal's seconds, wall time of plan + execution
@@ -75,31 +98,31 @@ def summarize(rows: list[dict]) -> dict:
                  "replans": {}, "replans_adopted": {}, "replan_seconds": {}, "below_0_9": {}}
     for kind in sorted({r["shape"] for r in rows}):
         sel = [r for r in rows if r["shape"] == kind]
-        out["coverage"][kind] = _quartiles([r["coverage"] for r in sel])
-        out["open_loop_coverage"][kind] = _quartiles([r.get("open_loop_coverage", 0.0)
+        out["coverage"][kind] = quartiles([r["coverage"] for r in sel])
+        out["open_loop_coverage"][kind] = quartiles([r.get("open_loop_coverage", 0.0)
                                                       for r in sel])
         out["below_0_9"][kind] = {
             "closed_loop": sum(r["coverage"] < 0.9 for r in sel),
             "open_loop": sum(r.get("open_loop_coverage", 0.0) < 0.9 for r in sel)}
-        out["plan_seconds"][kind] = _quartiles([r["plan_seconds"] for r in sel])
-        out["rehearsal_seconds"][kind] = _quartiles([r.get("rehearsal_seconds", 0.0)
+        out["plan_seconds"][kind] = quartiles([r["plan_seconds"] for r in sel])
+        out["rehearsal_seconds"][kind] = quartiles([r.get("rehearsal_seconds", 0.0)
                                                      for r in sel])
-        out["closed_loop_seconds"][kind] = _quartiles(
+        out["closed_loop_seconds"][kind] = quartiles(
             [r["plan_seconds"] - r.get("rehearsal_seconds", 0.0) + r.get("execute_seconds", 0.0)
              for r in sel])
-        out["open_loop_seconds"][kind] = _quartiles(
+        out["open_loop_seconds"][kind] = quartiles(
             [r["plan_seconds"] + r.get("open_loop_seconds", 0.0) for r in sel])
-        out["replans"][kind] = _quartiles([len(r.get("replans", [])) for r in sel])
+        out["replans"][kind] = quartiles([len(r.get("replans", [])) for r in sel])
         every = [x for r in sel for x in r.get("replans", [])]
         out["replans_adopted"][kind] = {
             "adopted": sum(bool(x.get("adopted", x.get("solved"))) for x in every),
             "of": len(every)}
-        out["replan_seconds"][kind] = _quartiles([x["seconds"] for x in every])
-    out["plan_seconds"]["all"] = _quartiles([r["plan_seconds"] for r in rows])
+        out["replan_seconds"][kind] = quartiles([x["seconds"] for x in every])
+    out["plan_seconds"]["all"] = quartiles([r["plan_seconds"] for r in rows])
     mixed = [r for r in rows if r["shape"] in ("ood", "pose")]
     if mixed:
         out["coverage_by_family"] = {
-            fam: _quartiles([r["coverage"] for r in mixed if r.get("family") == fam])
+            fam: quartiles([r["coverage"] for r in mixed if r.get("family") == fam])
             for fam in sorted({r.get("family") for r in mixed})}
     poses = [r for r in rows if r["shape"] == "pose"]
     if poses:  # Push-T's success: coverage of the target footprint ≥ 0.95
@@ -228,12 +251,7 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
     check_ray(ray)
     (out / "scenes").mkdir(parents=True, exist_ok=True)
     rows_path = out / "rows.jsonl"
-    done = {}
-    if rows_path.exists():
-        for line in rows_path.read_text().splitlines():
-            if line.strip():
-                row = json.loads(line)
-                done[row["scene"]] = row
+    done = finished_rows(rows_path)
     todo = [(i, kind) for i in range(scenes) for kind in shapes]
     jobs = [(i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb, loop,
              program, rehearse)

@@ -166,7 +166,7 @@ def dynamics_list_problem(kinds: list[str], model: str | None) -> str | None:
 
 
 def cmd_bench_push(args: argparse.Namespace) -> int:
-    from robotplan.pushing.bench.push import run_bench_push
+    from robotplan.pushing.bench.push import run_bench_push, time_profile_line
 
     kinds = args.dynamics.split(",")
     problem = dynamics_list_problem(kinds, args.model)
@@ -219,11 +219,9 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
                   f"of {a['of']} adopted); plan time median "
                   f"{t['median']:.1f} s; plan + execution median {c['median']:.1f} s closed, "
                   f"{w['median']:.1f} s open loop")
-        prof = summary["time_profile"]
-        if prof["candidate_seconds"]:
-            top = ", ".join(f"{k} {100 * v:.0f} %" for k, v in list(prof["share"].items())[:6])
-            print(f"time: {prof['programs']} programs, {prof['candidate_seconds']:.0f} s in "
-                  f"their callbacks and solver: {top}")
+        line = time_profile_line(summary["time_profile"])
+        if line:
+            print(line)
         print(f"wrote {out / 'results.csv'}, {out / 'coverage.png'}, {summary_path}")
     return 0
 

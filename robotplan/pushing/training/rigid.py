@@ -13,7 +13,6 @@ permutation per ``(seed, epoch)``, ``checkpoint.pt`` every few minutes and at th
 from __future__ import annotations
 
 import math
-from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -44,10 +43,9 @@ from robotplan.pushing.training.train import (
 from robotplan.training.loop import (
     Run,
     epoch_batch,
-    hardware,
     load_checkpoint,
     run_steps,
-    write_json,
+    write_training_record,
 )
 
 __all__ = ["PLACEMENT_REACH", "WINDOW_AUGMENTS", "delta_q_predictions",
@@ -194,11 +192,8 @@ def train_rigid(cfg: TrainConfig, resume: bool = False, progress: bool = True) -
                "val_turn_gain": round(turn_gain(pred[c], true[c]), 3)}
         run.history.append(row)
         save_rigid(model, out)
-        write_json(out / "training.json", {"config": asdict(cfg), "stages": stages,
-                                            "history": run.history,
-                                            "samples": {"train": len(train_idx),
-                                                        "val": len(val_idx)},
-                                            "hardware": hardware(device)})
+        write_training_record(out, cfg, run, {"train": len(train_idx), "val": len(val_idx)},
+                              device, stages=stages)
         return row
 
     batch_of = epoch_batch(train_idx, cfg.batch, cfg.seed)

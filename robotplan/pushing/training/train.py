@@ -27,10 +27,9 @@ from robotplan.sdf import Workspace
 from robotplan.training.loop import (
     Run,
     epoch_batch,
-    hardware,
     load_checkpoint,
     run_steps,
-    write_json,
+    write_training_record,
 )
 
 __all__ = ["AUGMENTS", "WINDOW_AUGMENTS", "TrainConfig", "augmented", "framed", "grid_rmse",
@@ -220,11 +219,8 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
                                    "free": round(1e3 * float(base[~c].mean()), 3)}}
         run.history.append(row)
         save_model(model, out)
-        write_json(out / "training.json", {"config": asdict(cfg), "stages": stages,
-                                             "history": run.history,
-                                             "samples": {"train": len(train_idx),
-                                                         "val": len(val_idx)},
-                                             "hardware": hardware(device)})
+        write_training_record(out, cfg, run, {"train": len(train_idx), "val": len(val_idx)},
+                              device, stages=stages)
         return row
 
     batch_of = epoch_batch(train_idx, cfg.batch, cfg.seed)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import robotplan
-from robotplan.cli.main import main
+from robotplan.cli.app import main
 from robotplan.hanging.api.planner import HangPlan, HangPlanner
 from robotplan.hanging.api.poses import compose, table_pose
 from robotplan.hanging.program.problem import HangSettings

@@ -4,7 +4,7 @@ arguments refused with exit 2."""
 import json
 
 from robotplan.base.resources import learned_dir
-from robotplan.cli.main import main
+from robotplan.cli.app import main
 from robotplan.hanging.bench.bench import METHODS, summarize_hang
 
 

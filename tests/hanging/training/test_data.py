@@ -6,7 +6,7 @@ import json
 import numpy as np
 import torch
 
-from robotplan.cli.main import main
+from robotplan.cli.app import main
 from robotplan.geometry.transforms import perturbed_poses, spatial_to_world, uniform_poses
 from robotplan.hanging.execution.world import HangWorld
 from robotplan.hanging.training.data import (

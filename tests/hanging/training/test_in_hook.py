@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 
-from robotplan.cli.main import main
+from robotplan.cli.app import main
 from robotplan.hanging.execution.world import HangWorld
 from robotplan.hanging.training.data import IN_HOOK, decode_hook, decode_mug, load_hang_shards
 from robotplan.hanging.training.train import HangSamples

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import torch
 
-from robotplan.cli.main import main
+from robotplan.cli.app import main
 from robotplan.hanging.execution.world import HangWorld
 from robotplan.hanging.models.hang_model import (
     HangSpec,

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import torch
 
-from robotplan.cli.main import main
+from robotplan.cli.app import main
 from robotplan.hanging.functionals.h_hang import HangSuccessFunctional
 from robotplan.hanging.models.hang_model import HangSpec, HangSuccess, hang_loss, load_hang_model
 from robotplan.hanging.training.data import decode_hook, decode_mug, load_hang_shards

@@ -6,7 +6,7 @@ import pytest
 
 from robotplan.pushing.bench.compare import compare_rows
 from robotplan.pushing.cli.model_commands import dynamics_list_problem
-from tests.cli.test_main import run
+from tests.cli.test_app import run
 
 
 def _row(scene: str, shape: str, closed: float, open_loop: float, status: str) -> dict:

@@ -14,7 +14,7 @@ from robotplan.pushing.program.skeleton import load_skeleton_space
 from robotplan.pushing.search.planner import order_candidates
 from robotplan.scene import parse_scene
 from robotplan.scene.task import make_task
-from tests.cli.test_main import call, run
+from tests.cli.test_app import call, run
 
 
 @pytest.mark.parametrize("kind", ["box", "lshape"])

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 import sys
 
-from robotplan.cli.main import main
+from robotplan.cli.app import main
 
 
 def _train(data, out, *extra: str) -> int:

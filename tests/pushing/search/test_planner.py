@@ -16,6 +16,17 @@ from tests.conftest import DATA, ROOT
 MODEL = ROOT / "learned" / "push_flow"
 
 
+def _plan(violation: float = 1e-4, rms_mm: float = 3.0, cost: float = 1.0,
+          clearance: float = np.inf):
+    """A solved one-push plan of 21 states with the given violation, residual, cost and
+    obstacle clearance."""
+    from robotplan.pushing.program.solution import Solution
+
+    sk = parse_skeleton("push@0", "pusher", "box")
+    return Solution(sk, True, "", violation, cost, 1.0, np.zeros((21, 3)), np.zeros((21, 2)),
+                    dynamics_mm2=np.full(20, rms_mm**2), clearance=clearance)
+
+
 @pytest.mark.skipif(not (MODEL / "weights.pt").exists(), reason="push_flow not shipped")
 def test_search_solves_box_push_and_the_plan_works_in_pybullet():
     task = load_task(DATA / "box_push_near.yaml")  # one push at the data's speeds
@@ -56,7 +67,6 @@ def test_ranking_prefers_plans_the_learned_dynamics_believe():
 
 
 def test_the_search_stops_on_a_good_plan_or_after_its_patience_with_a_solved_one():
-    from robotplan.pushing.program.solution import Solution
     from robotplan.pushing.search.planner import (
         PATIENCE_S,
         PLAUSIBLE_RMS_MM,
@@ -64,13 +74,7 @@ def test_the_search_stops_on_a_good_plan_or_after_its_patience_with_a_solved_one
         stops_search,
     )
 
-    sk = parse_skeleton("push@0", "pusher", "box")
-
-    def plan(violation, rms_mm):
-        return Solution(sk, True, "", violation, 1.0, 1.0, np.zeros((21, 3)),
-                        np.zeros((21, 2)), dynamics_mm2=np.full(20, rms_mm**2))
-
-    good, solved, broken = plan(1e-4, 3.0), plan(1e-4, 8.0), plan(0.5, 1.0)
+    good, solved, broken = _plan(1e-4, 3.0), _plan(1e-4, 8.0), _plan(0.5, 1.0)
     assert is_solved(solved) and not is_solved(broken)
     early, late = PATIENCE_S - 1.0, PATIENCE_S + 1.0
     assert stops_search(good, True, 1.0, None, False)
@@ -131,7 +135,6 @@ def test_past_the_budget_the_pool_starts_nothing_but_collects_what_runs():
 def test_plans_around_obstacles_must_keep_the_margin():
     """A feasible plan that skims an obstacle is neither good enough nor solved, and ranks
     behind one that keeps OBSTACLE_MARGIN, whatever their costs."""
-    from robotplan.pushing.program.solution import Solution
     from robotplan.pushing.search.planner import (
         OBSTACLE_MARGIN,
         SearchResult,
@@ -139,11 +142,8 @@ def test_plans_around_obstacles_must_keep_the_margin():
         plan_rank,
     )
 
-    sk = parse_skeleton("push@0", "pusher", "box")
-
-    def plan(clearance, cost):
-        return Solution(sk, True, "", 1e-4, cost, 1.0, np.zeros((21, 3)), np.zeros((21, 2)),
-                        dynamics_mm2=np.full(20, 9.0), clearance=clearance)
+    def plan(clearance: float, cost: float):
+        return _plan(cost=cost, clearance=clearance)
 
     skims, clear, free = plan(0.01, 1.0), plan(OBSTACLE_MARGIN + 0.01, 5.0), plan(np.inf, 7.0)
     assert not good_enough(skims) and not SearchResult(skims).solved

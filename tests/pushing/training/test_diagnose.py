@@ -7,7 +7,7 @@ import numpy as np
 from robotplan import load_scene
 from robotplan.pushing.training.diagnose import check_steps, summarize, table
 from robotplan.scene.task import load_task
-from tests.cli.test_main import run
+from tests.cli.test_app import run
 from tests.conftest import DATA, ROOT
 
 FLOW = ROOT / "learned" / "push_flow"

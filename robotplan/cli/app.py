@@ -40,6 +40,7 @@ from robotplan.pushing.cli.model_commands import (
     cmd_data_push,
     cmd_eval_push,
 )
+from robotplan.pushing.cli.plan_commands import add_bench_plan_parser
 from robotplan.pushing.cli.train_push_parser import add_train_push_parser
 from robotplan.pushing.models.symmetry import VIEW_COUNTS
 from robotplan.scene import SceneError
@@ -110,6 +111,7 @@ def _parser() -> argparse.ArgumentParser:
     add_rehearse_option(bp)
     add_program_option(bp)
     bp.set_defaults(run=cmd_bench_push)
+    add_bench_plan_parser(bsub)
     add_bench_hang_parser(bsub)
 
     add_reproduce_parser(sub)

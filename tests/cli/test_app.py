@@ -9,7 +9,7 @@ from pathlib import Path
 
 import yaml
 
-from robotplan.cli.main import main
+from robotplan.cli.app import main
 from tests.conftest import ROOT, TASKS
 from tests.scene.test_loader import BAD_CASES
 
