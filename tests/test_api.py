@@ -24,7 +24,7 @@ def test_plan_needs_no_simulator_and_execute_runs_it(box_plan, tmp_path):
     assert planned.obj == "box"
     assert planned.best is not None and planned.solved
     summary = planned.summary()
-    assert summary["status"] == "solved" and summary["skeleton"][0]["mode"] == "reach"
+    assert summary["plan_status"] == "solved" and summary["skeleton"][0]["mode"] == "reach"
     executed = robotplan.execute(planned, mode="open_loop")
     assert executed.mode == "open_loop" and not executed.replans
     assert executed.times.shape == (len(planned.best.q_pusher),)

@@ -12,6 +12,7 @@ from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
 
 __all__ = [
     "EXIT_BAD_INPUT",
+    "SOLVE_EXIT",
     "add_data_options",
     "add_dynamics_options",
     "add_ray_option",
@@ -26,6 +27,10 @@ __all__ = [
 
 
 EXIT_BAD_INPUT = 2
+# ``solve``'s exit status per result status: 0 the plan is solved and (executed) reached the
+# goal; 3 the goal was reached although the plan misses a constraint; 1 the goal was not
+# reached or nothing was planned; 2 (EXIT_BAD_INPUT) bad input
+SOLVE_EXIT = {"solved": 0, "reached": 3, "missed": 1, "no_solution": 1}
 
 
 def load_footprint_scene(path: str, command: str):

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from robotplan.cli.common import (
     EXIT_BAD_INPUT,
+    SOLVE_EXIT,
     load_footprint_scene,
     loop_overrides,
     model_folder,
@@ -96,11 +97,13 @@ def cmd_solve(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     ex = doc.get("execution") or {}
     loop = (f" ({ex['mode'].replace('_', ' ')}, {len(ex['replans'])} re-plans)" if ex else "")
-    print(f"{doc['status']}: violation {doc['violation']:.3g}, coverage in pybullet "
+    plan = "" if doc["status"] == doc["plan_status"] else f" (plan: {doc['plan_status']})"
+    violation = "none" if doc["violation"] is None else f"{doc['violation']:.3g}"
+    print(f"{doc['status']}{plan}: violation {violation}, coverage in pybullet "
           f"{ex.get('coverage')}{loop}, plan {doc['plan_seconds']} s; "
           f"wrote {out / 'result.json'}"
           + (f" and {out / 'playback.html'}" if "playback" in doc else ""))
-    return 0 if doc["status"] == "solved" else 1
+    return SOLVE_EXIT[doc["status"]]
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:

@@ -22,6 +22,7 @@ from robotplan.pushing.api.playback import playback_layers
 from robotplan.pushing.api.results import (
     candidate_summary,
     execution_summary,
+    outcome_status,
     thresholds,
     write_json,
 )
@@ -80,7 +81,7 @@ class PushPlan(TaskPlan):
     def summary(self) -> dict:
         """The plan's entries of ``result.json``."""
         best = self.best
-        return {"status": "solved" if self.solved else "no_solution",
+        return {"plan_status": "solved" if self.solved else "no_solution",
                 "skeleton": best.skeleton.as_rows() if best else [],
                 "skeleton_space": ({"steps_per_phase": self.space.steps_per_phase,
                                     "init_frame": self.space.init_frame}
@@ -239,6 +240,9 @@ class PushPlanner:
             executed = self.execute(planned, mode=mode, perturb=perturb, loop=settings,
                                     quiet=quiet)
             doc.update(execution_summary(planned, executed, perturb))
+            reached = (settings or loop_settings_for(task)).goal_met(
+                task, executed.coverage, executed.touch_distance)
+            doc["execution"]["goal_reached"] = reached
             if loop:
                 doc["execution"]["loop_settings"] = dict(loop)
             doc["execution"]["seconds"] = round(time.perf_counter() - t0, 2)
@@ -251,6 +255,7 @@ class PushPlanner:
             self.playback(planned, executed, out / "playback.html")
             doc["playback"] = "playback.html"
             doc["candidates"] = [candidate_summary(s) for s in planned.candidates]
-        doc.update(thresholds())
+        status = outcome_status(doc)
+        doc = {"scene": task.scene.name, "status": status, **doc, **thresholds()}
         write_json(out / "result.json", doc)
         return doc

@@ -17,7 +17,8 @@ from robotplan.pushing.search.planner import FEASIBLE, PLAUSIBLE_RMS_MM
 from robotplan.pushing.search.scene_search import metres
 from robotplan.scene.task import PushTask
 
-__all__ = ["candidate_summary", "execution_summary", "thresholds", "write_json"]
+__all__ = ["candidate_summary", "execution_summary", "outcome_status", "thresholds",
+           "write_json"]
 
 
 def candidate_summary(s: Solution) -> dict:
@@ -26,6 +27,19 @@ def candidate_summary(s: Solution) -> dict:
             "seconds": round(s.seconds, 2), "dynamics_rms_mm": round(s.dynamics_rms_mm, 3),
             "obstacle_clearance": metres(s.clearance), "timings": s.timings,
             "status": s.status}
+
+
+def outcome_status(doc: dict) -> str:
+    """A push result's ``status``: ``solved`` (the plan meets every constraint and, where it
+    was executed, the simulator reached the goal), ``reached`` (the plan does not meet every
+    constraint, but its execution reached the goal), ``missed`` (executed, the goal not
+    reached) or ``no_solution`` (no plan to execute)."""
+    reached = (doc.get("execution") or {}).get("goal_reached")
+    if doc["plan_status"] == "solved" and reached is not False:
+        return "solved"
+    if reached is None:
+        return "no_solution"
+    return "reached" if reached else "missed"
 
 
 def thresholds() -> dict:

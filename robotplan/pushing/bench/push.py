@@ -216,7 +216,7 @@ def bench_scene(job: tuple) -> dict:
     return {"scene": name, "shape": kind, "family": family_of(i, kind),
             "footprint": scene.objects[0].shape.describe(),
             "model": Path(result["model"]).name,
-            "status": result["status"],
+            "status": result["plan_status"], "outcome": result["status"],
             "coverage": float(ex.get("coverage") or 0.0),
             "open_loop_coverage": float(open_loop.get("coverage") or 0.0),
             "execute_seconds": float(ex.get("seconds") or 0.0),

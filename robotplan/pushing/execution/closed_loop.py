@@ -108,14 +108,11 @@ def _observed(task: PushTask, seen: Observation) -> PushTask:
 
 def _goal_met(task: PushTask, seen: Observation, settings: LoopSettings) -> bool:
     goal_obj, bodies = task.goal_object, task.scene.bodies
-    body = bodies[goal_obj]
-    if task.touch_actor is not None:
-        tip = seen.tips[task.touch_actor][:2]
-        _, gap = outcome(task, body, seen.poses[goal_obj], tip,
-                         bodies[task.touch_actor].shape.radius)
-        return gap <= settings.touch_gap
-    cov, _ = outcome(task, body, seen.poses[goal_obj], np.zeros(2), 0.0)
-    return cov >= (settings.pose_coverage if task.goal == "pose" else settings.goal_coverage)
+    touching = task.touch_actor
+    tip = seen.tips[touching][:2] if touching is not None else np.zeros(2)
+    radius = bodies[touching].shape.radius if touching is not None else 0.0
+    cov, gap = outcome(task, bodies[goal_obj], seen.poses[goal_obj], tip, radius)
+    return settings.goal_met(task, cov, gap)
 
 
 class _Loop:

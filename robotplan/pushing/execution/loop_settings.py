@@ -73,6 +73,15 @@ class LoopSettings:
     steer_limit: float = 0.03
 
 
+    def goal_met(self, task: PushTask, coverage: float | None, gap: float | None) -> bool:
+        """Whether an outcome meets the task's goal: a touch goal's ``gap`` (m) within
+        ``touch_gap``, else the goal's ``coverage`` at least ``goal_coverage`` (a region)
+        or ``pose_coverage`` (a pose)."""
+        if task.touch_actor is not None:
+            return gap is not None and gap <= self.touch_gap
+        bound = self.pose_coverage if task.goal == "pose" else self.goal_coverage
+        return coverage is not None and coverage >= bound
+
 LOOP_CLASSES = ("arms", "chains", "pose")
 """Scene classes with their own closed-loop settings: ``arms``, scenes pushed by robot arms;
 ``chains``, scenes in which the pusher pushes one object into another; ``pose``, pose
