@@ -163,6 +163,7 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     assert (tmp_path / "report.html").stat().st_size > 1000
 
 
+@pytest.mark.slow
 def test_h_hang_on_each_representation_is_trained_alike_and_planned_with(tmp_path):
     """Tab. 3's baselines (tiny: 2 scenes of data, 1 held out, 2 steps, one scene planned
     with 64 evaluations): each model folder says what it reads, each is scored on the
