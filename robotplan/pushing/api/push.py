@@ -236,13 +236,12 @@ class PushPlanner:
                 print(f"plan: {' and '.join([planned.obj, *best.q_others])} pushed by "
                       f"{best.skeleton.phases[0].actor}; executing in pybullet")
             t0 = time.perf_counter()
-            settings = loop_settings_for(task, overrides=loop) if loop else None
+            settings = loop_settings_for(task, overrides=loop)
             executed = self.execute(planned, mode=mode, perturb=perturb, loop=settings,
                                     quiet=quiet)
             doc.update(execution_summary(planned, executed, perturb))
-            reached = (settings or loop_settings_for(task)).goal_met(
+            doc["execution"]["goal_reached"] = settings.goal_met(
                 task, executed.coverage, executed.touch_distance)
-            doc["execution"]["goal_reached"] = reached
             if loop:
                 doc["execution"]["loop_settings"] = dict(loop)
             doc["execution"]["seconds"] = round(time.perf_counter() - t0, 2)

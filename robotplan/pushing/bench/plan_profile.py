@@ -30,7 +30,7 @@ from robotplan.pushing.bench.push import (
     quartiles,
     time_profile,
 )
-from robotplan.pushing.bench.push_scenes import draw_scene
+from robotplan.pushing.bench.push_scenes import draw_scene, scene_name
 from robotplan.pushing.program.solution import FEASIBLE, Solution
 from robotplan.pushing.search.planner import is_solved
 from robotplan.scene import parse_scene
@@ -71,8 +71,7 @@ def profile_scene(i: int, kind: str, seed: int, out: Path, model_dir: str | Path
             "plan_seconds": round(seconds, 2), "programs": programs,
             "best": planned.best.skeleton.describe() if planned.best else None,
             "violation": float(planned.best.violation) if planned.best else None,
-            "timings": candidate_timings([{"seconds": p["seconds"], "timings": p["timings"]}
-                                          for p in programs])}
+            "timings": candidate_timings(programs)}
 
 
 def summarize_profile(rows: list[dict]) -> dict:
@@ -118,7 +117,7 @@ def run_bench_plan(scenes: int, seed: int, out: Path, model_dir: str | Path | No
     done = finished_rows(rows_path)
     todo = [(i, kind) for i in range(scenes) for kind in shapes]
     for i, kind in todo:
-        name = draw_scene(i, seed, kind)["name"]
+        name = scene_name(i, kind)
         if name in done:
             continue
         row = profile_scene(i, kind, seed, out, model_dir, search)
@@ -131,7 +130,7 @@ def run_bench_plan(scenes: int, seed: int, out: Path, model_dir: str | Path | No
               f" in {row['plan_seconds']:.1f} s, {len(row['programs'])} programs"
               + (f", {len(bad)} failed ({', '.join(f'{k} ×{n}' for k, n in why)})"
                  if bad else ""), flush=True)
-    rows = [done[draw_scene(i, seed, kind)["name"]] for i, kind in todo]
+    rows = [done[scene_name(i, kind)] for i, kind in todo]
     summary = summarize_profile(rows)
     summary.update({"seed": seed, "model": str(model_dir) if model_dir else "auto",
                     "search": {k: v for k, v in search.items() if k != "program"},

@@ -23,7 +23,7 @@ import yaml
 
 from robotplan.base.files import write_atomically
 from robotplan.base.units import UnitsReport, check_ray, run_units
-from robotplan.pushing.bench.push_scenes import draw_scene, family_of
+from robotplan.pushing.bench.push_scenes import draw_scene, family_of, scene_name
 from robotplan.scene import parse_scene
 
 __all__ = ["candidate_timings", "finished_rows", "quartiles", "run_bench_push", "summarize",
@@ -255,7 +255,7 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
     todo = [(i, kind) for i in range(scenes) for kind in shapes]
     jobs = [(i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb, loop,
              program, rehearse)
-            for i, kind in todo if draw_scene(i, seed, kind)["name"] not in done]
+            for i, kind in todo if scene_name(i, kind) not in done]
     report = UnitsReport()
     for row in run_units(bench_scene, jobs, 1, ray, report, cpus_per_unit=workers):
         done[row["scene"]] = row
@@ -266,7 +266,7 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
               f"re-plans), {row['open_loop_coverage']:.3f} open loop, "
               f"plan {row['plan_seconds']:.1f} s, "
               f"{row['programs']} programs, {row['skeleton']}", flush=True)
-    rows = [done[draw_scene(i, seed, kind)["name"]] for i, kind in todo]
+    rows = [done[scene_name(i, kind)] for i, kind in todo]
     summary = summarize(rows)
     summary.update({"seed": seed, "model": str(model_dir) if model_dir else "auto",
                     "exhaustive": exhaustive,

@@ -14,7 +14,8 @@ import numpy as np
 from robotplan.pushing.training.footprints import OOD_FAMILIES, draw_ood_shape
 from robotplan.pushing.training.push_data import PushDataSpec, draw_shape
 
-__all__ = ["OOD_FAMILIES", "POSE_FAMILIES", "draw_ood_shape", "draw_scene", "family_of"]
+__all__ = ["OOD_FAMILIES", "POSE_FAMILIES", "draw_ood_shape", "draw_scene", "family_of",
+           "scene_name"]
 
 GOAL_DISTANCE = 0.35  # m from the object to the goal centre
 GOAL_NOISE = 0.02  # m, standard deviation per axis
@@ -37,6 +38,11 @@ POSE_FAMILIES = ("box", "T")
 pose ``POSE_DISTANCE`` away, turned by 30–90° either way (Push-T's task)."""
 POSE_DISTANCE = (0.15, 0.3)  # m
 POSE_TURN_DEG = (30.0, 90.0)
+
+
+def scene_name(index: int, kind: str) -> str:
+    """The name of benchmark scene ``index`` of shape type ``kind`` (any seed)."""
+    return f"bench_{kind}_{index:03d}"
 
 
 def draw_scene(index: int, seed: int, kind: str) -> dict:
@@ -70,7 +76,7 @@ def draw_scene(index: int, seed: int, kind: str) -> dict:
         goal_doc = {"type": "pose", "object": "object",
                     "pose": [r(away[0]), r(away[1]), r(target_yaw)]}
     return {
-        "version": 1, "name": f"bench_{kind}_{index:03d}",
+        "version": 1, "name": scene_name(index, kind),
         "workspace": {"center": [0.0, 0.0], "size": [1.4, 1.4], "resolution": 0.01},
         "objects": [{"name": "object", "shape": _shape_doc(shape),
                      "pose": [r(center[0]), r(center[1]), r(yaw)]}],

@@ -72,7 +72,6 @@ class LoopSettings:
     steer_gain: float = 0.0
     steer_limit: float = 0.03
 
-
     def goal_met(self, task: PushTask, coverage: float | None, gap: float | None) -> bool:
         """Whether an outcome meets the task's goal: a touch goal's ``gap`` (m) within
         ``touch_gap``, else the goal's ``coverage`` at least ``goal_coverage`` (a region)
@@ -81,6 +80,7 @@ class LoopSettings:
             return gap is not None and gap <= self.touch_gap
         bound = self.pose_coverage if task.goal == "pose" else self.goal_coverage
         return coverage is not None and coverage >= bound
+
 
 LOOP_CLASSES = ("arms", "chains", "pose")
 """Scene classes with their own closed-loop settings: ``arms``, scenes pushed by robot arms;
