@@ -33,6 +33,13 @@ def solve_skeleton(task: PushTask, skeleton: Skeleton, model: PushDynamics, spac
         return PushProgram(task, skeleton, None, space, settings, guess=guess).solve()
     warm_seconds = 0.0
     given = guess is not None
+    if given and settings.accept_good_start:
+        # a start that already meets every row needs no solver: a re-plan's re-anchored
+        # plan, or pushes fitted in closed form to the goal
+        start = PushProgram(task, skeleton, model, space, settings, guess=guess)
+        kept = _accepted_start(start.start_solution(), settings)
+        if kept is not None:
+            return kept
     if settings.warm_start and guess is None:
         kin = PushProgram(task, skeleton, None, space, settings)
         warm = kin.solve()
@@ -68,15 +75,24 @@ def _kept_start(start: Solution, settings: ProgramSettings) -> Solution | None:
     ``good_rms_mm``) or when it misses the constraints by more than
     ``learned_start_violation``, from where the learned stage's few iterations do not get
     (measured: docs/experiments.md#replan-learned-stage). None: run the learned stage."""
-    if (settings.accept_good_start and start.success
-            and start.dynamics_rms_mm <= settings.good_rms_mm):
-        start.status = (f"learned stage not run: its start meets every row, residual "
-                        f"{start.dynamics_rms_mm:.1f} mm")
-        return start
+    accepted = _accepted_start(start, settings)
+    if accepted is not None:
+        return accepted
     bound = settings.learned_start_violation
     if bound is not None and start.violation > bound:
         start.status = (f"learned stage not run: its start misses the constraints by "
                         f"{start.violation:.3g} (> {bound:g})")
+        return start
+    return None
+
+
+def _accepted_start(start: Solution, settings: ProgramSettings) -> Solution | None:
+    """``start`` as the solution when ``accept_good_start`` and it meets every row with a
+    learned-dynamics residual of at most ``good_rms_mm``; else None."""
+    if (settings.accept_good_start and start.success
+            and start.dynamics_rms_mm <= settings.good_rms_mm):
+        start.status = (f"learned stage not run: its start meets every row, residual "
+                        f"{start.dynamics_rms_mm:.1f} mm")
         return start
     return None
 

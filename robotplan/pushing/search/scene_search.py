@@ -227,20 +227,20 @@ def search_scene(request: SearchRequest) -> tuple[SearchResult, dict[int, Skelet
     :mod:`robotplan.pushing.search.tiers`): each tier the task and the request qualify for, while
     the result so far lets it run, until one ends the search; the result and each
     candidate's skeleton space (by ``id`` of its solution). A warm start
-    (``request.guesses``) solves with the re-plans' budget (``replan`` of the table's
-    budgets); a tier's ``replan`` budget is tried only in a re-plan (``request.replan``).
+    (``request.guesses``) solves with the smaller budget of a start close to a plan
+    (``quick`` of the table's budgets) as its own.
     The time budget counts the seconds of the charged tiers."""
     task = request.task
     own = with_overrides(task_settings(task, request.solver, dynamics_kind(request.model_dir)),
                          request.program)
     named = {name: budget_settings(name, own) for name in load_budgets()}
-    named["own"] = named["replan"] if request.guesses else own  # a warm start: a re-plan
+    named["own"] = named["quick"] if request.guesses else own  # a warm start: a re-plan
     space = space_for(task)
     apart, charged, spaces = SearchResult(None), SearchResult(None), {}
     for tier in load_tiers():
         if not _runs(tier, charged, request):
             continue
-        budgets = tuple(named[b] for b in tier.budgets if b != "replan" or request.replan)
+        budgets = tuple(named[b] for b in tier.budgets)
         timed = request.but(time_budget=request.left(charged.seconds))
         result, more = TIER_SEARCHES[tier.candidates](timed, budgets, space)
         spaces.update(more)

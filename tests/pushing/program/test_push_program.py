@@ -180,8 +180,9 @@ def test_learned_program_never_ends_worse_than_its_warm_start():
 
 def test_a_start_the_learned_rows_accept_is_kept_without_a_learned_solve():
     """``start_solution`` measures the guess by the program's own rows; with
-    ``accept_good_start`` a re-plan whose repaired guess meets every row within
-    ``good_rms_mm`` returns it unsolved, and one beyond it goes on to the learned solve."""
+    ``accept_good_start`` a re-plan whose guess meets every row within ``good_rms_mm``
+    returns it without a solver, one that meets them once the kinematic program repaired
+    it returns the repair, and one beyond ``good_rms_mm`` goes on to the learned solve."""
     from robotplan.pushing.program.solution import FEASIBLE
     from robotplan.pushing.program.solve import solve_skeleton
 
@@ -199,17 +200,21 @@ def test_a_start_the_learned_rows_accept_is_kept_without_a_learned_solve():
     assert np.array_equal(start.q_obj, warm.q_obj) and start.dynamics_mm2.size == learned.N
     assert start.violation == max(violations.values())
 
-    def replan(good_rms_mm: float):
+    def replan(good_rms_mm: float, guess: dict | None = None):
         settings = ProgramSettings(iterations=3, accept_good_start=True,
                                    good_rms_mm=good_rms_mm)
         torch.manual_seed(0)
         return solve_skeleton(kin.task, kin.skeleton, model, kin.space, settings,
-                              guess=kin.as_guess(warm))
+                              guess=guess or kin.as_guess(warm))
 
     kept = replan(good_rms_mm=1e6)
     assert kept.status.startswith("learned stage not run") and kept.success
-    assert np.abs(kept.q_obj - warm.q_obj).max() < 1e-3  # the kinematic repair's, kept
-    assert "warm_start" in kept.timings and "H_F" not in kept.timings  # no learned solve
+    assert np.array_equal(kept.q_obj, warm.q_obj) and not kept.timings  # no solver ran
+    off = kin.as_guess(warm)
+    off["p"] = off["p"] + np.array([0.004, 0.0])  # contact points off the surfaces
+    repaired = replan(good_rms_mm=1e6, guess=off)
+    assert repaired.status.startswith("learned stage not run") and repaired.success
+    assert "warm_start" in repaired.timings and "H_F" not in repaired.timings  # the repair's
     solved = replan(good_rms_mm=start.dynamics_rms_mm / 2)
     assert not solved.status.startswith("learned stage not run")
     assert solved.timings.get("H_F", 0.0) > 0.0

@@ -195,12 +195,12 @@ def test_a_users_program_settings_win_over_every_later_overlay():
     from robotplan.pushing.search.tiers import budget_settings
 
     mine = with_overrides(settings_for("arms"), given)
-    # the re-plans' budget turns accept_good_start on and the routes' overlay sets lever.weight
-    later = settings_for("routes", base=budget_settings("replan", mine))
+    # the quick budget turns accept_good_start on and the routes' overlay sets lever.weight
+    later = settings_for("routes", base=budget_settings("quick", mine))
     assert not later.accept_good_start and later.row("lever").weight == 0.5
     assert later.row("step_limits").step == 0.02
     assert later.solver == "ipopt" and later.sparse_jacobians
-    assert budget_settings("replan", DEFAULT_SETTINGS).accept_good_start  # the budget's value
+    assert budget_settings("quick", DEFAULT_SETTINGS).accept_good_start  # the budget's value
     for items, words in ((["no_such=1"], "not a program setting"),
                          (["with_contact=maybe"], "not a bool"),
                          (["H_coll.a=-1"], "must not be negative"),

@@ -16,8 +16,9 @@ from tests.pushing.search.test_pose_pushes import BOX, scene_doc
 
 
 def test_kinematic_program_solves_a_turn_from_the_fitted_guess():
-    """A box moved 12 cm and turned 60°: the fitted guess meets sticking, H_PoC and the pose
-    row exactly, and SNOPT's kinematic stage ends feasible from it."""
+    """A box moved 12 cm and turned 60°: the fitted guess meets sticking, H_PoC, the
+    quasi-static push and the pose row exactly, and SNOPT's kinematic stage ends feasible
+    from it."""
     task = make_task(parse_scene(scene_doc(BOX, [0.12, 0.05, 0.3 + math.radians(60)])))
     assert (task.obj, task.actors, task.goal) == ("object", ("pusher",), "pose")
     settings = task_settings(task)
@@ -30,6 +31,7 @@ def test_kinematic_program_solves_a_turn_from_the_fitted_guess():
         x[prog.prog.FindDecisionVariableIndices(V.ravel())] = value.ravel()
     worst, _ = prog.evaluate(x)
     assert worst["sticking"] < 1e-6 and worst["H_PoC"] < 1e-6 and worst["H_pose"] < 0.01
+    assert worst["quasi_static"] < 1e-6  # the discrete turning law and the friction cone
     sol = prog.solve()
     assert sol.violation <= FEASIBLE
     turn = sol.q_obj[-1, 2] - sol.q_obj[0, 2]

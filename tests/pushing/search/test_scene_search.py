@@ -90,9 +90,10 @@ def test_a_warm_start_along_a_route_keeps_its_steps_and_the_routes_settings(monk
     assert settings.row("quasi_static").friction == 0.02 and settings.row("lever").weight == 100.0
 
 
-def test_a_warm_started_search_plans_with_the_replan_overlay(monkeypatch):
-    """A search from an earlier plan (a re-plan) gets ``replan`` of skeletons/settings.yaml
-    over its scene's settings; the same search without a guess does not."""
+def test_a_warm_started_search_plans_with_the_quick_budget(monkeypatch):
+    """A search from an earlier plan (a re-plan) gets the ``quick`` budget of
+    skeletons/tiers.yaml over its scene's settings; the same search without a guess does
+    not."""
     import numpy as np
 
     from robotplan.pushing.program.skeleton import parse_skeleton
@@ -113,8 +114,8 @@ def test_a_warm_started_search_plans_with_the_replan_overlay(monkeypatch):
     search_module.search_scene(request.but(guesses={sk: guess}))
     search_module.search_scene(request)
     warm, fresh = calls
-    overlay = load_budgets()["replan"]
-    assert overlay, "skeletons/tiers.yaml has a replan budget"
+    overlay = load_budgets()["quick"]
+    assert overlay, "skeletons/tiers.yaml has a quick budget"
     for key, value in overlay.items():
         assert getattr(warm, key) == value, key
     assert any(getattr(fresh, key) != value for key, value in overlay.items())
@@ -160,7 +161,9 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
     model = TASKS.parent / "learned" / "push_rigid"
     request = SearchRequest(task, model, quiet=True, progress=False)
     search_module.search_scene(request)
-    (fitted, space, guesses, settings), = calls  # an unsolved fitted plan: no plain tier
+    # at the quick budget, then at its own: unsolved fitted plans, no plain tier
+    (quick, _, _, _), (fitted, space, guesses, settings) = calls
+    assert quick == fitted
     assert fitted and set(guesses) == set(fitted)
     assert space.init_frame == "object" and space.steps_per_phase >= 10
     for sk in fitted:
@@ -175,11 +178,12 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
     assert len(plain) > len(fitted) and none is None and plain_space.init_frame == "goal"
 
 
-def test_a_fresh_search_while_executing_a_pose_goal_plans_with_the_replan_overlay(monkeypatch):
-    """``replan=True`` (the closed loop's fresh search) gives a pose goal's fitted pushes the
-    ``replan`` overlay's budget, and where that solves nothing its own; a region goal's
-    fresh search starts with its fitted pushes at that budget, then at its scene's
-    settings, then the plain tier where nothing solves."""
+def test_fitted_pushes_come_first_at_the_quick_budget(monkeypatch):
+    """A pose goal's fitted pushes (fresh, or executing: ``replan=True``) and a region
+    goal's get the ``quick`` budget first; where that solves nothing, a pose goal's fits
+    their own settings and then the plain tier; a region goal's fresh search the plain tier
+    and then its fits at its own settings, executing its fits at their own settings
+    before the plain tier."""
     from robotplan.pushing.search.tiers import load_budgets
 
     calls = []
@@ -190,31 +194,30 @@ def test_a_fresh_search_while_executing_a_pose_goal_plans_with_the_replan_overla
 
     region, pose = _box_pose_goal(monkeypatch, record)
     model = TASKS.parent / "learned" / "push_rigid"
-    overlay = load_budgets()["replan"]
+    overlay = load_budgets()["quick"]
+    fits_first = [("fits", True), ("fits", False), ("plain", False)]
+    expected = {("pose", False): fits_first, ("pose", True): fits_first,
+                ("region", False): [("fits", True), ("plain", False), ("fits", False)],
+                ("region", True): fits_first}
     for task in (pose, region):
         for replan in (False, True):
             calls.clear()
             search_module.search_scene(SearchRequest(task, model, quiet=True, progress=False,
                                                      replan=replan))
             assert all(kind == task.goal for kind, _, _ in calls)
-            with_overlay = [all(getattr(s, k) == v for k, v in overlay.items())
-                            for _, s, _ in calls]
-            assert with_overlay[0] == replan
-            fitted = [w for w, (_, _, guessed) in zip(with_overlay, calls, strict=True)
-                      if guessed]
-            assert fitted == ([True, False] if replan else [False])  # nothing was solved
-            assert len(calls) == len(fitted) + 1  # and one plain tier, at the scene's settings
-            assert not (replan and calls[-1][2])  # executing, the plain tier last
-            assert not any(w for w, (_, _, guessed) in zip(with_overlay, calls, strict=True)
-                           if not guessed)
+            seen = [("fits" if guessed else "plain",
+                     all(getattr(s, k) == v for k, v in overlay.items()))
+                    for _, s, guessed in calls]
+            assert seen == expected[task.goal, replan], (task.goal, replan)
 
 
 def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(monkeypatch):
-    """A free pusher's region goal whose plain tier solves nothing: a second search of the
-    pushes fitted to a pose inside the region (each with its guess ending there, the pose
-    goals' turning gain, the region's own goal tolerance). None when the plain tier
-    solves; while executing (``replan``) the fitted pushes come first, and end the search
-    where they solve or give a plan within the caller's last-resort bound."""
+    """A free pusher's region goal: first the pushes fitted to a pose inside the region
+    (each with its guess ending there, the pose goals' turning gain, the region's own goal
+    tolerance), then the plain tier, and where neither solves the fits again past the time
+    budget; the plain tier is skipped where the fits solve. While executing (``replan``)
+    the fitted pushes come first, and end the search where they solve or give a plan
+    within the caller's last-resort bound."""
     import numpy as np
     import torch
 
@@ -242,8 +245,9 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
     model = TASKS.parent / "learned" / "push_rigid"
     request = SearchRequest(task, model, quiet=True, progress=False)
     result, spaces = search_module.search_scene(request.but(time_budget=0.5))
-    (plain, _, none, _), (fitted, space, guesses, settings) = calls
-    assert budgets[1] == (None, True)  # past the budget, the fits in their own order
+    (quick, _, first, _), (plain, _, none, _), (fitted, space, guesses, settings) = calls
+    assert quick == fitted and set(first) == set(fitted)  # the fits first, then again
+    assert budgets[0] == budgets[2] == (None, True)  # four programs at most: no time budget
     assert plain and none is None and fitted and set(guesses) == set(fitted)
     assert space.init_frame == "object"
     gain = overlay("pose").row("quasi_static").turn_gain
@@ -260,7 +264,12 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
     calls.clear()
     solve_plain[0] = True
     search_module.search_scene(request)
-    assert len(calls) == 1 and calls[0][2] is None  # solved: no fitted tier
+    assert len(calls) == 2 and calls[1][2] is None  # the plain tier solved: no more fits
+
+    calls.clear()
+    solve_fits[0] = True
+    result, _ = search_module.search_scene(request)
+    assert len(calls) == 1 and calls[0][2] is not None and result.solved  # no plain tier
 
     calls.clear()  # executing, the fitted pushes come first: solved, no plain tier
     solve_fits[0] = True

@@ -40,8 +40,8 @@ def test_every_tier_has_a_search_and_the_plain_tier_is_for_every_task():
 
 def test_each_task_is_searched_with_the_tiers_its_kind_asks_for():
     box = _request("box_push")
-    assert _tiers_for(box) == ["plain", "region_fits"]
-    assert _tiers_for(box.but(replan=True)) == ["region_fits_first", "plain"]
+    assert _tiers_for(box) == ["region_fits_first", "plain", "region_fits"]
+    assert _tiers_for(box.but(replan=True)) == ["region_fits_replan", "plain"]
     assert _tiers_for(box.but(skeleton="push@0")) == ["plain"]
     assert _tiers_for(_request("obstacle_push")) == ["plain", "routes"]
     assert _tiers_for(_request("three_objects")) == ["plain"]
@@ -77,21 +77,28 @@ def _plan(violation: float, rms_mm: float = 1.0) -> Solution:
 
 
 def test_the_loop_ends_where_the_table_says(monkeypatch):
-    """A solved plain tier ends the search; an unsolved one goes on to the region's fitted
-    pushes past the time budget; in a re-plan, settled fitted pushes end it before the
-    plain tier, and unsettled ones are not charged to the plain tier's budget."""
+    """Solved fitted pushes end a fresh search; unsolved, the plain tier gets what is left
+    of the time budget, and where it solves nothing the fits at the task's own budget come
+    past the budget; in a re-plan, settled fitted pushes end it before the plain tier, and
+    unsettled ones are not charged to the plain tier's budget."""
     solved, unsolved = _plan(1e-5), _plan(0.5)  # FEASIBLE: 1e-2
     results = {"plain": SearchResult(solved, [solved], 3.0),
-               "region_fits": SearchResult(None, [], 1.0)}
+               "region_fits": SearchResult(solved, [solved], 1.0)}
     calls = _fake_tiers(monkeypatch, results)
     result, _ = search_module.search_scene(_request("box_push", time_budget=2.0))
-    assert [k for k, _ in calls] == ["plain"] and result.best is solved
+    assert calls == [("region_fits", 2.0)] and result.best is solved
+
+    results["region_fits"] = SearchResult(None, [], 1.0)
+    calls.clear()
+    result, _ = search_module.search_scene(_request("box_push", time_budget=2.0))
+    assert calls == [("region_fits", 2.0), ("plain", 1.0)] and result.best is solved
 
     results["plain"] = SearchResult(unsolved, [unsolved], 3.0)
     calls.clear()
     result, spaces = search_module.search_scene(_request("box_push", time_budget=2.0))
-    assert calls == [("plain", 2.0), ("region_fits", 0.0)]  # past the budget: still tried
-    assert result.seconds == 4.0 and set(spaces) == {id(unsolved)}
+    # past the budget: still tried
+    assert calls == [("region_fits", 2.0), ("plain", 1.0), ("region_fits", 0.0)]
+    assert result.seconds == 5.0 and set(spaces) == {id(unsolved)}
 
     fitted = _plan(0.02)
     results["region_fits"] = SearchResult(fitted, [fitted], 1.5)
