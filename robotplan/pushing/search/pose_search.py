@@ -61,7 +61,8 @@ REGION_SLACK = 0.5  # share of goal.tol that H_g may reach at a region goal's ta
 def region_target(task: PushTask, settings: ProgramSettings
                   ) -> tuple[float, float, float] | None:
     """A target pose ``(x, y, yaw)`` of the task's object for the region goal's fitted pushes: its
-    footprint's centroid on the region's, turned from its start yaw by the least multiple
+    footprint's centroid or bounding box's centre on the region's centroid, turned from its
+    start yaw by the least multiple
     of YAW_STEP_DEG at which the program's goal row (H_g over the area, eq. 8) is at most
     REGION_SLACK of ``goal.tol`` (else within 10 % of its least); None when at every turn
     half the footprint or more lies outside."""
@@ -70,9 +71,17 @@ def region_target(task: PushTask, settings: ProgramSettings
     yaw0 = float(body.pose[2])
     yaws = yaw0 + np.array(sorted(np.radians(np.arange(-180.0, 180.0, YAW_STEP_DEG)), key=abs))
     cos, sin = np.cos(yaws), np.sin(yaws)
-    origins = c_R - np.stack((cos * c_B[0] - sin * c_B[1], sin * c_B[0] + cos * c_B[1]), -1)
-    X = torch.from_numpy(np.column_stack((origins, yaws)))
-    outside = region_goal(body, region, settings)(X)[:, 0].numpy() / body.area
+    R = np.stack((np.stack((cos, -sin), -1), np.stack((sin, cos), -1)), -2)  # (Y, 2, 2)
+    turned = np.einsum("yij,nj->yni", R, body.shape.outline())
+    # per turn, the footprint's centroid or its bounding box's centre on the region's
+    # centroid, whichever leaves less outside (an L's centroid is off its box's centre)
+    middles = np.stack((R @ c_B, 0.5 * (turned.min(axis=1) + turned.max(axis=1))))
+    H = region_goal(body, region, settings)
+    shares = [H(torch.from_numpy(np.column_stack((c_R - m, yaws))))[:, 0].numpy()
+              for m in middles]
+    best = np.argmin(shares, axis=0)
+    origins = c_R - middles[best, np.arange(len(yaws))]
+    outside = np.min(shares, axis=0) / body.area
     if outside.min() >= 0.5:
         return None
     # the least turn within the slack, or within 10 % of the least outside share (a box's
