@@ -108,15 +108,26 @@ def push_arc(c0: np.ndarray, yaw0: float, r_B: np.ndarray, n_B: np.ndarray, radi
     """Centroids ``(S, 2)`` and yaws ``(S,)`` after pushing ``s (S,)`` m at ``r_B`` (contact
     point from the centroid, body frame) along the inward normal ``n_B``, from the centroid
     ``c0`` at ``yaw0``: θ = θ0 + κ s and c = c0 + R(θ0) ∫₀ˢ R(κσ) n_B dσ, κ = (r × n)/c²."""
-    kappa = (r_B[0] * n_B[1] - r_B[1] * n_B[0]) / radius**2
-    ks = kappa * s
+    cs, ys = _arcs(np.asarray(c0, dtype=float)[None], np.array([yaw0], dtype=float),
+                   np.asarray(r_B, dtype=float)[None], n_B, radius, np.asarray(s)[None])
+    return cs[0], ys[0]
+
+
+def _arcs(c0: np.ndarray, yaw0: np.ndarray, r_B: np.ndarray, n_B: np.ndarray, radius: float,
+          s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`push_arc` for a batch: ``c0 (B, 2)``, ``yaw0 (B,)``, ``r_B (B, 2)``, ``s (B, S)``
+    give centroids ``(B, S, 2)`` and yaws ``(B, S)``."""
+    kappa = (r_B[:, 0] * n_B[1] - r_B[:, 1] * n_B[0]) / radius**2
+    ks = kappa[:, None] * s
     small = np.abs(ks) < 1e-6
     safe = np.where(small, 1.0, ks)
     sin_term = np.where(small, 1.0 - ks**2 / 6, np.sin(safe) / safe) * s
     cos_term = np.where(small, ks / 2, (1.0 - np.cos(safe)) / safe) * s
-    local = np.stack((sin_term * n_B[0] - cos_term * n_B[1],
-                      cos_term * n_B[0] + sin_term * n_B[1]), -1)
-    return c0 + local @ rotation(yaw0).T, yaw0 + ks
+    lx = sin_term * n_B[0] - cos_term * n_B[1]
+    ly = cos_term * n_B[0] + sin_term * n_B[1]
+    cos0, sin0 = np.cos(yaw0)[:, None], np.sin(yaw0)[:, None]
+    world = np.stack((cos0 * lx - sin0 * ly, sin0 * lx + cos0 * ly), -1)
+    return c0[:, None, :] + world, yaw0[:, None] + ks
 
 
 @dataclass(frozen=True)
@@ -158,19 +169,32 @@ class TurningBody:
 
 
 def _path(body: TurningBody, faces: tuple[Face, ...], c0: np.ndarray, yaw0: float,
-          params: np.ndarray) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
-    """The end centroid and yaw after the pushes ``params`` (share, length per push), the
-    centroids ``(K · ROOM_SAMPLES, 2)`` passed on the way and each push's turn ``(K,)``."""
-    c, yaw, passed, turns = c0, yaw0, [], []
+          params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """For a batch of pushes ``params (B, 2K)`` (share, length per push): the end centroids
+    ``(B, 2)`` and yaws ``(B,)``, the centroids ``(B, K · ROOM_SAMPLES, 2)`` passed on the
+    way and each push's turn ``(B, K)``."""
+    B = len(params)
+    c, yaw = np.tile(np.asarray(c0, dtype=float), (B, 1)), np.full(B, float(yaw0))
+    passed, turns = [], []
+    steps = np.arange(1, ROOM_SAMPLES + 1) / ROOM_SAMPLES
     for k, face in enumerate(faces):
-        share, length = params[2 * k], params[2 * k + 1]
-        r_B = face.point(share) - body.c_B
-        s = length * np.arange(1, ROOM_SAMPLES + 1) / ROOM_SAMPLES
-        cs, ys = push_arc(c, yaw, r_B, face.n, body.radius, s)
+        share, length = params[:, 2 * k], params[:, 2 * k + 1]
+        r_B = face.a + (share * face.length)[:, None] * face.t - body.c_B
+        cs, ys = _arcs(c, yaw, r_B, face.n, body.radius, length[:, None] * steps)
         passed.append(cs)
-        turns.append(float(ys[-1]) - yaw)
-        c, yaw = cs[-1], float(ys[-1])
-    return c, yaw, np.concatenate(passed), np.array(turns)
+        turns.append(ys[:, -1] - yaw)
+        c, yaw = cs[:, -1], ys[:, -1]
+    return c, yaw, np.concatenate(passed, axis=1), np.stack(turns, -1)
+
+
+def _forward_jacobian(residuals, x: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Forward differences of ``residuals`` (a batch ``(B, n) → (B, m)``) at ``x (n,)`` in
+    one batched call, stepping down where a step up would leave the upper bound ``hi``."""
+    h = 1e-7 * np.maximum(1.0, np.abs(x))
+    h = np.where(x + h > hi, -h, h)
+    points = np.vstack((x, x + np.diag(h)))
+    values = residuals(points)
+    return ((values[1:] - values[0]) / h[:, None]).T
 
 
 def fit_pose_pushes(task: PushTask, goal: tuple[float, float, float], max_pushes: int = 2,
@@ -207,21 +231,29 @@ def fit_pose_pushes(task: PushTask, goal: tuple[float, float, float], max_pushes
             lo = np.tile([FACE_MARGIN, 0.0], k)
             hi = np.tile([1 - FACE_MARGIN, MAX_LENGTH], k)
 
-            def residual(params: np.ndarray, seq: tuple[Face, ...] = seq) -> np.ndarray:
+            def residuals(params: np.ndarray, seq: tuple[Face, ...] = seq) -> np.ndarray:
                 c, yaw, passed, _turns = _path(body, seq, c0, pose[2], params)
-                miss = np.array([*(c - target_c), body.radius * (yaw - target_yaw)])
+                miss = np.column_stack((c - target_c, body.radius * (yaw - target_yaw)))
                 off = np.maximum(passed - hi_xy, 0.0) + np.maximum(lo_xy - passed, 0.0)
-                return np.concatenate((miss, off.ravel(), LENGTH_WEIGHT * params[1::2]))
+                return np.hstack((miss, off.reshape(len(params), -1),
+                                  LENGTH_WEIGHT * params[:, 1::2]))
+
+            def residual(x: np.ndarray, residuals=residuals) -> np.ndarray:
+                return residuals(x[None])[0]
+
+            def jacobian(x: np.ndarray, residuals=residuals, hi=hi) -> np.ndarray:
+                return _forward_jacobian(residuals, x, hi)
 
             best, miss = None, np.inf
             for u in FIT_STARTS:  # the next start only where this one misses the target
-                res = least_squares(residual, np.tile([u, 0.1], k), bounds=(lo, hi), xtol=1e-10)
+                res = least_squares(residual, np.tile([u, 0.1], k), jac=jacobian,
+                                    bounds=(lo, hi), xtol=1e-10)
                 if best is None or res.cost < best.cost:
                     # the pose and the room on the table
                     best, miss = res, float(np.linalg.norm(res.fun[:-k]))
                 if miss <= tolerance or miss > HOPELESS_MISS:
                     break
-            turns = _path(body, seq, c0, pose[2], best.x)[3]
+            turns = _path(body, seq, c0, pose[2], best.x[None])[3][0]
             fit = PosePushes(seq, tuple(best.x[0::2]), tuple(best.x[1::2]), miss,
                              tuple(float(t) for t in turns), tolerance)
             key = tuple(f.init for f in seq)

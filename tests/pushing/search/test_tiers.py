@@ -42,6 +42,8 @@ def test_each_task_is_searched_with_the_tiers_its_kind_asks_for():
     box = _request("box_push")
     assert _tiers_for(box) == ["region_fits_first", "plain", "region_fits"]
     assert _tiers_for(box.but(replan=True)) == ["region_fits_replan", "plain"]
+    tail = box.but(replan=True, skeleton="push@0", guesses={"tail": {}})
+    assert _tiers_for(tail) == ["region_fits_tail", "plain"]
     assert _tiers_for(box.but(skeleton="push@0")) == ["plain"]
     assert _tiers_for(_request("obstacle_push")) == ["plain", "routes"]
     assert _tiers_for(_request("three_objects")) == ["plain"]
