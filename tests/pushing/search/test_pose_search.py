@@ -134,3 +134,31 @@ def test_a_region_target_keeps_a_fitting_yaw_and_refuses_a_region_too_small():
     # larger than the 7 cm wide region in every direction: more than half outside at any yaw
     narrow = make_task(parse_scene(region_doc([0.18, 0.18], 0.0, [0.5, 0.07])))
     assert region_target(narrow, settings) is None
+
+
+def test_a_region_target_centres_an_l_shape_by_its_box_where_its_centroid_would_stick_out():
+    """A 20 cm L-shape (6 cm legs) and a 40 cm square region: its centroid lies ~3 cm off its
+    bounding box's centre, so with the centroid on the region's the goal row finds 0.3 % or
+    more of it outside at every turn; with its box centred it fits unturned (0.08 %), and
+    the target is that pose."""
+    import torch
+
+    from robotplan.pushing.program.rows_goal import region_goal
+    from robotplan.pushing.search.pose_search import REGION_SLACK, region_target
+
+    doc = {"version": 1, "name": "l_region",
+           "workspace": {"center": [0.0, 0.0], "size": [1.4, 1.4], "resolution": 0.01},
+           "objects": [{"name": "object", "pose": [-0.2, 0.0, 0.0],
+                        "shape": {"type": "lshape", "size": [0.2, 0.2], "thickness": 0.06}}],
+           "pushers": [{"name": "pusher", "radius": 0.02, "position": [-0.45, 0.0]}],
+           "goal": {"type": "region", "object": "object",
+                    "region": {"shape": {"type": "box", "size": [0.4, 0.4]},
+                               "pose": [0.25, 0.0, 0.0]}}}
+    task = make_task(parse_scene(doc))
+    settings = task_settings(task)
+    body = task.scene.bodies["object"]
+    x, y, yaw = region_target(task, settings)
+    H = region_goal(body, task.region, settings)
+    outside = float(H(torch.tensor([[x, y, yaw]], dtype=torch.float64))[0, 0]) / body.area
+    assert outside <= REGION_SLACK * settings.row("goal").tol
+    assert abs(yaw) < 1e-9  # unturned
