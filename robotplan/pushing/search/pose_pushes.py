@@ -29,7 +29,8 @@ from robotplan.scene import Scene
 from robotplan.scene.task import PushTask
 
 __all__ = ["FIT_SHARE", "FIT_TOLERANCE", "INIT_DIRECTIONS_DEG", "STANDOFF", "Face", "PosePushes",
-           "TurningBody", "faces_of", "fit_pose_pushes", "fit_rank", "push_arc", "rotation"]
+           "TurningBody", "centroid_room", "faces_of", "fit_pose_pushes", "fit_rank", "push_arc",
+           "rotation"]
 
 MIN_FACE = 0.02  # m: shorter edges of the outline (a disc's facets) are not pushed
 FACE_MARGIN = 0.2  # share of a face kept free at either end: contacts nearer a corner slide
@@ -197,6 +198,19 @@ def _forward_jacobian(residuals, x: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return ((values[1:] - values[0]) / h[:, None]).T
 
 
+def centroid_room(task: PushTask) -> tuple[np.ndarray, np.ndarray]:
+    """The box ``(low, high)`` (table frame, m) the fitted pushes keep the object's centroid
+    in: the object's reach plus a pusher's width and standoff from the table's edges, so
+    that the pusher can get behind it."""
+    scene, obj = task.scene, task.obj
+    shape = scene.bodies[obj].shape
+    room = (shape.bound_radius + float(np.linalg.norm(centroid(shape.outline())))
+            + 2 * scene.bodies[task.actors[0]].shape.radius + STANDOFF)
+    ws = scene.workspace
+    return (np.asarray(ws.center) - np.asarray(ws.size) / 2 + room,
+            np.asarray(ws.center) + np.asarray(ws.size) / 2 - room)
+
+
 def fit_pose_pushes(task: PushTask, goal: tuple[float, float, float], max_pushes: int = 2,
                     turn_gain: float = 1.0, classes: tuple[int, ...] | None = None
                     ) -> list[PosePushes]:
@@ -216,13 +230,7 @@ def fit_pose_pushes(task: PushTask, goal: tuple[float, float, float], max_pushes
     start_error = float(np.linalg.norm([*(c0 - target_c), body.radius * turn]))
     tolerance = min(FIT_TOLERANCE, FIT_SHARE * start_error)
     faces = faces_of(scene, obj, actor)
-    # the centroid keeps the object's reach plus a pusher's width and standoff from the
-    # table's edges, so that the pusher can get behind it
-    ws = scene.workspace
-    room = (scene.bodies[obj].shape.bound_radius + float(np.linalg.norm(body.c_B))
-            + 2 * scene.bodies[actor].shape.radius + STANDOFF)
-    lo_xy = np.asarray(ws.center) - np.asarray(ws.size) / 2 + room
-    hi_xy = np.asarray(ws.center) + np.asarray(ws.size) / 2 - room
+    lo_xy, hi_xy = centroid_room(task)
     fits: dict[tuple[int, ...], PosePushes] = {}
     for k in range(1 if classes is None else max_pushes, max_pushes + 1):
         for seq in itertools.product(faces, repeat=k):

@@ -34,6 +34,7 @@ from robotplan.pushing.search.pose_pushes import (
     Face,
     PosePushes,
     TurningBody,
+    centroid_room,
     fit_pose_pushes,
     push_arc,
     rotation,
@@ -61,8 +62,9 @@ REGION_SLACK = 0.5  # share of goal.tol that H_g may reach at a region goal's ta
 def region_target(task: PushTask, settings: ProgramSettings
                   ) -> tuple[float, float, float] | None:
     """A target pose ``(x, y, yaw)`` of the task's object for the region goal's fitted pushes: its
-    footprint's centroid or bounding box's centre on the region's centroid, turned from its
-    start yaw by the least multiple
+    footprint's centroid or bounding box's centre on the region's centroid (moved so that
+    its centroid stays in the room the fits keep it in: :func:`centroid_room`), turned from
+    its start yaw by the least multiple
     of YAW_STEP_DEG at which the program's goal row (H_g over the area, eq. 8) is at most
     REGION_SLACK of ``goal.tol`` (else within 10 % of its least); None when at every turn
     half the footprint or more lies outside."""
@@ -75,12 +77,16 @@ def region_target(task: PushTask, settings: ProgramSettings
     turned = np.einsum("yij,nj->yni", R, body.shape.outline())
     # per turn, the footprint's centroid or its bounding box's centre on the region's
     # centroid, whichever leaves less outside (an L's centroid is off its box's centre)
+    # (Y, 2), moved where the centroid would leave the room the fits keep it in
     middles = np.stack((R @ c_B, 0.5 * (turned.min(axis=1) + turned.max(axis=1))))
+    lo, hi = centroid_room(task)
+    candidates = c_R - middles  # (2, Y, 2) origins
+    candidates += np.clip(candidates + R @ c_B, lo, hi) - (candidates + R @ c_B)
     H = region_goal(body, region, settings)
-    shares = [H(torch.from_numpy(np.column_stack((c_R - m, yaws))))[:, 0].numpy()
-              for m in middles]
+    shares = [H(torch.from_numpy(np.column_stack((origins, yaws))))[:, 0].numpy()
+              for origins in candidates]
     best = np.argmin(shares, axis=0)
-    origins = c_R - middles[best, np.arange(len(yaws))]
+    origins = candidates[best, np.arange(len(yaws))]
     outside = np.min(shares, axis=0) / body.area
     if outside.min() >= 0.5:
         return None
