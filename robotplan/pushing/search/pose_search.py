@@ -186,7 +186,10 @@ def pose_guess(scene: Scene, obj: str, actor: str, fit: PosePushes, T: int,
             q_pusher.append(pj - rho * (Rj @ face.n))
             contacts.append(pj)
         c, yaw, last_n = cs[-1], float(ys[-1]), rotation(float(ys[-1])) @ face.n
-    return {"q_obj": np.array(q_obj), "q_pusher": np.array(q_pusher),
+    # on the table: a back-off or a circle round an object near its edge would leave it
+    x0, x1, y0, y1 = scene.workspace.bounds
+    q_pusher = np.clip(np.array(q_pusher), [x0, y0], [x1, y1])
+    return {"q_obj": np.array(q_obj), "q_pusher": q_pusher,
             "p": np.array(contacts)}
 
 
