@@ -112,3 +112,20 @@ def test_a_turn_in_place_near_the_target_is_fitted_with_two_pushes(shape):
     assert two[0].within and len(two[0].faces) == 2
     assert two[0].error <= FIT_SHARE * start_error
     assert min(two[0].lengths) > 0.0005  # both push: neither is a placeholder
+
+
+def test_the_guess_keeps_the_pusher_on_the_table_beside_its_edge():
+    """A box 8 cm from the table's edge pushed away from it: the guess's standoff behind
+    the face towards the edge and its circle round the box would lie beyond the edge;
+    every state of the pusher stays on the table."""
+    doc = scene_doc(BOX, [0.0, 0.0, 0.0])
+    doc["objects"][0]["pose"] = [0.62, 0.0, 0.0]
+    doc["pushers"][0]["position"] = [0.45, 0.0]
+    scene = parse_scene(doc)
+    # the face towards the edge, pushed back from the edge's side
+    face = min(faces_of(scene, "object", "pusher"), key=lambda f: f.n[0])
+    pushes = PosePushes((face,), (0.5,), (0.05,), 0.0)
+    q = pose_guess(scene, "object", "pusher", pushes, 12)["q_pusher"]
+    x0, x1, y0, y1 = scene.workspace.bounds
+    assert (q[:, 0] >= x0).all() and (q[:, 0] <= x1).all()
+    assert (q[:, 1] >= y0).all() and (q[:, 1] <= y1).all()
