@@ -80,7 +80,7 @@ class PushProgram:
             goal_chained=chained is not None and task.goal_object == chained)
         self.goal_body = self.target if self.variables.goal_chained else self.obj
         self.dynamics = self.chain_dynamics = None
-        self.swept_check: tuple[np.ndarray, float] | None = None
+        self.swept_check: tuple[np.ndarray, float, float] | None = None
         self.guess = guess if guess is not None else (
             chain_guess(self) if chained else initial_guess(self))
         self.keep_start = guess is not None  # a given start is a plan worth keeping

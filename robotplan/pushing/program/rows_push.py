@@ -157,15 +157,25 @@ def _collision(ctx) -> None:
 
 def _swept(ctx) -> None:
     """Along each free move of a free pusher, its gap to the object at ``samples`` points
-    (and after the solve at points ``check_spacing`` apart: :func:`swept_shortfall`)."""
+    (and after the solve at points ``check_spacing`` apart: :func:`swept_shortfall`), at
+    most ``depth`` (m) into it: ``tolerance``, or for the move from the scene's start as
+    deep as the pusher starts in the object (a re-plan observes it pressed in; no plan
+    changes where it starts)."""
     program, free, samples = ctx.program, ctx.steps, ctx.constants.samples
     if program.task.arms or samples <= 0:
         return
-    program.swept_check = (free, ctx.spec.scale)
+    depth = np.full(len(free), float(ctx.constants.tolerance))
+    start_depth = 0.0
+    if len(free) and free[0] == 1:
+        start = torch.as_tensor(program.pusher.pose[:2], dtype=torch.float64)[None, None]
+        pose = torch.as_tensor(program.obj.pose, dtype=torch.float64)[None]
+        start_depth = program.pusher.shape.radius - float(program.obj.sdf(start, pose)[0, 0])
+        depth[0] = max(depth[0], start_depth)
+    program.swept_check = (free, ctx.spec.scale, start_depth)
     # the object holds still in these steps (hold_object.active): its pose at t
     Q1, Q2 = ctx.body("object"), ctx.body("actor")
     ctx.constrain(SweptClearance(program.obj, program.pusher, samples),
-                  [Q1[free], Q2[free - 1], Q2[free]], samples)
+                  [Q1[free], Q2[free - 1], Q2[free]], samples, depth=depth)
 
 
 def swept_shortfall(program, q_obj: np.ndarray, q_pusher: np.ndarray) -> float:
@@ -176,11 +186,15 @@ def swept_shortfall(program, q_obj: np.ndarray, q_pusher: np.ndarray) -> float:
     swept = program.settings.row("swept")
     if program.swept_check is None or swept.check_spacing is None:
         return 0.0
-    free, scale = program.swept_check
+    free, scale, start_depth = program.swept_check
     q1, q2 = torch.from_numpy(q_obj), torch.from_numpy(q_pusher[:, :2])
     depth = partial(crossing_depth, program.obj, program.pusher, spacing=swept.check_spacing,
                     samples=swept.samples)
-    beyond = depth(q1[free], q2[free - 1], q2[free]) - swept.check_depth
+    rest = free[1:] if free[0] == 1 else free
+    beyond = depth(q1[rest], q2[rest - 1], q2[rest]) - swept.check_depth
+    if free[0] == 1:  # the move from the start, as deep as the pusher starts in the object
+        first = depth(q1[1:2], q2[:1], q2[1:2])
+        beyond = max(beyond, first - max(swept.check_depth, start_depth))
     push = program.steps.named("push")
     if len(push):
         start = carry_with_body(q2[push - 1, None], q1[push - 1], q1[push])[:, 0]

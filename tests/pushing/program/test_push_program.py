@@ -344,3 +344,29 @@ def test_a_push_step_hopping_through_the_object_is_seen_by_the_dense_check():
         prog.obj, prog.pusher, torch.from_numpy(turned_obj[t:t + 1]),
         torch.from_numpy(carried[t - 1:t]), torch.from_numpy(carried[t:t + 1]), 0.01)
     assert in_table_frame > s.row("swept").push_check_depth
+
+
+def test_a_pusher_that_starts_pressed_into_the_object_may_leave_it():
+    """Observed 2 cm inside the box (a re-plan in a world that let it press in): the move
+    out of the box from the start is held to that depth, not to ``swept.tolerance``, by the
+    row and by the dense check; a later move as deep still fails the check."""
+    task = load_task(TASKS / "box_push.yaml")
+    box = task.scene.bodies["box"]
+    x, y, yaw = box.pose
+    R_WB = np.array([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
+    radius = task.scene.bodies["pusher"].shape.radius
+    inside = np.array([x, y]) + R_WB @ (-(box.shape.size[0] / 2 + radius - 0.02), 0.0)
+    task = task.at(task.scene.with_state({"pusher": tuple(inside)}))
+    space = replace(load_skeleton_space(), init_frame="table")
+    prog = PushProgram(task, parse_skeleton("push@2", "pusher", "box"), None, space)
+    swept = prog.settings.row("swept")
+    (binding,) = [b for b in prog.prog.GetAllConstraints()
+                  if b.evaluator().get_description() == "swept"]
+    lower = binding.evaluator().lower_bound().reshape(-1, swept.samples)
+    assert lower[0] == pytest.approx(-100 * 0.02) and lower[1:] == pytest.approx(
+        -100 * swept.tolerance)
+    q_obj, q_pusher = prog.guess["q_obj"].copy(), prog.guess["q_pusher"].copy()
+    q_pusher[1:9] = np.array([x, y]) + R_WB @ (-0.3, 0.0)  # straight out, then round
+    assert swept_shortfall(prog, q_obj, q_pusher) == 0.0
+    q_pusher[5] = inside  # pressed in as deep again, later
+    assert swept_shortfall(prog, q_obj, q_pusher) > 0.0

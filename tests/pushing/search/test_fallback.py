@@ -33,7 +33,7 @@ def test_only_a_free_pushers_pose_re_plan_with_two_workers_runs_side_by_side(pos
 
 
 @pytest.mark.parametrize(("dx", "turn_deg", "tail_solves"), [(0.008, 5.0, True),
-                                                             (0.08, 30.0, False)])
+                                                             (0.2, 0.0, False)])
 def test_side_by_side_plans_what_the_sequence_plans(pose_plan, dx, turn_deg, tail_solves):
     """Re-planned after its first push from ``dx`` m and ``turn_deg`` off: the tail and
     the fresh search side by side (2 workers) give the plan the tail-then-fresh sequence
