@@ -31,11 +31,12 @@ def _request(name: str, **changes) -> SearchRequest:
                          progress=False, **changes)
 
 
-def test_every_tier_has_a_search_and_the_plain_tier_is_for_every_task():
+def test_every_tier_has_a_search_and_a_plain_tier_is_for_every_task():
     tiers = load_tiers()
     assert {t.candidates for t in tiers} <= set(search_module.TIER_SEARCHES)
     plain = [t for t in tiers if t.candidates == "plain"]
-    assert len(plain) == 1 and plain[0].when.holds(_request("two_arm_touch"))
+    for name in ("two_arm_touch", "box_push", "obstacle_push", "three_objects"):
+        assert sum(t.when.holds(_request(name)) for t in plain) == 1, name
 
 
 def test_each_task_is_searched_with_the_tiers_its_kind_asks_for():
@@ -51,8 +52,10 @@ def test_each_task_is_searched_with_the_tiers_its_kind_asks_for():
     scene = load_scene(TASKS / "box_push.yaml")
     posed = replace(scene, goal=PoseGoal("box", (0.1, 0.1, 0.5)))
     pose = SearchRequest(make_task(posed), MODEL)
-    assert _tiers_for(pose) == ["pose_fits", "plain"]
-    assert _tiers_for(pose.but(guesses={"warm": {}})) == ["plain"]
+    assert _tiers_for(pose) == ["pose_fits", "plain_pose"]
+    assert _tiers_for(pose.but(guesses={"warm": {}})) == ["plain_pose_tail"]
+    assert _tiers_for(pose.but(replan=True)) == ["pose_fits"]  # no plain pushes executing
+    assert _tiers_for(pose.but(replan=True, guesses={"tail": {}})) == ["plain_pose_tail"]
 
 
 def _fake_tiers(monkeypatch, results: dict[str, SearchResult]) -> list[tuple[str, float]]:
