@@ -128,9 +128,13 @@ class PushProgram:
         return self._solution(x, violations, cost, "the start, not solved",
                               time.perf_counter() - t0, {})
 
-    def _solver(self) -> tuple[SnoptSolver | IpoptSolver, SolverOptions]:
+    def _solver(self, iterations: int | None = None
+                ) -> tuple[SnoptSolver | IpoptSolver, SolverOptions]:
+        """The solver and its options; ``iterations``: major iterations (default: the
+        stage's)."""
         s, prog = self.settings, self.prog
-        iterations = s.iterations if self.dynamics is not None else s.warm_iterations
+        if iterations is None:
+            iterations = s.iterations if self.dynamics is not None else s.warm_iterations
         opts = SolverOptions()
         if s.solver == "snopt":
             solver = SnoptSolver()
@@ -147,16 +151,29 @@ class PushProgram:
         opts.SetOption(solver.id(), "max_iter", iterations)
         return solver, opts
 
+    def _chunks(self) -> list[int]:
+        """The major iterations of each solve of this stage (``warm_chunk``)."""
+        s = self.settings
+        if self.dynamics is not None or not s.warm_chunk:
+            return [s.iterations if self.dynamics is not None else s.warm_iterations]
+        full, rest = divmod(s.warm_iterations, s.warm_chunk)
+        return [s.warm_chunk] * full + ([rest] if rest else [])
+
     def solve(self) -> Solution:
         s, prog = self.settings, self.prog
         self._set_start()
-        solver, opts = self._solver()
+        start = x = prog.GetInitialGuess(prog.decision_variables())
         t0 = time.perf_counter()  # the clock of the per-functional timings
-        result = solver.Solve(prog, None, opts)
+        for iterations in self._chunks():
+            prog.SetInitialGuess(prog.decision_variables(), x)  # from where the last ended
+            solver, opts = self._solver(iterations)
+            result = solver.Solve(prog, None, opts)
+            x = result.GetSolution(prog.decision_variables())
+            violations, cost = self._evaluate_untimed(x)
+            if max(violations.values(), default=0.0) <= s.warm_restart_above:
+                break
         seconds = time.perf_counter() - t0
         status = self._status(result)
-        x = result.GetSolution(prog.decision_variables())
-        violations, cost = self._evaluate_untimed(x)
         for _ in range(s.warm_restarts if self.dynamics is None else 0):
             worst = max(violations.values(), default=0.0)
             if not s.warm_restart_above < worst <= WARM_USABLE:  # done, or hopeless
@@ -174,7 +191,6 @@ class PushProgram:
         timings = self._timing_report(seconds)
         if self.keep_start:
             # SNOPT returns its last iterate; from a warm start the start itself may be better
-            start = prog.GetInitialGuess(prog.decision_variables())
             start_violations, start_cost = self.evaluate(start)
             if rank(start_violations, start_cost) < rank(violations, cost):
                 x, violations, cost = start, start_violations, start_cost

@@ -73,6 +73,11 @@ class ProgramSettings:
     # always run) (docs/experiments.md#replan-learned-stage)
     learned_start_violation: float | None = None
     warm_iterations: int = 300
+    # the kinematic stage in chunks of this many major iterations, ending at the first chunk
+    # that ends within warm_restart_above: a warm start needs the rows met, and SNOPT spends
+    # the rest of warm_iterations on the costs (None: one solve;
+    # docs/experiments.md#kinematic-chunks)
+    warm_chunk: int | None = None
     # a kinematic solve that ends above this violation (but usable, ≤ WARM_USABLE) is solved
     # again from where it ended: it rescues SNOPT's "infeasibilities minimized" near a
     # solution (docs/experiments.md#warm-restart)

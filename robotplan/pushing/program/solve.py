@@ -23,8 +23,9 @@ def solve_skeleton(task: PushTask, skeleton: Skeleton, model: PushDynamics, spac
     program from its solution; seconds and timings cover both (``"warm_start"``: stage 1).
     A given ``guess`` (an earlier plan of the same skeleton) is repaired by the kinematic
     program (``warm_from_guess``) and starts the learned program, which is not run when
-    the start is kept (:func:`_kept_start`). Without ``learned_stage`` the kinematic
-    program's solution is the plan."""
+    the start is kept (:func:`_kept_start`); with ``accept_good_start`` neither is a
+    start (given, or the kinematic plan) that the learned rows accept. Without
+    ``learned_stage`` the kinematic program's solution is the plan."""
     states = len(skeleton.phases) * space.steps_per_phase + 1
     if guess is not None and len(guess["q_obj"]) != states:
         raise ValueError(f"a guess of {len(guess['q_obj'])} states for {skeleton.describe()} "
@@ -62,6 +63,8 @@ def solve_skeleton(task: PushTask, skeleton: Skeleton, model: PushDynamics, spac
     sol = None
     if given and (settings.accept_good_start or settings.learned_start_violation is not None):
         sol = _kept_start(learned.start_solution(), settings)
+    elif settings.accept_good_start:  # the kinematic plan, where the learned rows accept it
+        sol = _accepted_start(learned.start_solution(), settings)
     sol = sol or learned.solve()
     if settings.warm_start and warm_seconds:
         sol.seconds += warm_seconds

@@ -30,7 +30,7 @@ from robotplan.scene.task import PushTask
 
 __all__ = ["FIT_SHARE", "FIT_TOLERANCE", "INIT_DIRECTIONS_DEG", "STANDOFF", "Face", "PosePushes",
            "TurningBody", "centroid_room", "faces_of", "fit_pose_pushes", "fit_rank", "push_arc",
-           "rotation"]
+           "rotation", "sticking_share"]
 
 MIN_FACE = 0.02  # m: shorter edges of the outline (a disc's facets) are not pushed
 FACE_MARGIN = 0.2  # share of a face kept free at either end: contacts nearer a corner slide
@@ -268,6 +268,25 @@ def fit_pose_pushes(task: PushTask, goal: tuple[float, float, float], max_pushes
             if key not in fits or fit_rank(fit) < fit_rank(fits[key]):
                 fits[key] = fit
     return sorted(fits.values(), key=fit_rank)[:KEEP_FITS]
+
+
+def sticking_share(body: TurningBody, face: Face, share: float, step: float) -> float:
+    """Where along ``face`` (share of its length) the pusher sticks so that the arc pushed
+    at ``share`` meets the program's discrete turning law in steps of ``step`` m,
+    ``c² Δθ = r × Δc`` with ``r`` from the step's end centroid
+    (:class:`~robotplan.functionals.sticking.QuasiStaticPush`): the arc's chord turns the
+    object a little more or less than its end contact point would. Every chord of the arc
+    is the same in the object's frame, so one share holds in every step. Kept within the
+    face; ``share`` where the face is parallel to the step."""
+    r_B = face.point(share) - body.c_B
+    cs, ys = push_arc(np.zeros(2), 0.0, r_B, face.n, body.radius, np.array([step]))
+    d, R = cs[0], rotation(float(ys[0]))
+    base, along = R @ (face.a - body.c_B), face.length * (R @ face.t)
+    lever = along[0] * d[1] - along[1] * d[0]
+    if abs(lever) < 1e-12:
+        return share
+    u = (body.radius**2 * float(ys[0]) - (base[0] * d[1] - base[1] * d[0])) / lever
+    return min(1.0, max(0.0, u))
 
 
 def fit_rank(fit: PosePushes) -> tuple[bool, float]:

@@ -31,28 +31,20 @@ from robotplan.pushing.search.pose_pushes import (
     FIT_TOLERANCE,
     INIT_DIRECTIONS_DEG,
     STANDOFF,
-    Face,
     PosePushes,
     TurningBody,
     centroid_room,
     fit_pose_pushes,
     push_arc,
     rotation,
+    sticking_share,
 )
 from robotplan.pushing.search.request import SearchRequest
 from robotplan.scene import Scene
 from robotplan.scene.task import PushTask
 
-__all__ = [
-    "pose_candidates",
-    "pose_guess",
-    "region_target",
-    "search_pose",
-    "search_pose_budgets",
-    "search_region_fits",
-    "search_region_fits_budgets",
-    "sticking_share",
-]
+__all__ = ["pose_candidates", "pose_guess", "region_target", "search_pose", "search_pose_budgets",
+           "search_region_fits", "search_region_fits_budgets"]
 
 MAX_STEPS_PER_PHASE = 30
 YAW_STEP_DEG = 5.0  # the turns tried for a region goal's target
@@ -108,25 +100,6 @@ def _steps_for(body: TurningBody, fit: PosePushes, speed: float, max_turn: float
         sweep = 1.0 + kappa * float(np.linalg.norm(r_B))
         need = max(need, math.ceil(length * sweep / speed), math.ceil(kappa * length / max_turn))
     return min(MAX_STEPS_PER_PHASE, need + 2)
-
-
-def sticking_share(body: TurningBody, face: Face, share: float, step: float) -> float:
-    """Where along ``face`` (share of its length) the pusher sticks so that the arc pushed
-    at ``share`` meets the program's discrete turning law in steps of ``step`` m,
-    ``c² Δθ = r × Δc`` with ``r`` from the step's end centroid
-    (:class:`~robotplan.functionals.sticking.QuasiStaticPush`): the arc's chord turns the
-    object a little more or less than its end contact point would. Every chord of the arc
-    is the same in the object's frame, so one share holds in every step. Kept within the
-    face; ``share`` where the face is parallel to the step."""
-    r_B = face.point(share) - body.c_B
-    cs, ys = push_arc(np.zeros(2), 0.0, r_B, face.n, body.radius, np.array([step]))
-    d, R = cs[0], rotation(float(ys[0]))
-    base, along = R @ (face.a - body.c_B), face.length * (R @ face.t)
-    lever = along[0] * d[1] - along[1] * d[0]
-    if abs(lever) < 1e-12:
-        return share
-    u = (body.radius**2 * float(ys[0]) - (base[0] * d[1] - base[1] * d[0])) / lever
-    return min(1.0, max(0.0, u))
 
 
 def pose_guess(scene: Scene, obj: str, actor: str, fit: PosePushes, T: int,

@@ -6,6 +6,7 @@ candidate (:func:`robotplan.pushing.search.planner.search_push`)."""
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Iterator
 from dataclasses import replace
 
@@ -242,7 +243,10 @@ def search_scene(request: SearchRequest) -> tuple[SearchResult, dict[int, Skelet
             continue
         budgets = tuple(named[b] for b in tier.budgets)
         timed = request.but(time_budget=request.left(charged.seconds))
+        t0 = time.perf_counter()
         result, more = TIER_SEARCHES[tier.candidates](timed, budgets, space)
+        # the tier's wall clock: its programs and what made their candidates (the fits)
+        result = replace(result, seconds=max(result.seconds, time.perf_counter() - t0))
         spaces.update(more)
         if tier.charged:
             charged = merge_results(charged, result)

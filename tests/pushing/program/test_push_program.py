@@ -370,3 +370,17 @@ def test_a_pusher_that_starts_pressed_into_the_object_may_leave_it():
     assert swept_shortfall(prog, q_obj, q_pusher) == 0.0
     q_pusher[5] = inside  # pressed in as deep again, later
     assert swept_shortfall(prog, q_obj, q_pusher) > 0.0
+
+
+def test_the_kinematic_stage_in_chunks_ends_once_its_rows_are_met():
+    """``warm_chunk``: the kinematic stage's major iterations in chunks (the last one the
+    rest), the learned stage's in one; solved in chunks the kinematic stage ends with its
+    rows met (to FEASIBLE: this one never gets within ``warm_restart_above``, in chunks or
+    in one solve)."""
+    prog = build(kinematic=True, warm_chunk=40)
+    assert prog._chunks() == [40] * 7 + [20]
+    assert build(kinematic=True)._chunks() == [300]
+    assert build(warm_chunk=40)._chunks() == [30]
+    from robotplan.pushing.program.solution import FEASIBLE
+
+    assert prog.solve().violation <= FEASIBLE

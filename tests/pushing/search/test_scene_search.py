@@ -30,7 +30,8 @@ def test_arm_search_tries_init_points_seen_from_the_goal_when_face_pushes_fail(
     first, second = (skeletons for skeletons, _ in calls)
     assert len(first) == 1 and len(second) == 20
     assert {p.actor for sk in second for p in sk.phases} == {"left"}
-    assert doc["plan_seconds"] == 2.0  # both searches' time
+    # both searches' time, and the reach checks that made their candidates
+    assert doc["plan_seconds"] >= 2.0
 
 
 def test_a_given_skeleton_gets_no_fallback(monkeypatch, tmp_path):
