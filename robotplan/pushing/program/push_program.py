@@ -128,13 +128,9 @@ class PushProgram:
         return self._solution(x, violations, cost, "the start, not solved",
                               time.perf_counter() - t0, {})
 
-    def _solver(self, iterations: int | None = None
-                ) -> tuple[SnoptSolver | IpoptSolver, SolverOptions]:
-        """The solver and its options; ``iterations``: major iterations (default: the
-        stage's)."""
+    def _solver(self, iterations: int) -> tuple[SnoptSolver | IpoptSolver, SolverOptions]:
+        """The solver and its options for ``iterations`` major iterations."""
         s, prog = self.settings, self.prog
-        if iterations is None:
-            iterations = s.iterations if self.dynamics is not None else s.warm_iterations
         opts = SolverOptions()
         if s.solver == "snopt":
             solver = SnoptSolver()
@@ -164,8 +160,9 @@ class PushProgram:
         self._set_start()
         start = x = prog.GetInitialGuess(prog.decision_variables())
         t0 = time.perf_counter()  # the clock of the per-functional timings
-        for iterations in self._chunks():
-            prog.SetInitialGuess(prog.decision_variables(), x)  # from where the last ended
+        for i, iterations in enumerate(self._chunks()):
+            if i:  # from where the last chunk ended
+                prog.SetInitialGuess(prog.decision_variables(), x)
             solver, opts = self._solver(iterations)
             result = solver.Solve(prog, None, opts)
             x = result.GetSolution(prog.decision_variables())

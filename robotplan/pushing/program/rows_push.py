@@ -190,9 +190,10 @@ def swept_shortfall(program, q_obj: np.ndarray, q_pusher: np.ndarray) -> float:
     q1, q2 = torch.from_numpy(q_obj), torch.from_numpy(q_pusher[:, :2])
     depth = partial(crossing_depth, program.obj, program.pusher, spacing=swept.check_spacing,
                     samples=swept.samples)
-    rest = free[1:] if free[0] == 1 else free
+    from_start = len(free) > 0 and free[0] == 1
+    rest = free[1:] if from_start else free
     beyond = depth(q1[rest], q2[rest - 1], q2[rest]) - swept.check_depth
-    if free[0] == 1:  # the move from the start, as deep as the pusher starts in the object
+    if from_start:  # the move from the start, as deep as the pusher starts in the object
         first = depth(q1[1:2], q2[:1], q2[1:2])
         beyond = max(beyond, first - max(swept.check_depth, start_depth))
     push = program.steps.named("push")

@@ -34,11 +34,13 @@ def solve_skeleton(task: PushTask, skeleton: Skeleton, model: PushDynamics, spac
         return PushProgram(task, skeleton, None, space, settings, guess=guess).solve()
     warm_seconds = 0.0
     given = guess is not None
+    learned = start = None  # the learned program of the given start, and that start
     if given and settings.accept_good_start:
         # a start that already meets every row needs no solver: a re-plan's re-anchored
         # plan, or pushes fitted in closed form to the goal
-        start = PushProgram(task, skeleton, model, space, settings, guess=guess)
-        kept = _accepted_start(start.start_solution(), settings)
+        learned = PushProgram(task, skeleton, model, space, settings, guess=guess)
+        start = learned.start_solution()
+        kept = _accepted_start(start, settings)
         if kept is not None:
             return kept
     if settings.warm_start and guess is None:
@@ -59,10 +61,12 @@ def solve_skeleton(task: PushTask, skeleton: Skeleton, model: PushDynamics, spac
         warm_seconds = warm.seconds
         if warm.violation <= WARM_USABLE:
             guess = kin.as_guess(warm)
-    learned = PushProgram(task, skeleton, model, space, settings, guess=guess)
+            learned = start = None  # a repaired start
+    if learned is None:
+        learned = PushProgram(task, skeleton, model, space, settings, guess=guess)
     sol = None
     if given and (settings.accept_good_start or settings.learned_start_violation is not None):
-        sol = _kept_start(learned.start_solution(), settings)
+        sol = _kept_start(start or learned.start_solution(), settings)
     elif settings.accept_good_start:  # the kinematic plan, where the learned rows accept it
         sol = _accepted_start(learned.start_solution(), settings)
     sol = sol or learned.solve()

@@ -70,10 +70,11 @@ def region_target(task: PushTask, settings: ProgramSettings
     # per turn, the footprint's centroid or its bounding box's centre on the region's
     # centroid, whichever leaves less outside (an L's centroid is off its box's centre)
     # (Y, 2), moved where the centroid would leave the room the fits keep it in
-    middles = np.stack((R @ c_B, 0.5 * (turned.min(axis=1) + turned.max(axis=1))))
+    centroids = R @ c_B  # (Y, 2), from the origin
+    middles = np.stack((centroids, 0.5 * (turned.min(axis=1) + turned.max(axis=1))))
     lo, hi = centroid_room(task)
     candidates = c_R - middles  # (2, Y, 2) origins
-    candidates += np.clip(candidates + R @ c_B, lo, hi) - (candidates + R @ c_B)
+    candidates += np.clip(candidates + centroids, lo, hi) - (candidates + centroids)
     H = region_goal(body, region, settings)
     shares = [H(torch.from_numpy(np.column_stack((origins, yaws))))[:, 0].numpy()
               for origins in candidates]
