@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
-from scipy.optimize import least_squares
 
+from robotplan.base.batch_least_squares import least_squares_batch
 from robotplan.functionals.sticking import centroid, turning_radius
 from robotplan.geometry.transforms import wrap_angle
 from robotplan.scene import Scene
@@ -46,11 +46,9 @@ KEEP_FITS = 4  # fits kept, one per sequence of face classes: a pose tier's prog
 PUSH_COST = 0.1  # m of pushing one more push (its reach around the object) counts as
 ROOM_SAMPLES = 6  # points per push at which the object must leave the pusher room on the table
 INIT_DIRECTIONS_DEG = (0.0, 90.0, 180.0, 270.0)  # face normal classes in the object frame
-# contact shares along the face the least squares start from, the next only where a fit
-# misses the target, and not where it misses by more than HOPELESS_MISS (m): other contact
-# points do not turn such a sequence of faces towards it (docs/experiments.md#fitted-first)
+# contact shares along the face the least squares start from, all solved at once
+# (docs/experiments.md#batched-fits)
 FIT_STARTS = (0.5, 0.25, 0.75)
-HOPELESS_MISS = 0.05
 
 
 @dataclass(frozen=True)
@@ -116,16 +114,17 @@ def push_arc(c0: np.ndarray, yaw0: float, r_B: np.ndarray, n_B: np.ndarray, radi
 
 def _arcs(c0: np.ndarray, yaw0: np.ndarray, r_B: np.ndarray, n_B: np.ndarray, radius: float,
           s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`push_arc` for a batch: ``c0 (B, 2)``, ``yaw0 (B,)``, ``r_B (B, 2)``, ``s (B, S)``
-    give centroids ``(B, S, 2)`` and yaws ``(B, S)``."""
-    kappa = (r_B[:, 0] * n_B[1] - r_B[:, 1] * n_B[0]) / radius**2
+    """:func:`push_arc` for a batch: ``c0 (B, 2)``, ``yaw0 (B,)``, ``r_B (B, 2)``, ``n_B (2,)``
+    or ``(B, 2)``, ``s (B, S)`` give centroids ``(B, S, 2)`` and yaws ``(B, S)``."""
+    nx, ny = np.broadcast_to(n_B, r_B.shape).T[:, :, None]
+    kappa = (r_B[:, 0] * ny[:, 0] - r_B[:, 1] * nx[:, 0]) / radius**2
     ks = kappa[:, None] * s
     small = np.abs(ks) < 1e-6
     safe = np.where(small, 1.0, ks)
     sin_term = np.where(small, 1.0 - ks**2 / 6, np.sin(safe) / safe) * s
     cos_term = np.where(small, ks / 2, (1.0 - np.cos(safe)) / safe) * s
-    lx = sin_term * n_B[0] - cos_term * n_B[1]
-    ly = cos_term * n_B[0] + sin_term * n_B[1]
+    lx = sin_term * nx - cos_term * ny
+    ly = cos_term * nx + sin_term * ny
     cos0, sin0 = np.cos(yaw0)[:, None], np.sin(yaw0)[:, None]
     world = np.stack((cos0 * lx - sin0 * ly, sin0 * lx + cos0 * ly), -1)
     return c0[:, None, :] + world, yaw0[:, None] + ks
@@ -169,33 +168,42 @@ class TurningBody:
                                np.sin(yaw) * cB[0] + np.cos(yaw) * cB[1]), -1)
 
 
-def _path(body: TurningBody, faces: tuple[Face, ...], c0: np.ndarray, yaw0: float,
+@dataclass(frozen=True)
+class FaceStack:
+    """Sequences of K faces as arrays, one row per sequence: starts ``a``, tangents ``t``
+    and inward normals ``n`` ``(S, K, 2)``, lengths ``(S, K)`` (body frame)."""
+
+    a: np.ndarray
+    t: np.ndarray
+    n: np.ndarray
+    length: np.ndarray
+
+    @classmethod
+    def of(cls, sequences: list[tuple[Face, ...]]) -> FaceStack:
+        return cls(*(np.array([[getattr(f, name) for f in seq] for seq in sequences])
+                     for name in ("a", "t", "n", "length")))
+
+    def rows(self, index: np.ndarray) -> FaceStack:
+        return FaceStack(self.a[index], self.t[index], self.n[index], self.length[index])
+
+
+def _path(body: TurningBody, faces: FaceStack, c0: np.ndarray, yaw0: float,
           params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """For a batch of pushes ``params (B, 2K)`` (share, length per push): the end centroids
-    ``(B, 2)`` and yaws ``(B,)``, the centroids ``(B, K · ROOM_SAMPLES, 2)`` passed on the
-    way and each push's turn ``(B, K)``."""
+    """For a batch of pushes ``params (B, 2K)`` (share, length per push) along the face
+    sequences ``faces`` (B rows): the end centroids ``(B, 2)`` and yaws ``(B,)``, the
+    centroids ``(B, K · ROOM_SAMPLES, 2)`` passed on the way and each push's turn ``(B, K)``."""
     B = len(params)
     c, yaw = np.tile(np.asarray(c0, dtype=float), (B, 1)), np.full(B, float(yaw0))
     passed, turns = [], []
     steps = np.arange(1, ROOM_SAMPLES + 1) / ROOM_SAMPLES
-    for k, face in enumerate(faces):
+    for k in range(faces.length.shape[1]):
         share, length = params[:, 2 * k], params[:, 2 * k + 1]
-        r_B = face.a + (share * face.length)[:, None] * face.t - body.c_B
-        cs, ys = _arcs(c, yaw, r_B, face.n, body.radius, length[:, None] * steps)
+        r_B = faces.a[:, k] + (share * faces.length[:, k])[:, None] * faces.t[:, k] - body.c_B
+        cs, ys = _arcs(c, yaw, r_B, faces.n[:, k], body.radius, length[:, None] * steps)
         passed.append(cs)
         turns.append(ys[:, -1] - yaw)
         c, yaw = cs[:, -1], ys[:, -1]
     return c, yaw, np.concatenate(passed, axis=1), np.stack(turns, -1)
-
-
-def _forward_jacobian(residuals, x: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """Forward differences of ``residuals`` (a batch ``(B, n) → (B, m)``) at ``x (n,)`` in
-    one batched call, stepping down where a step up would leave the upper bound ``hi``."""
-    h = 1e-7 * np.maximum(1.0, np.abs(x))
-    h = np.where(x + h > hi, -h, h)
-    points = np.vstack((x, x + np.diag(h)))
-    values = residuals(points)
-    return ((values[1:] - values[0]) / h[:, None]).T
 
 
 def centroid_room(task: PushTask) -> tuple[np.ndarray, np.ndarray]:
@@ -225,45 +233,41 @@ def fit_pose_pushes(task: PushTask, goal: tuple[float, float, float], max_pushes
     pose = np.asarray(scene.bodies[obj].pose, dtype=float)
     c0 = pose[:2] + rotation(pose[2]) @ body.c_B
     target_c = np.asarray(goal[:2], dtype=float) + rotation(goal[2]) @ body.c_B
-    turn = wrap_angle(goal[2] - pose[2])
-    target_yaw = pose[2] + turn
-    start_error = float(np.linalg.norm([*(c0 - target_c), body.radius * turn]))
+    target_yaw = pose[2] + wrap_angle(goal[2] - pose[2])
+    start_error = float(np.linalg.norm([*(c0 - target_c), body.radius * (target_yaw - pose[2])]))
     tolerance = min(FIT_TOLERANCE, FIT_SHARE * start_error)
     faces = faces_of(scene, obj, actor)
     lo_xy, hi_xy = centroid_room(task)
     fits: dict[tuple[int, ...], PosePushes] = {}
     for k in range(1 if classes is None else max_pushes, max_pushes + 1):
-        for seq in itertools.product(faces, repeat=k):
-            if classes is not None and tuple(f.init for f in seq) != classes:
-                continue
-            lo = np.tile([FACE_MARGIN, 0.0], k)
-            hi = np.tile([1 - FACE_MARGIN, MAX_LENGTH], k)
+        seqs = [seq for seq in itertools.product(faces, repeat=k)
+                if classes is None or tuple(f.init for f in seq) == classes]
+        if not seqs:
+            continue
+        stack, S = FaceStack.of(seqs), len(seqs)
 
-            def residuals(params: np.ndarray, seq: tuple[Face, ...] = seq) -> np.ndarray:
-                c, yaw, passed, _turns = _path(body, seq, c0, pose[2], params)
-                miss = np.column_stack((c - target_c, body.radius * (yaw - target_yaw)))
-                off = np.maximum(passed - hi_xy, 0.0) + np.maximum(lo_xy - passed, 0.0)
-                return np.hstack((miss, off.reshape(len(params), -1),
-                                  LENGTH_WEIGHT * params[:, 1::2]))
+        def residuals(points: np.ndarray, problems: np.ndarray, stack=stack, S=S) -> np.ndarray:
+            B, R, n = points.shape
+            c, yaw, passed, _turns = _path(body, stack.rows(np.repeat(problems % S, R)), c0,
+                                           pose[2], points.reshape(B * R, n))
+            miss = np.column_stack((c - target_c, body.radius * (yaw - target_yaw)))
+            off = np.maximum(passed - hi_xy, 0.0) + np.maximum(lo_xy - passed, 0.0)
+            return np.hstack((miss, off.reshape(B * R, -1),  # the pose and room on the table
+                              LENGTH_WEIGHT * points.reshape(B * R, n)[:, 1::2])
+                             ).reshape(B, R, -1)
 
-            def residual(x: np.ndarray, residuals=residuals) -> np.ndarray:
-                return residuals(x[None])[0]
-
-            def jacobian(x: np.ndarray, residuals=residuals, hi=hi) -> np.ndarray:
-                return _forward_jacobian(residuals, x, hi)
-
-            best, miss = None, np.inf
-            for u in FIT_STARTS:  # the next start only where this one misses the target
-                res = least_squares(residual, np.tile([u, 0.1], k), jac=jacobian,
-                                    bounds=(lo, hi), xtol=1e-10)
-                if best is None or res.cost < best.cost:
-                    # the pose and the room on the table
-                    best, miss = res, float(np.linalg.norm(res.fun[:-k]))
-                if miss <= tolerance or miss > HOPELESS_MISS:
-                    break
-            turns = _path(body, seq, c0, pose[2], best.x[None])[3][0]
-            fit = PosePushes(seq, tuple(best.x[0::2]), tuple(best.x[1::2]), miss,
-                             tuple(float(t) for t in turns), tolerance)
+        # every start of every sequence at once: problem j·S + i starts sequence i at share j
+        x0 = np.vstack([np.tile([u, 0.1], (S, k)) for u in FIT_STARTS])
+        solved = least_squares_batch(residuals, x0, np.tile([FACE_MARGIN, 0.0], k),
+                                     np.tile([1 - FACE_MARGIN, MAX_LENGTH], k))
+        miss = np.linalg.norm(solved.fun[:, :-k], axis=1)
+        # per sequence the least cost among its starts within tolerance, else among all
+        rank = (miss > tolerance) + np.minimum(solved.cost, 0.5)
+        best = rank.reshape(len(FIT_STARTS), S).argmin(0) * S + np.arange(S)
+        x, turns = solved.x[best], _path(body, stack, c0, pose[2], solved.x[best])[3]
+        for i, seq in enumerate(seqs):
+            fit = PosePushes(seq, tuple(x[i, 0::2]), tuple(x[i, 1::2]), float(miss[best[i]]),
+                             tuple(float(t) for t in turns[i]), tolerance)
             key = tuple(f.init for f in seq)
             if key not in fits or fit_rank(fit) < fit_rank(fits[key]):
                 fits[key] = fit
