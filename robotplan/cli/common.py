@@ -159,9 +159,9 @@ def add_rehearse_option(parser) -> None:
     """``--no-rehearse``: run F_q's plan open loop as the search left it."""
     parser.add_argument("--no-rehearse", action="store_true",
                         help="open loop: run the plan as the search left it (the paper's "
-                        "protocol); default with F_q, one pusher, one object and no "
-                        "obstacles: the pusher's states of the plan rehearsed closed loop "
-                        "in F_q")
+                        "protocol); default with F_q, one pusher, one object, no "
+                        "obstacles and a region goal: the pusher's states of the plan "
+                        "rehearsed closed loop in F_q")
 
 
 def add_loop_option(parser) -> None:

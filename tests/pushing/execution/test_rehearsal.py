@@ -19,6 +19,7 @@ from robotplan.pushing.models.loading import load_dynamics
 from robotplan.scene.loader import parse_scene
 from robotplan.scene.task import PushTask, load_task, make_task
 from tests.conftest import TASKS
+from tests.pushing.search.test_pose_pushes import BOX, scene_doc
 
 
 @pytest.fixture(scope="module")
@@ -38,12 +39,14 @@ def _nothing_plans(observed, tail, fresh, last_resort=None):
     return robotplan.PushPlan(observed, None, False)
 
 
-def test_only_one_pusher_one_object_and_no_obstacles_are_rehearsed():
+def test_only_one_pusher_one_object_no_obstacles_and_a_region_goal_are_rehearsed():
     kinds = {name: rehearsable(load_task(TASKS / f"{name}.yaml"))
              for name in ("box_push", "lshape_push", "three_objects", "obstacle_push",
                           "two_arm_left_only")}
     assert kinds == {"box_push": True, "lshape_push": True, "three_objects": False,
                      "obstacle_push": False, "two_arm_left_only": False}
+    posed = make_task(parse_scene(scene_doc(BOX, [0.1, 0.05, 0.8])))
+    assert posed.goal == "pose" and posed.single and not rehearsable(posed)
 
 
 def test_boxes_and_l_shapes_rehearse_in_the_object_frame_f_q_other_footprints_in_their_own():
