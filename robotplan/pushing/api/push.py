@@ -197,16 +197,18 @@ class PushPlanner:
         """:meth:`plan` of the task in an observed scene, as ``planned`` was made, warm
         started from the current plan's ``tail`` (None: a fresh search), a fresh search
         following when the tail does not solve only if ``fresh``; ``last_resort``: the
-        violation within which the loop adopts an unsolved plan."""
+        violation within which the loop adopts an unsolved plan; ``deadline``: the
+        ``time.monotonic()`` instant after which it starts nothing more."""
         options = dict(planned.options)
         model = options.pop("model", None)
 
         def replan(observed: PushTask, tail: Solution | None, fresh: bool,
-                   last_resort: float | None = None) -> PushPlan:
+                   last_resort: float | None = None, deadline: float | None = None
+                   ) -> PushPlan:
             warm = PushPlan(observed, tail, True) if tail is not None else None
             return self.plan(observed, model, **options, progress=False, quiet=True,
                              time_budget=REPLAN_BUDGET, warm_start=warm, fallback=fresh,
-                             replan=True, last_resort=last_resort)
+                             replan=True, last_resort=last_resort, deadline=deadline)
 
         return replan
 

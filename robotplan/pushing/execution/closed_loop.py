@@ -83,7 +83,12 @@ class Replan:
 # None, whether a fresh search may follow when the tail does not solve, the violation within
 # which the loop adopts an unsolved plan or None) → an object with ``best`` (Solution | None)
 # and ``solved`` (robotplan.api.PushPlan)
-Replanner = Callable[[PushTask, "Solution | None", bool, "float | None"], object]
+Replanner = Callable[[PushTask, "Solution | None", bool, "float | None", "float | None"],
+                     object]
+"""``replan(observed, tail, fresh, last_resort, deadline)``: a plan of the observed task from
+the current plan's ``tail`` (a fresh search after it only if ``fresh``), adopting an
+unsolved plan within the violation ``last_resort``, starting nothing after the
+``time.monotonic()`` instant ``deadline``."""
 
 
 def departure(planned: dict[str, np.ndarray], seen: dict[str, np.ndarray], far: float,
@@ -227,7 +232,8 @@ def _ask(loop: _Loop, seen: Observation, tail: Solution | None, reason: str,
         return False
     t0 = time.perf_counter()
     bound = settings.last_resort_violation if last_resort else None
-    result = replan(_observed(loop.task, seen), tail, fresh, bound)
+    result = replan(_observed(loop.task, seen), tail, fresh, bound,
+                    time.monotonic() + settings.replan_deadline)
     best = getattr(result, "best", None)
     solved = bool(getattr(result, "solved", False)) and best is not None
     adopted = solved or adoptable(best, bound)

@@ -96,10 +96,10 @@ def rehearse(task: PushTask, sol: Solution, replan: Replanner, model: RigidMotio
     t0 = time.perf_counter()
 
     def within_budget(observed: PushTask, tail: Solution | None, fresh: bool,
-                      last_resort: float | None = None):
+                      last_resort: float | None = None, deadline: float | None = None):
         if time.perf_counter() - t0 > budget:
             return None  # nothing planned: the loop goes on with its plan
-        return replan(observed, tail, fresh, last_resort)
+        return replan(observed, tail, fresh, last_resort, deadline)
 
     ex = execute_closed_loop(task, sol, within_budget, settings, physics,
                              world_of=lambda t, p: ImaginedWorld(t, model, p))

@@ -72,6 +72,10 @@ class ProgramSettings:
     # nor when its start misses the constraints by more than this (scaled violation; None:
     # always run) (docs/experiments.md#replan-learned-stage)
     learned_start_violation: float | None = None
+    # a search's programs in request.workers processes where more than one is queued; off:
+    # one after another in the searching process, for programs that only check their starts
+    # (~0.06 s each against ~0.2 s to start the processes; docs/experiments.md#starts-first)
+    parallel: bool = True
     warm_iterations: int = 300
     # the kinematic stage in chunks of this many major iterations, ending at the first chunk
     # that ends within warm_restart_above: a warm start needs the rows met, and SNOPT spends

@@ -214,11 +214,13 @@ def search_push(request: SearchRequest, skeletons: list[Skeleton],
                 settings: ProgramSettings | None = None, space: SkeletonSpace | None = None,
                 ordered: bool = False) -> SearchResult:
     """Solve the skeletons (``request.workers`` processes), most promising first, and pick
-    the best; unless ``request.exhaustive``, stop at the first good-enough plan
+    the best (in this process where one program is queued or ``settings.parallel`` is off);
+    unless ``request.exhaustive``, stop at the first good-enough plan
     (``settings.good_rms_mm``) or, after ``PATIENCE_S`` seconds, at the first program
     collected while a solved plan is in hand; start no program after
     ``request.time_budget`` seconds once one has been collected, and stop there once a
-    solved plan is in hand, else when the programs running end (the best so far wins).
+    solved plan is in hand, else when the programs running end (the best so far wins);
+    start none past ``request.deadline``.
     ``request.guesses``: the learned program's initial guess by skeleton (a warm start skips
     the kinematic stage). ``ordered``: the skeletons come most promising first already."""
     from tqdm import tqdm
@@ -245,9 +247,10 @@ def search_push(request: SearchRequest, skeletons: list[Skeleton],
                             settings.good_rms_mm)
 
     def may_start() -> bool:  # past the budget only while nothing has been collected
-        return not past_budget(time.time() - t0, time_budget) or not solutions
+        return (not request.past_deadline()
+                and (not past_budget(time.time() - t0, time_budget) or not solutions))
 
-    if workers <= 1:
+    if workers <= 1 or len(queue) <= 1 or not settings.parallel:
         _init_worker(*args)
         for sk in queue:
             if not may_start() or collect(_solve(sk)):

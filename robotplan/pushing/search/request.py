@@ -4,6 +4,7 @@ the budget and how it reports; frozen, so a tier or a helper process narrows it 
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -27,7 +28,10 @@ class SearchRequest:
     start). ``program``: a user's program settings
     (:func:`~robotplan.pushing.program.settings.with_overrides`). ``replan``: a fresh search during
     execution. ``last_resort``: the violation within which the caller adopts an unsolved
-    plan that meets the constraints. ``exhaustive``: solve every candidate."""
+    plan that meets the constraints. ``exhaustive``: solve every candidate. ``deadline``: the
+    instant (``time.monotonic()``, one clock for every process) after which no tier and no
+    program starts, the best plan so far (or none) being the search's result; a program
+    running then runs to its end."""
 
     task: PushTask
     model_dir: Path
@@ -41,6 +45,7 @@ class SearchRequest:
     replan: bool = False
     last_resort: float | None = None
     exhaustive: bool = False
+    deadline: float | None = None
     progress: bool = True
     quiet: bool = False
 
@@ -51,6 +56,10 @@ class SearchRequest:
     def left(self, spent: float) -> float | None:
         """The seconds of ``time_budget`` left after ``spent`` (None: no budget)."""
         return None if self.time_budget is None else max(0.0, self.time_budget - spent)
+
+    def past_deadline(self) -> bool:
+        """Whether ``deadline`` has passed (never without one)."""
+        return self.deadline is not None and time.monotonic() > self.deadline
 
     def say(self, line: str) -> None:
         """Print ``line`` unless quiet."""

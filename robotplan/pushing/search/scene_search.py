@@ -230,7 +230,8 @@ def search_scene(request: SearchRequest) -> tuple[SearchResult, dict[int, Skelet
     candidate's skeleton space (by ``id`` of its solution). A warm start
     (``request.guesses``) solves with the smaller budget of a start close to a plan
     (``quick`` of the table's budgets) as its own.
-    The time budget counts the seconds of the charged tiers."""
+    The time budget counts the seconds of the charged tiers; past ``request.deadline`` no
+    further tier starts."""
     task = request.task
     own = with_overrides(task_settings(task, request.solver, dynamics_kind(request.model_dir)),
                          request.program)
@@ -239,6 +240,9 @@ def search_scene(request: SearchRequest) -> tuple[SearchResult, dict[int, Skelet
     space = space_for(task)
     apart, charged, spaces = SearchResult(None), SearchResult(None), {}
     for tier in load_tiers():
+        if request.past_deadline():
+            request.say(f"past the deadline: tier {tier.name!r} and those after it do not start")
+            break
         if not _runs(tier, charged, request):
             continue
         budgets = tuple(named[b] for b in tier.budgets)

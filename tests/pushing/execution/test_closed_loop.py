@@ -3,6 +3,7 @@ with the real planner, where open loop fails; its pieces one by one."""
 
 import math
 import re
+import time
 from dataclasses import replace
 
 import numpy as np
@@ -135,7 +136,7 @@ def _observed_box(observed) -> None:
     assert (observed.obj, observed.actors) == ("box", ("pusher",))
 
 
-def _implausible_when_fresh(observed, tail, fresh, last_resort=None):
+def _implausible_when_fresh(observed, tail, fresh, last_resort=None, deadline=None):
     """A re-planner that plans nothing from a tail alone; asked for a fresh search it returns
     a real plan from the observed scene that meets every constraint, flagged not solved (as
     one the learned dynamics call implausible)."""
@@ -205,7 +206,7 @@ def test_an_object_lost_with_no_re_plans_left_ends_the_run_only_when_asked(box_p
         assert ex.stopped is None and len(ex.object_poses) - 1 == planned_steps
 
 
-def _nothing_plans(observed, tail, fresh, last_resort=None):
+def _nothing_plans(observed, tail, fresh, last_resort=None, deadline=None):
     _observed_box(observed)
     return robotplan.PushPlan(observed, None, False)
 
@@ -215,7 +216,7 @@ def _recording_nothing_plans():
     tail, and whether a fresh search may follow."""
     calls: list[tuple[bool, bool]] = []
 
-    def nothing_plans(observed, tail, fresh, last_resort=None):
+    def nothing_plans(observed, tail, fresh, last_resort=None, deadline=None):
         calls.append((tail is not None, fresh))
         return _nothing_plans(observed, tail, fresh)
 
@@ -292,7 +293,7 @@ def test_a_gross_departure_at_a_phase_end_asks_for_a_fresh_search(box_plan,
     ``fresh_beyond_drift``, and with it the bound of a last-resort plan."""
     calls = []
 
-    def nothing_plans(observed, tail, fresh, last_resort):
+    def nothing_plans(observed, tail, fresh, last_resort, deadline=None):
         calls.append((len(calls), tail is not None, fresh, last_resort))
         return _nothing_plans(observed, tail, fresh)
 
@@ -349,3 +350,18 @@ def test_at_the_plan_end_the_last_push_is_redone_first_only_when_asked(box_plan,
     ex = execute_closed_loop(moved, box_plan.best, nothing_plans, settings)
     assert ex.replans[-1].reason == "goal not met at the plan's end"
     assert calls[-1] == (redo_last_push, True)
+
+
+@pytest.mark.parametrize("deadline", [5.0, math.inf])
+def test_every_re_plan_is_asked_with_the_deadline_of_the_loop_settings(box_plan, deadline):
+    asked: list[tuple[float, float]] = []
+
+    def nothing_plans(observed, tail, fresh, last_resort=None, deadline=None):
+        asked.append((time.monotonic(), deadline))
+        return _nothing_plans(observed, tail, fresh)
+
+    settings = LoopSettings(replan_deadline=deadline, max_replans=2)
+    ex = execute_closed_loop(_box_moved(box_plan), box_plan.best, nothing_plans, settings)
+    assert ex.replans and len(asked) == len(ex.replans)
+    for now, until in asked:
+        assert now <= until <= now + deadline

@@ -34,7 +34,7 @@ def box_plan(fq):
                           progress=False, quiet=True)
 
 
-def _nothing_plans(observed, tail, fresh, last_resort=None):
+def _nothing_plans(observed, tail, fresh, last_resort=None, deadline=None):
     assert isinstance(observed, PushTask) and observed.obj == "box"
     return robotplan.PushPlan(observed, None, False)
 

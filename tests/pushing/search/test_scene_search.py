@@ -162,9 +162,9 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
     model = TASKS.parent / "learned" / "push_rigid"
     request = SearchRequest(task, model, quiet=True, progress=False)
     search_module.search_scene(request)
-    # at the quick budget, then at its own: unsolved fitted plans, no plain tier
-    (quick, _, _, _), (fitted, space, guesses, settings) = calls
-    assert quick == fitted
+    # their starts, at the quick budget, then at its own: unsolved fitted plans, no plain tier
+    (starts, _, _, checked), (quick, _, _, _), (fitted, space, guesses, settings) = calls
+    assert starts == quick == fitted and not checked.parallel and settings.parallel
     assert fitted and set(guesses) == set(fitted)
     assert space.init_frame == "object" and space.steps_per_phase >= 10
     for sk in fitted:
@@ -179,12 +179,12 @@ def test_a_pose_goal_searches_its_fitted_pushes_first(monkeypatch):
     assert len(plain) > len(fitted) and none is None and plain_space.init_frame == "goal"
 
 
-def test_fitted_pushes_come_first_at_the_quick_budget(monkeypatch):
+def test_fitted_pushes_come_first_their_starts_then_the_quick_budget(monkeypatch):
     """A pose goal's fitted pushes (fresh, or executing: ``replan=True``) and a region
-    goal's get the ``quick`` budget first; where that solves nothing, a pose goal's fits
-    their own settings and then, unless executing, the plain tier; a region goal's fresh
-    search the plain tier and then its fits at its own settings, executing its fits at
-    their own settings before the plain tier."""
+    goal's get their starts checked first (``start_only``), then the ``quick`` budget;
+    where that solves nothing, a pose goal's fits their own settings and then, unless
+    executing, the plain tier; a region goal's fresh search the plain tier and then its fits
+    at its own settings, executing its fits at their own settings before the plain tier."""
     from robotplan.pushing.search.tiers import load_budgets
 
     calls = []
@@ -195,20 +195,25 @@ def test_fitted_pushes_come_first_at_the_quick_budget(monkeypatch):
 
     region, pose = _box_pose_goal(monkeypatch, record)
     model = TASKS.parent / "learned" / "push_rigid"
-    overlay = load_budgets()["quick"]
-    fits_first = [("fits", True), ("fits", False), ("plain", False)]
-    expected = {("pose", False): fits_first, ("pose", True): fits_first[:2],
-                ("region", False): [("fits", True), ("plain", False), ("fits", False)],
-                ("region", True): fits_first}
+    budgets = load_budgets()
+
+    def budget(settings) -> str:
+        return next((name for name in ("start_only", "quick")
+                     if all(getattr(settings, k) == v for k, v in budgets[name].items())),
+                    "own")
+
+    fits = [("fits", "start_only"), ("fits", "quick")]
+    expected = {("pose", False): [*fits, ("fits", "own"), ("plain", "own")],
+                ("pose", True): [*fits, ("fits", "own")],
+                ("region", False): [*fits, ("plain", "own"), ("fits", "own")],
+                ("region", True): [*fits, ("fits", "own"), ("plain", "own")]}
     for task in (pose, region):
         for replan in (False, True):
             calls.clear()
             search_module.search_scene(SearchRequest(task, model, quiet=True, progress=False,
                                                      replan=replan))
             assert all(kind == task.goal for kind, _, _ in calls)
-            seen = [("fits" if guessed else "plain",
-                     all(getattr(s, k) == v for k, v in overlay.items()))
-                    for _, s, guessed in calls]
+            seen = [("fits" if guessed else "plain", budget(s)) for _, s, guessed in calls]
             assert seen == expected[task.goal, replan], (task.goal, replan)
 
 
@@ -246,9 +251,10 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
     model = TASKS.parent / "learned" / "push_rigid"
     request = SearchRequest(task, model, quiet=True, progress=False)
     result, spaces = search_module.search_scene(request.but(time_budget=0.5))
-    (quick, _, first, _), (plain, _, none, _), (fitted, space, guesses, settings) = calls
-    assert quick == fitted and set(first) == set(fitted)  # the fits first, then again
-    assert budgets[0] == budgets[2] == (None, True)  # four programs at most: no time budget
+    starts, (quick, _, first, _), (plain, _, none, _), (fitted, space, guesses, settings) = calls
+    assert starts[0] == quick == fitted and set(first) == set(fitted)  # the fits first, again
+    # four programs at most: no time budget
+    assert budgets[0] == budgets[1] == budgets[3] == (None, True)
     assert plain and none is None and fitted and set(guesses) == set(fitted)
     assert space.init_frame == "object"
     gain = overlay("pose").row("quasi_static").turn_gain
@@ -265,7 +271,7 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
     calls.clear()
     solve_plain[0] = True
     search_module.search_scene(request)
-    assert len(calls) == 2 and calls[1][2] is None  # the plain tier solved: no more fits
+    assert len(calls) == 3 and calls[2][2] is None  # the plain tier solved: no more fits
 
     calls.clear()
     solve_fits[0] = True
@@ -279,14 +285,33 @@ def test_a_region_goal_the_plain_tier_misses_gets_pushes_fitted_into_the_region(
 
     # unsolved fitted pushes within the caller's last-resort bound end the search too
     solve_fits[0], solve_plain[0], unsolved_fits[0] = False, False, 0.02
-    for last_resort, searches in ((0.03, 1), (0.01, 3), (None, 3)):
+    for last_resort, searches in ((0.03, 1), (0.01, 4), (None, 4)):
         calls.clear()
         result, _ = search_module.search_scene(request.but(replan=True,
                                                            last_resort=last_resort))
         assert len(calls) == searches and not result.solved
         assert result.best.violation == 0.02  # the plain tier's plans violate more
-        # the fitted pushes at both budgets before the plain tier
-        assert [g is not None for _, _, g, _ in calls] == [True, True, False][:searches]
+        # the fitted pushes' starts and both budgets before the plain tier
+        assert [g is not None for _, _, g, _ in calls] == [True, True, True, False][:searches]
     budgets.clear()  # the fitted pushes took 2 s: the plain tier still gets the whole budget
     search_module.search_scene(request.but(replan=True, time_budget=1.5))
-    assert [b for b, _ in budgets] == [None, None, 1.5]
+    assert [b for b, _ in budgets] == [None, None, None, 1.5]
+
+
+def test_past_its_deadline_a_search_starts_no_tier_and_no_program(monkeypatch):
+    import time
+
+    from robotplan.pushing.program.skeleton import parse_skeleton
+    from robotplan.pushing.search import planner
+
+    solved = []
+    monkeypatch.setattr(planner, "_solve", lambda sk: solved.append(sk))
+    task = load_task(TASKS / "box_push.yaml")
+    request = SearchRequest(task, TASKS.parent / "learned" / "push_rigid", workers=1,
+                            progress=False, quiet=True)
+    late = request.but(deadline=time.monotonic() - 1.0)
+    result, _ = search_module.search_scene(late)
+    assert result.best is None and not result.candidates and not solved
+    sk = parse_skeleton("push@0", task.actors[0], task.obj)
+    assert not planner.search_push(late, [sk]).candidates and not solved
+    assert not request.past_deadline() and late.past_deadline()
