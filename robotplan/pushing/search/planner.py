@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from functools import partial
 from multiprocessing import get_context
 from pathlib import Path
-from queue import SimpleQueue
+from queue import Empty, Queue
 
 import numpy as np
 
@@ -166,12 +166,14 @@ def past_budget(elapsed: float, time_budget: float | None) -> bool:
 
 
 def run_in_pool(solve: Callable, items: list, workers: int, setup: Callable[[], None] | None,
-                collect: Callable[[object], bool], may_start: Callable[[], bool]) -> None:
+                collect: Callable[[object], bool], may_start: Callable[[], bool],
+                deadline: float | None = None) -> None:
     """``solve`` each of ``items`` in order in a pool of ``workers`` forked processes (each
     set up by ``setup()``), handing every result to ``collect`` as it comes;
-    stop when ``collect`` says so (the programs still running are dropped), and start an
-    item only while ``may_start()``. An error in a worker is raised here."""
-    finished: SimpleQueue = SimpleQueue()
+    stop when ``collect`` says so or at ``deadline`` (a ``time.monotonic()`` instant; the
+    programs still running are dropped), and start an item only while ``may_start()``. An
+    error in a worker is raised here."""
+    finished: Queue = Queue()
     pending, running = list(items), 0
     with get_context("fork").Pool(workers, setup) as pool:
         while True:
@@ -181,7 +183,11 @@ def run_in_pool(solve: Callable, items: list, workers: int, setup: Callable[[], 
                 running += 1
             if running == 0:
                 return
-            result = finished.get()
+            try:
+                result = finished.get(timeout=None if deadline is None
+                                      else max(0.0, deadline - time.monotonic()))
+            except Empty:  # past the deadline: what still runs is dropped
+                return
             running -= 1
             if isinstance(result, BaseException):
                 raise result
@@ -220,7 +226,7 @@ def search_push(request: SearchRequest, skeletons: list[Skeleton],
     collected while a solved plan is in hand; start no program after
     ``request.time_budget`` seconds once one has been collected, and stop there once a
     solved plan is in hand, else when the programs running end (the best so far wins);
-    start none past ``request.deadline``.
+    start none past ``request.deadline``, and there drop those running in other processes.
     ``request.guesses``: the learned program's initial guess by skeleton (a warm start skips
     the kinematic stage). ``ordered``: the skeletons come most promising first already."""
     from tqdm import tqdm
@@ -257,7 +263,8 @@ def search_push(request: SearchRequest, skeletons: list[Skeleton],
                 break
     else:
         _dynamics(model_dir)  # loaded here, inherited by the forked workers
-        run_in_pool(_solve, queue, workers, partial(_init_worker, *args), collect, may_start)
+        run_in_pool(_solve, queue, workers, partial(_init_worker, *args), collect, may_start,
+                    request.deadline)
     bar.close()
     order = {sk: i for i, sk in enumerate(queue)}
     solutions.sort(key=lambda s: order[s.skeleton])

@@ -1,6 +1,8 @@
 """The skeleton search end to end on box_push with the shipped F_flow: the most promising
 skeleton is solved first, the search stops when it is good, and the plan works in pybullet."""
 
+import time
+
 import numpy as np
 import pytest
 
@@ -130,6 +132,12 @@ def test_past_the_budget_the_pool_starts_nothing_but_collects_what_runs():
 
     with pytest.raises(ValueError, match="a worker's error"):
         run_in_pool(_nap, [(-1, 0.0)], 1, None, collect_all, lambda: True)
+
+    got.clear()  # at the deadline what still runs is dropped
+    t0 = time.monotonic()
+    run_in_pool(_nap, [(0, 0.0), (1, 30.0), (2, 30.0)], 2, None, collect_all, lambda: True,
+                deadline=t0 + 1.0)
+    assert got == [0] and time.monotonic() - t0 < 10.0
 
 
 def test_plans_around_obstacles_must_keep_the_margin():
