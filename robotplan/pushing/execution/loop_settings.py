@@ -71,11 +71,13 @@ class LoopSettings:
     # docs/experiments.md#closed-loop); arms steer (the `arms` overlay)
     steer_gain: float = 0.0
     steer_limit: float = 0.03
-    # s after which a re-plan starts no further tier or program and answers with the best it
-    # has (none: the loop goes on with its plan): a free pusher's re-plans take a fraction of
-    # a second, the few past 5 s ended unsolved (measured: docs/experiments.md#replan-deadline);
-    # none for arms and chains (`.inf`), whose one program takes longer
-    replan_deadline: float = 5.0
+    # s after which a re-plan starts no further tier or program, drops those running in the
+    # search's processes and answers with the best it has (none: the loop goes on with its
+    # plan), 0.5 s before the 5 s a re-plan may take at most: a free pusher's re-plans take a
+    # fraction of a second, the few past 5 s ended unsolved (measured:
+    # docs/experiments.md#replan-deadline); none for arms and chains (`.inf`), whose one
+    # program takes longer
+    replan_deadline: float = 4.5
 
     def goal_met(self, task: PushTask, coverage: float | None, gap: float | None) -> bool:
         """Whether an outcome meets the task's goal: a touch goal's ``gap`` (m) within

@@ -175,7 +175,7 @@ def run_in_pool(solve: Callable, items: list, workers: int, setup: Callable[[], 
     error in a worker is raised here."""
     finished: Queue = Queue()
     pending, running = list(items), 0
-    with get_context("fork").Pool(workers, setup) as pool:
+    with get_context("fork").Pool(min(workers, len(items)) or 1, setup) as pool:
         while True:
             while pending and running < workers and may_start():
                 pool.apply_async(solve, (pending.pop(0),), callback=finished.put,
@@ -220,7 +220,8 @@ def search_push(request: SearchRequest, skeletons: list[Skeleton],
                 settings: ProgramSettings | None = None, space: SkeletonSpace | None = None,
                 ordered: bool = False) -> SearchResult:
     """Solve the skeletons (``request.workers`` processes), most promising first, and pick
-    the best (in this process where one program is queued or ``settings.parallel`` is off);
+    the best (in this process where ``settings.parallel`` is off, or one program is queued
+    and no deadline set);
     unless ``request.exhaustive``, stop at the first good-enough plan
     (``settings.good_rms_mm``) or, after ``PATIENCE_S`` seconds, at the first program
     collected while a solved plan is in hand; start no program after
@@ -256,7 +257,10 @@ def search_push(request: SearchRequest, skeletons: list[Skeleton],
         return (not request.past_deadline()
                 and (not past_budget(time.time() - t0, time_budget) or not solutions))
 
-    if workers <= 1 or len(queue) <= 1 or not settings.parallel:
+    # one queued program gains nothing from the processes but their start (~0.2 s), unless a
+    # deadline must be able to drop it
+    if (workers <= 1 or not settings.parallel
+            or (len(queue) <= 1 and request.deadline is None)):
         _init_worker(*args)
         for sk in queue:
             if not may_start() or collect(_solve(sk)):
