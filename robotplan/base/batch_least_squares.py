@@ -40,7 +40,7 @@ def forward_jacobian(residuals: Residuals, x: np.ndarray, r: np.ndarray, hi: np.
     n = x.shape[1]
     h = 1e-7 * np.maximum(1.0, np.abs(x))
     h = np.where(x + h > hi, -h, h)
-    points = x[:, None, :] + h[:, :, None] * np.eye(n)  # (P, n, n): row j steps x_j
+    points = x[:, None, :] + h[:, :, None] * np.eye(n)  # (B, n, n): row j steps x_j
     values = residuals(points, problems)  # (B, n, m)
     return np.swapaxes((values - r[:, None, :]) / h[:, :, None], 1, 2)
 

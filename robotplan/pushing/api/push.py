@@ -120,8 +120,8 @@ class PushPlanner:
         :mod:`robotplan.pushing.search.fallback`). ``rehearse_plan``: with F_q (and its learned
         stage), one free pusher, one object, no obstacles and a region goal, rehearse the best
         plan in F_q for the open loop (:mod:`robotplan.pushing.execution.rehearsal`; never in a
-        re-plan); its seconds count as planning. ``rehearsal_model``: the F_q folder the rehearsal's
-        object moves by (default: ``REHEARSAL_FOLDERS`` by the object's footprint type,
+        re-plan); its seconds count as planning. ``rehearsal_model``: the F_q folder the
+        rehearsal's object moves by (default: ``REHEARSAL_FOLDERS`` by the object's footprint type,
         else the plan's own F_q; the re-plans plan with ``model``)."""
         model_dir = (Path(model) if model is not None
                      else learned_dir(DYNAMICS_FOLDERS[default_dynamics(task)]))

@@ -79,16 +79,14 @@ class Replan:
         return out
 
 
-# a re-planner: (the task in the observed scene, tail of the current plan to start from or
-# None, whether a fresh search may follow when the tail does not solve, the violation within
-# which the loop adopts an unsolved plan or None) → an object with ``best`` (Solution | None)
-# and ``solved`` (robotplan.api.PushPlan)
 Replanner = Callable[[PushTask, "Solution | None", bool, "float | None", "float | None"],
                      object]
-"""``replan(observed, tail, fresh, last_resort, deadline)``: a plan of the observed task from
-the current plan's ``tail`` (a fresh search after it only if ``fresh``), adopting an
-unsolved plan within the violation ``last_resort``, starting nothing after the
-``time.monotonic()`` instant ``deadline``."""
+"""``replan(observed, tail, fresh, last_resort, deadline)``: a plan of the task in the
+observed scene from the current plan's ``tail`` (or None), a fresh search following when the
+tail does not solve only if ``fresh``, for a loop that adopts an unsolved plan within the
+violation ``last_resort`` (or None), starting nothing after the ``time.monotonic()``
+instant ``deadline``; an object with ``best`` (Solution | None) and ``solved``
+(robotplan.api.PushPlan)."""
 
 
 def departure(planned: dict[str, np.ndarray], seen: dict[str, np.ndarray], far: float,

@@ -219,12 +219,11 @@ def order_candidates(task: PushTask, skeletons: list[Skeleton],
 def search_push(request: SearchRequest, skeletons: list[Skeleton],
                 settings: ProgramSettings | None = None, space: SkeletonSpace | None = None,
                 ordered: bool = False) -> SearchResult:
-    """Solve the skeletons (``request.workers`` processes), most promising first, and pick
-    the best (in this process where ``settings.parallel`` is off, or one program is queued
-    and no deadline set);
-    unless ``request.exhaustive``, stop at the first good-enough plan
-    (``settings.good_rms_mm``) or, after ``PATIENCE_S`` seconds, at the first program
-    collected while a solved plan is in hand; start no program after
+    """Solve the skeletons (``request.workers`` processes; this one where
+    ``settings.parallel`` is off, or one program is queued and no deadline set), most
+    promising first, and pick the best; unless ``request.exhaustive``, stop at the first
+    good-enough plan (``settings.good_rms_mm``) or, after ``PATIENCE_S`` seconds, at the
+    first program collected while a solved plan is in hand; start no program after
     ``request.time_budget`` seconds once one has been collected, and stop there once a
     solved plan is in hand, else when the programs running end (the best so far wins);
     start none past ``request.deadline``, and there drop those running in other processes.
