@@ -230,8 +230,9 @@ def _ask(loop: _Loop, seen: Observation, tail: Solution | None, reason: str,
         return False
     t0 = time.perf_counter()
     bound = settings.last_resort_violation if last_resort else None
+    wait = settings.replan_deadline
     result = replan(_observed(loop.task, seen), tail, fresh, bound,
-                    time.monotonic() + settings.replan_deadline)
+                    time.monotonic() + wait if math.isfinite(wait) else None)
     best = getattr(result, "best", None)
     solved = bool(getattr(result, "solved", False)) and best is not None
     adopted = solved or adoptable(best, bound)

@@ -184,7 +184,7 @@ def run_in_pool(solve: Callable, items: list, workers: int, setup: Callable[[], 
             if running == 0:
                 return
             try:
-                result = finished.get(timeout=None if deadline is None
+                result = finished.get(timeout=None if deadline is None or math.isinf(deadline)
                                       else max(0.0, deadline - time.monotonic()))
             except Empty:  # past the deadline: what still runs is dropped
                 return

@@ -1,6 +1,7 @@
 """The skeleton search end to end on box_push with the shipped F_flow: the most promising
 skeleton is solved first, the search stops when it is good, and the plan works in pybullet."""
 
+import math
 import time
 
 import numpy as np
@@ -132,6 +133,11 @@ def test_past_the_budget_the_pool_starts_nothing_but_collects_what_runs():
 
     with pytest.raises(ValueError, match="a worker's error"):
         run_in_pool(_nap, [(-1, 0.0)], 1, None, collect_all, lambda: True)
+
+    got.clear()  # a deadline never reached
+    run_in_pool(_nap, [(0, 0.0), (1, 0.2)], 2, None, collect_all, lambda: True,
+                deadline=math.inf)
+    assert sorted(got) == [0, 1]
 
     got.clear()  # at the deadline what still runs is dropped
     t0 = time.monotonic()
