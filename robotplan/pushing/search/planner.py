@@ -14,12 +14,9 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
-from multiprocessing import get_context
 from pathlib import Path
-from queue import Empty, Queue
 
 import numpy as np
 
@@ -29,12 +26,24 @@ from robotplan.pushing.program.settings import ProgramSettings
 from robotplan.pushing.program.skeleton import Skeleton, SkeletonSpace, space_for
 from robotplan.pushing.program.solution import FEASIBLE, Solution
 from robotplan.pushing.program.solve import solve_skeleton
+from robotplan.pushing.search.pool import Processes, run_in_pool
 from robotplan.pushing.search.request import SearchRequest
 from robotplan.scene import Scene
 from robotplan.scene.task import PushTask
 
-__all__ = ["PATIENCE_S", "SearchResult", "adoptable", "is_solved", "meets_constraints",
-           "merge_results", "past_budget", "run_in_pool", "search_push", "stops_search"]
+__all__ = [
+    "PATIENCE_S",
+    "Processes",
+    "SearchResult",
+    "adoptable",
+    "is_solved",
+    "meets_constraints",
+    "merge_results",
+    "past_budget",
+    "run_in_pool",
+    "search_push",
+    "stops_search",
+]
 
 # residual RMS (mm) below which plans rank alike, and the default good-enough residual
 GOOD_RMS_MM = ProgramSettings.good_rms_mm
@@ -165,36 +174,6 @@ def past_budget(elapsed: float, time_budget: float | None) -> bool:
     return time_budget is not None and elapsed > time_budget
 
 
-def run_in_pool(solve: Callable, items: list, workers: int, setup: Callable[[], None] | None,
-                collect: Callable[[object], bool], may_start: Callable[[], bool],
-                deadline: float | None = None) -> None:
-    """``solve`` each of ``items`` in order in a pool of ``workers`` forked processes (each
-    set up by ``setup()``), handing every result to ``collect`` as it comes;
-    stop when ``collect`` says so or at ``deadline`` (a ``time.monotonic()`` instant; the
-    programs still running are dropped), and start an item only while ``may_start()``. An
-    error in a worker is raised here."""
-    finished: Queue = Queue()
-    pending, running = list(items), 0
-    with get_context("fork").Pool(min(workers, len(items)) or 1, setup) as pool:
-        while True:
-            while pending and running < workers and may_start():
-                pool.apply_async(solve, (pending.pop(0),), callback=finished.put,
-                                 error_callback=finished.put)
-                running += 1
-            if running == 0:
-                return
-            try:
-                result = finished.get(timeout=None if deadline is None or math.isinf(deadline)
-                                      else max(0.0, deadline - time.monotonic()))
-            except Empty:  # past the deadline: what still runs is dropped
-                return
-            running -= 1
-            if isinstance(result, BaseException):
-                raise result
-            if collect(result):
-                return
-
-
 def order_candidates(task: PushTask, skeletons: list[Skeleton],
                      space: SkeletonSpace | None = None) -> list[Skeleton]:
     """Most promising first: pushes from init points behind the object (seen from the goal),
@@ -266,8 +245,8 @@ def search_push(request: SearchRequest, skeletons: list[Skeleton],
                 break
     else:
         _dynamics(model_dir)  # loaded here, inherited by the forked workers
-        run_in_pool(_solve, queue, workers, partial(_init_worker, *args), collect, may_start,
-                    request.deadline)
+        run_in_pool(_solve, queue, Processes(workers, partial(_init_worker, *args),
+                                             request.deadline), collect, may_start)
     bar.close()
     order = {sk: i for i, sk in enumerate(queue)}
     solutions.sort(key=lambda s: order[s.skeleton])

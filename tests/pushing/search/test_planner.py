@@ -1,8 +1,6 @@
 """The skeleton search end to end on box_push with the shipped F_flow: the most promising
 skeleton is solved first, the search stops when it is good, and the plan works in pybullet."""
 
-import math
-import time
 
 import numpy as np
 import pytest
@@ -94,56 +92,6 @@ def test_the_search_stops_on_a_good_plan_or_after_its_patience_with_a_solved_one
     # a looser good-enough residual (F_q's overlay) stops at the first solved plan
     assert stops_search(solved, False, early, None, False, PLAUSIBLE_RMS_MM)
     assert not stops_search(broken, False, early, None, False, PLAUSIBLE_RMS_MM)
-
-
-def _nap(item: tuple[int, float]) -> int:
-    """A pool task: sleep ``item[1]`` s, return ``item[0]`` (negative: raise)."""
-    import time
-
-    if item[0] < 0:
-        raise ValueError("a worker's error")
-    time.sleep(item[1])
-    return item[0]
-
-
-def test_past_the_budget_the_pool_starts_nothing_but_collects_what_runs():
-    """The search's pool: once ``may_start`` says no, the programs already running are still
-    collected and no other starts; a stop from ``collect`` drops what runs; a worker's error
-    reaches the caller."""
-    from robotplan.pushing.search.planner import run_in_pool
-
-    started, got = [], []
-
-    def may_start() -> bool:
-        started.append(len(started))
-        return len(started) <= 2  # the first two only
-
-    def collect_all(result: int) -> bool:
-        got.append(result)
-        return False
-
-    run_in_pool(_nap, [(0, 0.3), (1, 0.6), (2, 0.0), (3, 0.0)], 2, None, collect_all,
-                may_start)
-    assert sorted(got) == [0, 1]
-
-    got.clear()
-    run_in_pool(_nap, [(0, 0.0), (1, 30.0), (2, 0.0)], 2, None,
-                lambda r: got.append(r) or True, lambda: True)
-    assert got == [0]
-
-    with pytest.raises(ValueError, match="a worker's error"):
-        run_in_pool(_nap, [(-1, 0.0)], 1, None, collect_all, lambda: True)
-
-    got.clear()  # a deadline never reached
-    run_in_pool(_nap, [(0, 0.0), (1, 0.2)], 2, None, collect_all, lambda: True,
-                deadline=math.inf)
-    assert sorted(got) == [0, 1]
-
-    got.clear()  # at the deadline what still runs is dropped
-    t0 = time.monotonic()
-    run_in_pool(_nap, [(0, 0.0), (1, 30.0), (2, 30.0)], 2, None, collect_all, lambda: True,
-                deadline=t0 + 1.0)
-    assert got == [0] and time.monotonic() - t0 < 10.0
 
 
 def test_plans_around_obstacles_must_keep_the_margin():
