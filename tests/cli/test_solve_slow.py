@@ -34,8 +34,10 @@ def test_solve_box_push(tmp_path):
     assert doc["status"] == "solved"
     assert doc["execution"]["simulator"] == "pybullet"
     assert doc["execution"]["coverage"] >= 0.95
-    # T = 10 steps per phase (reach + push per push) and the initial state
-    assert len(doc["trajectory"]["pusher"]) == 10 * len(doc["skeleton"]) + 1
+    # T steps per phase (reach + push per push; at least the skeleton space's 10, more for
+    # a fitted push longer than 10 steps at the guess's speed) and the initial state
+    T = doc["skeleton_space"]["steps_per_phase"]
+    assert T >= 10 and len(doc["trajectory"]["pusher"]) == T * len(doc["skeleton"]) + 1
     assert (out / "playback.html").stat().st_size > 100_000
 
 
@@ -97,16 +99,19 @@ def test_solve_obstacle_push(tmp_path):
 
 
 @pytest.mark.slow
-def test_arm_search_falls_back_to_init_points_seen_from_the_goal(tmp_path):
-    """tasks/variants/left_only_lshape: the one face push in reach is kinematically
-    infeasible; the search then tries init points around the L as seen from the goal and
-    plans with the left arm. Its open-loop execution drifts, so coverage is not asserted
-    (docs/experiments.md#arm-variants)."""
+def test_an_l_in_the_left_arms_reach_is_planned_by_the_left_arm(tmp_path):
+    """tasks/variants/left_only_lshape: one face push of the L is in reach. Where it plans,
+    the plan pushes from that face; where it does not, the search tries init points around
+    the L as seen from the goal (that fallback itself: tests/pushing/search/
+    test_scene_search.py). Either way the left arm plans it and the closed loop reaches the
+    goal (docs/experiments.md#arm-variants)."""
     out = tmp_path / "out"
     doc = solve("variants/left_only_lshape", out)
-    assert "(init points in the goal frame)" in doc["stdout"]
+    assert "skeletons: 1 of 72 within the arms' reach (init points in the object frame)" \
+        in doc["stdout"]
+    frame = doc["skeleton_space"]["init_frame"]
+    assert frame == "object" or "(init points in the goal frame)" in doc["stdout"]
     assert doc["status"] == "solved"
-    assert doc["skeleton_space"]["init_frame"] == "goal"
     assert {row["actor"] for row in doc["skeleton"] if row["mode"] == "push"} == {"left"}
 
 
