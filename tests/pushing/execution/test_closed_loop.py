@@ -356,8 +356,8 @@ def test_at_the_plan_end_the_last_push_is_redone_first_only_when_asked(box_plan,
 def test_every_re_plan_is_asked_with_the_deadline_of_the_loop_settings(box_plan, deadline):
     asked: list[tuple[float, float]] = []
 
-    def nothing_plans(observed, tail, fresh, last_resort=None, deadline=None):
-        asked.append((time.monotonic(), deadline))
+    def nothing_plans(observed, tail, fresh, last_resort=None, until=None):
+        asked.append((time.monotonic(), until))
         return _nothing_plans(observed, tail, fresh)
 
     settings = LoopSettings(replan_deadline=deadline, max_replans=2)
