@@ -215,13 +215,20 @@ def pose_candidates(task: PushTask, space: SkeletonSpace,
 
 def search_pose(request: SearchRequest, settings: ProgramSettings, space: SkeletonSpace,
                 given: Skeleton | None = None,
-                target: tuple[float, float, float] | None = None
+                target: tuple[float, float, float] | None = None, made: dict | None = None
                 ) -> tuple[SkeletonSpace, SearchResult]:
     """Solve the skeletons fitted to ``target`` (default: the pose goal's pose;
     :func:`pose_candidates`; ``given``: that skeleton's faces only), each from its own
-    guess; the space they were solved in and the result."""
-    posed, skeletons, guesses = pose_candidates(request.task, space, settings,
-                                                request.max_pushes, given, target)
+    guess; the space they were solved in and the result. ``made``: the candidates a tier
+    already fitted, by what they depend on (filled here): the budgets a tier tries in turn
+    change how its programs are solved, not its fits."""
+    made = {} if made is None else made
+    key = (settings.row("quasi_static").turn_gain, settings.guess_speed,
+           settings.row("turn_limits").turn, target)
+    if key not in made:
+        made[key] = pose_candidates(request.task, space, settings, request.max_pushes, given,
+                                    target)
+    posed, skeletons, guesses = made[key]
     where = "pose goal" if target is None else (
         f"pushes fitted to ({target[0]:.3f}, {target[1]:.3f}, "
         f"{math.degrees(target[2]):.0f}°) in the goal region")
@@ -256,22 +263,26 @@ def search_pose_budgets(request: SearchRequest, budgets: tuple[ProgramSettings, 
     """:func:`search_pose` with each of ``budgets`` (program settings) in turn until one
     solves, within ``request.time_budget`` s in all; the merged result and each
     candidate's space (by ``id`` of its solution)."""
+    made: dict = {}
     return _in_turn(lambda budget, spent: search_pose(
-        request.but(time_budget=request.left(spent)), budget, space, given), budgets)
+        request.but(time_budget=request.left(spent)), budget, space, given, made=made),
+        budgets)
 
 
 def search_region_fits(request: SearchRequest, settings: ProgramSettings,
-                       space: SkeletonSpace) -> tuple[SkeletonSpace, SearchResult]:
+                       space: SkeletonSpace, made: dict | None = None
+                       ) -> tuple[SkeletonSpace, SearchResult]:
     """A free pusher's region goal the plain tier did not plan: pushes fitted in closed form
     to a pose inside the region (:func:`region_target`), planned with the turning gain the
     pose goals measured in pybullet (the `pose` overlay's ``turn_gain``). No time budget:
-    the tier has at most four programs, and without it nothing plans."""
+    the tier has at most four programs, and without it nothing plans. ``made``: as
+    :func:`search_pose`'s."""
     gain = program_settings("pose").row("quasi_static").turn_gain
     fitted = settings.with_values({"quasi_static.turn_gain": gain})
     target = region_target(request.task, fitted)
     if target is None:
         return space, SearchResult(None)
-    return search_pose(request.but(time_budget=None), fitted, space, target=target)
+    return search_pose(request.but(time_budget=None), fitted, space, target=target, made=made)
 
 
 def search_region_fits_budgets(request: SearchRequest, budgets: tuple[ProgramSettings, ...],
@@ -281,5 +292,6 @@ def search_region_fits_budgets(request: SearchRequest, budgets: tuple[ProgramSet
     one solves or, given ``request.last_resort``, gives a plan that meets the constraints
     within that violation; the merged result and each candidate's space (by ``id`` of its
     solution)."""
-    return _in_turn(lambda budget, _spent: search_region_fits(request, budget, space),
+    made: dict = {}
+    return _in_turn(lambda budget, _spent: search_region_fits(request, budget, space, made),
                     budgets, request.last_resort)
