@@ -25,6 +25,15 @@ def _seed_everything() -> None:
     torch.set_num_threads(1)
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _private_cache(tmp_path_factory) -> None:
+    """Derived files (a mesh's convex pieces) go to a folder of the test run, not the
+    user's cache."""
+    import os
+
+    os.environ["ROBOTPLAN_CACHE"] = str(tmp_path_factory.mktemp("cache"))
+
+
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(1234)

@@ -10,8 +10,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-__all__ = ["DYNAMICS_FOLDERS", "OBJECT_FRAME_FOLDERS", "REHEARSAL_FOLDERS", "data_root",
-           "learned_dir", "robots_dir", "skeletons_dir", "tasks_dir"]
+__all__ = ["DYNAMICS_FOLDERS", "OBJECT_FRAME_FOLDERS", "REHEARSAL_FOLDERS", "cache_dir",
+           "data_root", "learned_dir", "robots_dir", "skeletons_dir", "tasks_dir"]
 
 _PACKAGE = Path(__file__).resolve().parents[1]
 
@@ -51,3 +51,18 @@ def learned_dir(model: str = "push_flow") -> Path:
 
 def tasks_dir() -> Path:
     return data_root() / "tasks"
+
+
+def cache_dir(kind: str) -> Path:
+    """A folder for results derived from a user's files (keyed by their content), created on
+    demand: ``$ROBOTPLAN_CACHE/<kind>``, else ``$XDG_CACHE_HOME/robotplan/<kind>``, else
+    ``~/.cache/robotplan/<kind>``."""
+    given = os.environ.get("ROBOTPLAN_CACHE")
+    if given:
+        root = Path(given)
+    else:
+        xdg = os.environ.get("XDG_CACHE_HOME")
+        root = (Path(xdg) if xdg else Path.home() / ".cache") / "robotplan"
+    folder = root / kind
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder

@@ -14,9 +14,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from robotplan.base.quiet import c_output_silenced, connect_direct, import_pybullet
-from robotplan.geometry.polygons import convex_parts
+from robotplan.execution.convex_pieces import convex_pieces_file
 from robotplan.sdf import Box, Circle, LShape, Shape2D
-from robotplan.sdf.footprint import footprint_boxes, footprint_centroid
+from robotplan.sdf.footprint import footprint_boxes, footprint_centroid, footprint_parts
+from robotplan.sdf.mesh_footprint import MeshFootprint
 
 __all__ = ["PHYSICS", "Physics", "PushWorld"]
 
@@ -149,8 +150,8 @@ class PushWorld:
 
     def _collision_shape(self, shape: Shape2D, height: float, com: np.ndarray) -> int:
         """The footprint extruded to ``height`` around its centroid ``com``: boxes for boxes
-        and L-shapes (as the push data), a cylinder for a disc, convex prisms (one per
-        :func:`convex_parts` piece) for polygons."""
+        and L-shapes (as the push data), a cylinder for a disc, the mesh's convex pieces for
+        a mesh, convex prisms (one per :func:`footprint_parts` piece) for polygons."""
         pb, c = self.pb, self.client
         if isinstance(shape, Box | LShape):
             boxes = footprint_boxes(shape)
@@ -163,10 +164,18 @@ class PushWorld:
         if isinstance(shape, Circle):
             return pb.createCollisionShape(pb.GEOM_CYLINDER, radius=shape.radius,
                                            height=height, physicsClientId=c)
+        if isinstance(shape, MeshFootprint) and not shape.prism:
+            # the mesh itself (a prism mesh is its footprint's prism, below): B's point of the
+            # scaled mesh is mesh_offset, the body's frame is the centroid at half the height
+            at = -np.asarray(shape.mesh_offset) - np.array([com[0], com[1], height / 2])
+            return pb.createCollisionShape(
+                pb.GEOM_MESH, fileName=str(convex_pieces_file(shape.mesh_file)),
+                meshScale=[shape.scale] * 3, collisionFramePosition=at.tolist(),
+                physicsClientId=c)
         import tempfile
         from pathlib import Path
 
-        parts = [part - com for part in convex_parts(shape.outline())]
+        parts = [part - com for part in footprint_parts(shape)]
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / "footprint.obj"
             path.write_text(_prism_obj(parts, height))

@@ -11,6 +11,7 @@ from typing import Any
 
 from robotplan.scene.files import read_data
 from robotplan.scene.limits import check_counts, check_grid
+from robotplan.scene.meshes import resolve_mesh_footprints
 from robotplan.scene.mug_hook_checks import check_hang_scene
 from robotplan.scene.placement import check_placement
 from robotplan.scene.reader import SchemaError, read, show
@@ -55,6 +56,8 @@ def parse_scene(data: Any, path: str | Path = "<scene>") -> Scene:
     try:
         check_counts(data)
         scene = read(Scene, data)
+        if not isinstance(scene.goal, HangGoal):
+            scene = resolve_mesh_footprints(scene, Path(path))
         _check_scene(scene)
     except SchemaError as err:
         raise SceneError(path, err.field, err.message) from None

@@ -12,6 +12,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
+from robotplan.scene.meshes import MeshShape
 from robotplan.sdf import Box, Circle, LShape, Polygon, Workspace
 from robotplan.sdf.mug_hook import Hook, Mug
 
@@ -24,6 +25,7 @@ __all__ = [
     "BodySpec",
     "HangGoal",
     "HookShape",
+    "MeshShape",
     "MugShape",
     "PoseGoal",
     "PusherSpec",
@@ -94,7 +96,7 @@ class HookShape:
                     self.post_radius, self.rod_radius)
 
 
-ShapeSpec = Box | Circle | LShape | Polygon | MugShape | HookShape
+ShapeSpec = Box | Circle | LShape | Polygon | MeshShape | MugShape | HookShape
 SOLID_SHAPES = (MugShape, HookShape)  # 3D: only in hang scenes
 
 

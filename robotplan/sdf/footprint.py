@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotplan.geometry.polygons import convex_parts, signed_area
+from robotplan.geometry.polygons import as_ccw, convex_parts, signed_area
 from robotplan.sdf.shapes2d import Box, Circle, LShape, Shape2D
 
-__all__ = ["footprint_boxes", "footprint_centroid", "support_corners"]
+__all__ = ["footprint_boxes", "footprint_centroid", "footprint_parts", "support_corners"]
 
 
 def footprint_centroid(shape: Shape2D) -> np.ndarray:
@@ -41,4 +41,26 @@ def support_corners(shape: Shape2D) -> np.ndarray:
     if isinstance(shape, Box | LShape):
         signs = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]], dtype=float)
         return np.vstack([np.asarray(c) + signs * np.asarray(h) for c, h in footprint_boxes(shape)])
-    return np.vstack(convex_parts(shape.outline()))
+    return np.vstack(footprint_parts(shape))
+
+
+def footprint_parts(shape: Shape2D) -> list[np.ndarray]:
+    """The footprint as convex polygons ``[(V, 2)]`` in its frame that cover it exactly:
+    a footprint with holes is first cut through each hole into simple pieces."""
+    holes = getattr(shape, "holes", ())
+    if not holes:
+        return convex_parts(shape.outline())
+    from shapely.geometry import LineString
+    from shapely.geometry import Polygon as Solid
+    from shapely.ops import split
+
+    todo, simple = [Solid(shape.outline(), holes)], []
+    while todo:
+        piece = todo.pop()
+        if not piece.interiors:
+            simple.append(as_ccw(np.asarray(piece.exterior.coords)[:-1]))
+            continue
+        x = Solid(piece.interiors[0]).centroid.x  # a vertical cut through the hole
+        y0, y1 = piece.bounds[1] - 1.0, piece.bounds[3] + 1.0
+        todo += list(split(piece, LineString([(x, y0), (x, y1)])).geoms)
+    return [part for piece in simple for part in convex_parts(piece)]

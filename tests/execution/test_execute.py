@@ -149,14 +149,30 @@ def test_footprints_are_simulated_as_their_outlines(shape, rng):
     """pybullet's body of a polygon (convex pieces), a disc (cylinder), a box or an L-shape
     (boxes about the centroid, the data's bodies): the distance from
     probe spheres around and inside its concavities matches the SDF to 2 mm."""
+    assert_simulated_as_outline(shape, 0.06, rng)
+
+
+@pytest.mark.parametrize("file", ["l_bracket.stl", "bench/hex_nut.stl"])
+def test_a_plate_mesh_is_simulated_as_its_footprints_prism(file, rng):
+    """A plate's body (a mesh that is its footprint extruded) is that prism in exact convex
+    pieces, a nut's cut through its bore; placed so that its footprint lies where the
+    planner's does, the bore open to probes."""
+    from robotplan.scene.meshes import MeshShape, mesh_footprint
+
+    shape, height = mesh_footprint(MeshShape(f"meshes/{file}", 0.001), TASKS / "scene.yaml")
+    assert shape.prism
+    assert_simulated_as_outline(shape, height, rng)
+
+
+def assert_simulated_as_outline(shape, height: float, rng) -> None:
     import torch
 
     from robotplan.execution.sim import PushWorld
 
     pose = (0.1, -0.05, 0.7)
-    body = Body("o", "object", shape, pose, 0.0, 0.06)
+    body = Body("o", "object", shape, pose, 0.0, height)
     with PushWorld() as world:
-        world.reset(shape, 0.06, pose, None)
+        world.reset(shape, height, pose, None)
         assert np.abs(world.object_pose()[0] - pose).max() < 2e-3
         pb, c = world.pb, world.client
         probe = pb.createCollisionShape(pb.GEOM_SPHERE, radius=0.005, physicsClientId=c)
@@ -165,7 +181,7 @@ def test_footprints_are_simulated_as_their_outlines(shape, rng):
         for p, d in zip(points, phi, strict=True):
             if d < 0.003:  # distances are only reported outside the body
                 continue
-            ball = pb.createMultiBody(0, probe, basePosition=[p[0], p[1], 0.03],
+            ball = pb.createMultiBody(0, probe, basePosition=[p[0], p[1], height / 2],
                                       physicsClientId=c)
             found = pb.getClosestPoints(world.object, ball, 0.5, physicsClientId=c)
             gap = min(f[8] for f in found) + 0.005

@@ -17,7 +17,7 @@ import numpy as np
 from robotplan.base.files import write_atomically
 from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
 from robotplan.pushing.bench.push import MODEL_NAMES, run_bench_push, summarize
-from robotplan.pushing.bench.push_scenes import draw_scene
+from robotplan.pushing.bench.push_scenes import scene_name
 
 __all__ = ["compare_rows", "run_bench_compare"]
 
@@ -81,7 +81,7 @@ def run_bench_compare(kinds: list[str], scenes: int, seed: int, out: Path, worke
     """One push benchmark per dynamics kind (``flow``, ``rigid``, ``direct``) on the same
     scenes, in ``out/<kind>/``; returns (and writes) the comparison. ``loop``: closed-loop
     settings in place of each scene class's, ``program`` its program settings."""
-    names = {draw_scene(i, seed, shape)["name"] for i in range(scenes) for shape in shapes}
+    names = {scene_name(i, shape) for i in range(scenes) for shape in shapes}
     rows_by_kind = {}
     for kind in kinds:
         print(f"== {kind}", flush=True)

@@ -30,7 +30,7 @@ from robotplan.pushing.bench.push import (
     quartiles,
     time_profile,
 )
-from robotplan.pushing.bench.push_scenes import draw_scene, scene_name
+from robotplan.pushing.bench.push_scenes import copy_meshes, draw_scene, scene_name
 from robotplan.pushing.program.solution import FEASIBLE, Solution
 from robotplan.pushing.search.planner import is_solved
 from robotplan.scene import parse_scene
@@ -59,7 +59,7 @@ def profile_scene(i: int, kind: str, seed: int, out: Path, model_dir: str | Path
     ``search``: fields of the search request (``workers``, ``time_budget``, ``program``)."""
     from robotplan.pushing.api.push import PushPlanner
 
-    doc = draw_scene(i, seed, kind)
+    doc = draw_scene(i, seed, kind, out / "scenes")
     path = out / "scenes" / f"{doc['name']}.yaml"
     path.write_text(yaml.safe_dump(doc, sort_keys=False, default_flow_style=None))
     task = make_task(parse_scene(doc, path))
@@ -113,6 +113,8 @@ def run_bench_plan(scenes: int, seed: int, out: Path, model_dir: str | Path | No
     ``search``: fields of the search request (``workers``, ``time_budget``, ``program``)."""
     search = dict(search or {})
     (out / "scenes").mkdir(parents=True, exist_ok=True)
+    if "mesh" in shapes:
+        copy_meshes(out / "scenes")
     rows_path = out / "rows.jsonl"
     done = finished_rows(rows_path)
     todo = [(i, kind) for i in range(scenes) for kind in shapes]

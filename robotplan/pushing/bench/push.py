@@ -23,7 +23,7 @@ import yaml
 
 from robotplan.base.files import write_atomically
 from robotplan.base.units import UnitsReport, check_ray, run_units
-from robotplan.pushing.bench.push_scenes import draw_scene, family_of, scene_name
+from robotplan.pushing.bench.push_scenes import copy_meshes, draw_scene, family_of, scene_name
 from robotplan.scene import parse_scene
 
 __all__ = ["candidate_timings", "finished_rows", "quartiles", "run_bench_push", "summarize",
@@ -199,7 +199,7 @@ def bench_scene(job: tuple) -> dict:
 
     (i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb, loop, program,
      rehearse) = job
-    doc = draw_scene(i, seed, kind)
+    doc = draw_scene(i, seed, kind, out / "scenes")
     name = doc["name"]
     scene_path = out / "scenes" / f"{name}.yaml"
     scene_path.write_text(yaml.safe_dump(doc, sort_keys=False, default_flow_style=None))
@@ -250,6 +250,8 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
     ran goes to the summary's ``units``."""
     check_ray(ray)
     (out / "scenes").mkdir(parents=True, exist_ok=True)
+    if "mesh" in shapes:
+        copy_meshes(out / "scenes")
     rows_path = out / "rows.jsonl"
     done = finished_rows(rows_path)
     todo = [(i, kind) for i in range(scenes) for kind in shapes]

@@ -3,23 +3,50 @@ object roughly in the middle of the table (position noise 3 cm, any yaw), the pu
 circle around it, the goal region at one of 8 positions around the object (every 45°,
 0.35 m away) with Gaussian noise (2 cm) on its centre, a square large enough for the object
 in any orientation (at least 0.4 m). Boxes and L-shapes come from the ranges of the push
-data; ``ood`` footprints were never seen in training; ``pose`` asks for a target pose."""
+data; ``ood`` footprints were never seen in training, nor the ``mesh`` files of
+``tasks/meshes/bench/`` (their footprints, from the meshes); ``pose`` asks for a target
+pose."""
 
 from __future__ import annotations
 
 import math
+import shutil
+from pathlib import Path
 
 import numpy as np
 
+from robotplan.base.resources import tasks_dir
 from robotplan.pushing.training.footprints import OOD_FAMILIES, draw_ood_shape
 from robotplan.pushing.training.push_data import PushDataSpec, draw_shape
 
-__all__ = ["OOD_FAMILIES", "POSE_FAMILIES", "draw_ood_shape", "draw_scene", "family_of",
-           "scene_name"]
+__all__ = ["MESH_FAMILIES", "OOD_FAMILIES", "POSE_FAMILIES", "copy_meshes",
+           "draw_ood_shape", "draw_scene", "family_of", "scene_name"]
+
+MESH_FAMILIES = {"hex_nut": ("hex_nut.stl", 0.001), "arch": ("arch.ply", 1.0),
+                 "mug": ("mug.obj", 1.0)}
+"""``--shapes mesh``: scene ``i`` pushes mesh ``i mod 3`` of ``tasks/meshes/bench/`` (file,
+scale), copied beside the scene files under ``meshes/``."""
 
 GOAL_DISTANCE = 0.35  # m from the object to the goal centre
 GOAL_NOISE = 0.02  # m, standard deviation per axis
 CENTER_NOISE = 0.03  # m
+
+
+def copy_meshes(scenes_dir: Path) -> None:
+    """Put the bench meshes under ``scenes_dir/meshes/``, where mesh scenes name them."""
+    (scenes_dir / "meshes").mkdir(parents=True, exist_ok=True)
+    for file, _ in MESH_FAMILIES.values():
+        shutil.copyfile(tasks_dir() / "meshes" / "bench" / file, scenes_dir / "meshes" / file)
+
+
+def _mesh_shape(family: str, scenes_dir: Path):
+    """``(footprint, shape document)`` of a bench mesh in ``scenes_dir/meshes/``."""
+    from robotplan.scene.meshes import MeshShape, mesh_footprint
+
+    file, scale = MESH_FAMILIES[family]
+    shape = MeshShape(f"meshes/{file}", scale)
+    doc = {"type": "mesh", "file": shape.file, "scale": scale}
+    return mesh_footprint(shape, scenes_dir / "scene.yaml")[0], doc
 
 
 def _shape_doc(shape) -> dict:
@@ -45,11 +72,17 @@ def scene_name(index: int, kind: str) -> str:
     return f"bench_{kind}_{index:03d}"
 
 
-def draw_scene(index: int, seed: int, kind: str) -> dict:
-    """The scene document (the YAML schema) of benchmark scene ``index`` for ``seed``."""
-    rng = np.random.default_rng([seed, index, {"box": 0, "lshape": 1, "ood": 2}.get(kind, 3)])
+def draw_scene(index: int, seed: int, kind: str, scenes_dir: Path | None = None) -> dict:
+    """The scene document (the YAML schema) of benchmark scene ``index`` for ``seed``; a mesh
+    scene's file lies in ``scenes_dir`` (:func:`copy_meshes`)."""
+    rng = np.random.default_rng([seed, index, {"box": 0, "lshape": 1, "ood": 2, "mesh": 4}
+                                 .get(kind, 3)])
     family = family_of(index, kind)
-    if kind == "ood" or family == "T":
+    shape_doc = None
+    if kind == "mesh":
+        assert scenes_dir is not None, "a mesh scene needs the folder of its mesh files"
+        shape, shape_doc = _mesh_shape(family, scenes_dir)
+    elif kind == "ood" or family == "T":
         shape = draw_ood_shape(rng, family)
     else:
         shape = draw_shape(rng, PushDataSpec(), family)
@@ -78,7 +111,7 @@ def draw_scene(index: int, seed: int, kind: str) -> dict:
     return {
         "version": 1, "name": scene_name(index, kind),
         "workspace": {"center": [0.0, 0.0], "size": [1.4, 1.4], "resolution": 0.01},
-        "objects": [{"name": "object", "shape": _shape_doc(shape),
+        "objects": [{"name": "object", "shape": shape_doc or _shape_doc(shape),
                      "pose": [r(center[0]), r(center[1]), r(yaw)]}],
         "pushers": [{"name": "pusher", "radius": r(radius),
                      "position": [r(pusher[0]), r(pusher[1])]}],
@@ -91,4 +124,6 @@ def family_of(index: int, kind: str) -> str:
         return OOD_FAMILIES[index % len(OOD_FAMILIES)]
     if kind == "pose":
         return POSE_FAMILIES[index % len(POSE_FAMILIES)]
+    if kind == "mesh":
+        return list(MESH_FAMILIES)[index % len(MESH_FAMILIES)]
     return kind

@@ -21,6 +21,7 @@ from robotplan.cli.common import (
     program_overrides,
     training_folders_problem,
 )
+from robotplan.pushing.cli.plan_commands import SHAPES
 from robotplan.pushing.cli.push_options import architecture, architecture_problem
 
 __all__ = ["cmd_bench", "cmd_bench_contact_push", "cmd_bench_functional", "cmd_bench_push",
@@ -183,11 +184,10 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
     if args.scenes < 1:
         print("error: --scenes: must be at least 1", file=sys.stderr)
         return EXIT_BAD_INPUT
-    bad = set(args.shapes.split(",")) - {"box", "lshape", "ood", "pose"}
+    bad = set(args.shapes.split(",")) - set(SHAPES)
     if bad:
-        print(f"error: --shapes: unknown shape type {sorted(bad)[0]!r} (box, lshape, ood, "
-              "pose)",
-              file=sys.stderr)
+        print(f"error: --shapes: unknown shape type {sorted(bad)[0]!r} "
+              f"({', '.join(SHAPES)})", file=sys.stderr)
         return EXIT_BAD_INPUT
     out = Path(args.out)
     if len(kinds) > 1:

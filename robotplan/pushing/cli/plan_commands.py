@@ -18,7 +18,7 @@ from robotplan.cli.common import (
 
 __all__ = ["add_bench_plan_parser", "cmd_bench_plan"]
 
-SHAPES = ("box", "lshape", "ood", "pose")
+SHAPES = ("box", "lshape", "ood", "pose", "mesh")
 
 
 def add_bench_plan_parser(bsub) -> None:

@@ -1,0 +1,141 @@
+"""Mesh shapes of a scene file: ``shape: {type: mesh, file: meshes/bracket.stl, scale: 0.001}``.
+
+The file is read relative to the scene file's folder and must stay inside it (no URL, no
+``..`` out of it). In a pushing scene the mesh becomes its footprint, a
+:class:`~robotplan.sdf.mesh_footprint.MeshFootprint`, and its body's height the mesh's own;
+the 2D planner then runs on it as on any polygon.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+
+from robotplan.geometry.meshes import MeshProblem, footprint_loops, read_mesh
+from robotplan.geometry.polygons import signed_area
+from robotplan.scene.limits import MAX_POLYGON_VERTICES
+from robotplan.scene.reader import SchemaError
+
+if TYPE_CHECKING:
+    import trimesh
+
+    from robotplan.scene.schema import Scene
+
+__all__ = ["MeshShape", "load_mesh_shape", "mesh_footprint", "mesh_path",
+           "resolve_mesh_footprints"]
+
+PRISM_SLACK = 0.005  # a mesh within 0.5 % of its footprint's prism volume is that prism
+_URL = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
+
+
+@dataclass(frozen=True)
+class MeshShape:
+    """A body given as a mesh file. ``scale`` turns the file's units into metres (0.001 for
+    millimetres); ``tolerance`` (m) is how far the footprint's simplified outline may stray
+    from the mesh's exact one."""
+
+    file: str
+    scale: float = field(default=1.0, metadata={"positive": True})
+    tolerance: float = field(default=0.001, metadata={"positive": True})
+    type: Literal["mesh"] = "mesh"
+
+    def check(self) -> tuple[str, str] | None:
+        if _URL.match(self.file):
+            return "file", "must be a path beside the scene file, not a URL"
+        if self.tolerance > 0.01:
+            return "tolerance", "at most 0.01 m: coarser outlines lose the object's shape"
+        return None
+
+
+def mesh_path(shape: MeshShape, scene_file: Path) -> Path:
+    """The absolute path of ``shape.file``, relative to the scene file's folder and inside
+    it. Raises SchemaError (field ``file``)."""
+    folder = scene_file.resolve().parent
+    path = (folder / shape.file).resolve()
+    if not path.is_relative_to(folder):
+        raise SchemaError("file", f"{shape.file!r} lies outside the scene's folder {folder}; "
+                          "keep meshes beside the scene file")
+    return path
+
+
+def load_mesh_shape(shape: MeshShape, scene_file: Path) -> trimesh.Trimesh:
+    """The checked, scaled mesh of ``shape``. Raises SchemaError (field ``file``)."""
+    try:
+        return read_mesh(mesh_path(shape, scene_file), shape.scale)
+    except MeshProblem as err:
+        raise SchemaError("file", str(err)) from None
+
+
+def mesh_footprint(shape: MeshShape, scene_file: Path):
+    """``(MeshFootprint, height)`` of a mesh shape in a scene file. Raises SchemaError."""
+    from robotplan.sdf.mesh_footprint import MeshFootprint
+
+    mesh = load_mesh_shape(shape, scene_file)
+    try:
+        outer, holes = footprint_loops(mesh, shape.tolerance)
+    except MeshProblem as err:
+        raise SchemaError("file", str(err)) from None
+    count = len(outer) + sum(len(h) for h in holes)
+    if count > MAX_POLYGON_VERTICES:
+        raise SchemaError("tolerance", f"the footprint keeps {count} vertices at tolerance "
+                          f"{shape.tolerance:g} m; at most {MAX_POLYGON_VERTICES}: raise it")
+    centre = _centroid(outer, holes)
+    z0 = float(mesh.vertices[:, 2].min())
+
+    def loop(points: np.ndarray) -> tuple[tuple[float, float], ...]:
+        return tuple((float(x), float(y)) for x, y in points - centre)
+
+    height = float(mesh.vertices[:, 2].max()) - z0
+    area = signed_area(outer) + sum(signed_area(h) for h in holes)  # holes: negative
+    extruded = area * height
+    footprint = MeshFootprint(vertices=loop(outer), holes=tuple(loop(h) for h in holes),
+                              mesh_file=str(mesh_path(shape, scene_file)), scale=shape.scale,
+                              mesh_offset=(float(centre[0]), float(centre[1]), z0),
+                              prism=abs(mesh.volume - extruded) < PRISM_SLACK * extruded)
+    return footprint, height
+
+
+def _centroid(outer: np.ndarray, holes: list[np.ndarray]) -> np.ndarray:
+    """Area centroid ``(2,)`` of a polygon with holes."""
+    def moment(p: np.ndarray) -> tuple[float, np.ndarray]:
+        q = np.roll(p, -1, axis=0)
+        cross = p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]
+        return signed_area(p), ((p + q) * cross[:, None]).sum(0) / 6.0
+
+    parts = [moment(outer)] + [moment(h) for h in holes]  # holes wind clockwise: negative
+    return sum(m for _, m in parts) / sum(a for a, _ in parts)
+
+
+def resolve_mesh_footprints(scene: Scene, scene_file: Path) -> Scene:
+    """``scene`` with every mesh object, obstacle and goal region replaced by its footprint
+    (objects and obstacles also take the mesh's height). Raises SchemaError naming the
+    field."""
+    made: dict[MeshShape, tuple] = {}
+
+    def resolved(shape: MeshShape, where: str):
+        if shape not in made:
+            try:
+                made[shape] = mesh_footprint(shape, scene_file)
+            except SchemaError as err:
+                raise SchemaError(f"{where}.{err.field}", err.message) from None
+        return made[shape]
+
+    def bodies(group: str) -> list:
+        out = []
+        for i, body in enumerate(getattr(scene, group)):
+            if isinstance(body.shape, MeshShape):
+                footprint, height = resolved(body.shape, f"{group}[{i}].shape")
+                body = replace(body, shape=footprint, height=height)
+            out.append(body)
+        return out
+
+    changes: dict = {"objects": bodies("objects"), "obstacles": bodies("obstacles")}
+    region = getattr(scene.goal, "region", None)
+    if region is not None and isinstance(region.shape, MeshShape):
+        footprint, _ = resolved(region.shape, "goal.region.shape")
+        changes["goal"] = replace(scene.goal, region=replace(region, shape=footprint))
+    return replace(scene, **changes)
