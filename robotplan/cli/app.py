@@ -1,5 +1,5 @@
-"""The ``robotplan`` command line: ``check``, ``render``, ``solve``, ``bench``, ``data``,
-``train``, ``eval``, ``reproduce``.
+"""The ``robotplan`` command line: ``check``, ``render``, ``solve``, ``bench``, ``robot``,
+``data``, ``train``, ``eval``, ``reproduce``.
 
 Exit status: 0 success, 1 failure of the work itself, 2 bad input (one line on stderr naming
 the file and the field, no traceback).
@@ -25,6 +25,7 @@ from robotplan.cli.common import (
     add_rehearse_option,
 )
 from robotplan.cli.reproduce_commands import add_reproduce_parser
+from robotplan.cli.robot_commands import add_robot_parser
 from robotplan.cli.scene_commands import cmd_check, cmd_diagnose, cmd_render, cmd_solve, cmd_view
 from robotplan.hanging.cli.data_parsers import add_hang_data_parsers
 from robotplan.hanging.cli.parsers import (
@@ -146,6 +147,8 @@ def _parser() -> argparse.ArgumentParser:
     vw.add_argument("dir", metavar="DIR")
     vw.add_argument("--port", type=int, default=0, help="0: any free port")
     vw.set_defaults(run=cmd_view)
+
+    add_robot_parser(sub)
 
     d = sub.add_parser("data", help="generate training data")
     dsub = d.add_subparsers(dest="what", required=True)

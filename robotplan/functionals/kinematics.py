@@ -23,14 +23,9 @@ __all__ = ["ArmKinematics", "ArmSeparation", "CheckPointHeights", "TipCoupling",
            "arm_kinematics",
            "track_tip_path"]
 
-CHECK_LINKS = (7, 6, 5, 4)
-"""Link origins checked against the table and the other arm, besides the tip centre
-(``lbr_iiwa_link_<i>``: 7 is the flange)."""
-
-
 @dataclass
 class _FK:
-    points: np.ndarray  # (K, 3): tip centre, then the CHECK_LINKS origins
+    points: np.ndarray  # (K, 3): tip centre, then the model's check_links origins
     jacobians: np.ndarray  # (K, 3, dof)
 
 
@@ -48,11 +43,10 @@ class ArmKinematics:
         self.arm = DrakeArm(self.model, tuple(spec.base))
         self.q0 = np.asarray(spec.q0 if spec.q0 is not None else self.model.home, dtype=float)
         plant = self.arm.plant
-        prefix = self.model.tip.link.rsplit("_", 1)[0]
         self._frames = [self.arm.tip_frame] + [
-            plant.GetBodyByName(f"{prefix}_{i}").body_frame() for i in CHECK_LINKS]
+            plant.GetBodyByName(name).body_frame() for name in self.model.check_links]
         self._offsets = [np.asarray(self.model.tip.offset, dtype=float)] + [
-            np.zeros(3)] * len(CHECK_LINKS)
+            np.zeros(3)] * len(self.model.check_links)
         self._cache: OrderedDict[bytes, _FK] = OrderedDict()
 
     @property
@@ -122,7 +116,7 @@ class TipCoupling(_OnArm):
 
 
 class _PointHeights(_OnArm):
-    """Heights of the FK points ``points`` (a slice of tip, then CHECK_LINKS),
+    """Heights of the FK points ``points`` (a slice of tip, then the check links),
     ``q (n, dof) → (n, k)`` in m."""
 
     points: slice

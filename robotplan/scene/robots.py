@@ -19,7 +19,8 @@ from robotplan.base.quiet import connect_direct, drake_quiet, import_pybullet
 from robotplan.base.resources import robots_dir
 from robotplan.scene.reader import read
 
-__all__ = ["ROBOTS_DIR", "DrakeArm", "RobotModel", "available_models", "load_robot_model"]
+__all__ = ["ROBOTS_DIR", "DrakeArm", "RobotModel", "available_models", "load_robot_model",
+           "welded_urdf"]
 
 ROBOTS_DIR = robots_dir()
 
@@ -46,6 +47,10 @@ class RobotModel:
     # horizontal distance (m) from the base axis at which the tip reaches push height with
     # the flange and links above the objects (measured by inverse kinematics)
     reach: tuple[float, float] = (0.0, float("inf"))
+    # link origins kept above the objects and apart from the other arm, flange first
+    check_links: tuple[str, ...] = ()
+    # joints of the URDF held at zero, not planned (a gripper's fingers): welded
+    fixed_joints: tuple[str, ...] = ()
     description: str = ""
     folder: Path = field(default=ROBOTS_DIR, compare=False, init=False)
 
@@ -62,6 +67,8 @@ class RobotModel:
             return "joint_upper", "every upper limit must exceed its lower limit"
         if not self.within_limits(self.home):
             return "home", "must lie within the joint limits"
+        if not self.check_links:
+            return "check_links", "name at least the flange link"
         return None
 
     def within_limits(self, q: tuple[float, ...] | np.ndarray) -> bool:
@@ -69,17 +76,54 @@ class RobotModel:
                    for v, lo, hi in zip(q, self.joint_lower, self.joint_upper, strict=True))
 
     @property
-    def urdf_path(self) -> Path:
+    def source_urdf(self) -> Path:
+        """The URDF file as the folder names it."""
         if self.urdf.startswith("pybullet_data://"):
             import pybullet_data
 
             return Path(pybullet_data.getDataPath()) / self.urdf.removeprefix("pybullet_data://")
         return self.folder / self.urdf
 
+    @property
+    def urdf_path(self) -> Path:
+        """The URDF the planner and the simulator load: the source, or with ``fixed_joints``
+        a copy in which they are welded (:func:`welded_urdf`)."""
+        return welded_urdf(self.source_urdf, self.fixed_joints) if self.fixed_joints \
+            else self.source_urdf
+
     def tip_position(self, q: tuple[float, ...], base: tuple[float, float, float, float]
                      ) -> np.ndarray:
         """Tip-sphere centre ``p_WT (3,)`` for joint angles ``q`` and ``base = (x, y, z, yaw)``."""
         return _tip_position(self, tuple(map(float, q)), tuple(map(float, base)))
+
+
+@cache
+def welded_urdf(source: Path, joints: tuple[str, ...]) -> Path:
+    """A copy of the URDF ``source`` with ``joints`` made fixed (at zero) and every mesh file
+    named by its absolute path (the copy lives in the cache, not beside its meshes)."""
+    import hashlib
+    import xml.etree.ElementTree as ET
+
+    from robotplan.base.files import write_atomically
+    from robotplan.base.resources import cache_dir
+
+    tree = ET.parse(source)
+    named = {j.get("name"): j for j in tree.getroot().iter("joint")}
+    missing = sorted(set(joints) - set(named))
+    if missing:
+        raise ValueError(f"{source}: no joint named {missing[0]!r} to fix")
+    for name in joints:
+        named[name].set("type", "fixed")
+    for mesh in tree.getroot().iter("mesh"):
+        file = mesh.get("filename", "")
+        relative = file.removeprefix("package://")  # pybullet's rule: beside the URDF
+        mesh.set("filename", str((source.parent / relative).resolve()))
+    text = ET.tostring(tree.getroot(), encoding="unicode")
+    key = hashlib.sha256(text.encode()).hexdigest()[:16]
+    out = cache_dir("robots") / f"{source.stem}-{key}.urdf"
+    if not out.is_file():
+        write_atomically(out, lambda tmp: tmp.write_text(text))
+    return out
 
 
 def available_models() -> list[str]:

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robotplan.base.quiet import drake_quiet
 from robotplan.scene import Scene
 
 __all__ = ["add_arms", "link_visuals"]
@@ -84,8 +85,9 @@ def add_arms(meshcat, animation, scene: Scene, layer: str, joints: dict[str, np.
             for link, items in visuals.items():
                 for i, (mesh, xyz, rpy) in enumerate(items):
                     if mesh.suffix.lower() in (".obj", ".stl", ".dae", ".gltf"):
-                        meshcat.SetObject(f"{root}/{link}/{i}", Mesh(str(mesh)),
-                                          Rgba(0.8, 0.8, 0.85, 1.0))
+                        with drake_quiet():  # an OBJ's missing material file: grey anyway
+                            meshcat.SetObject(f"{root}/{link}/{i}", Mesh(str(mesh)),
+                                              Rgba(0.8, 0.8, 0.85, 1.0))
                         parts.append((f"{root}/{link}/{i}", link,
                                       RigidTransform(RollPitchYaw(*rpy), list(xyz))))
         offset = np.asarray(kin.model.tip.offset, dtype=float)

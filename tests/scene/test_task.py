@@ -32,6 +32,9 @@ PUSH_TASKS = {
     "two_arm_handover": ("box", ("left", "right"), True, "region", None, None, ("arms",)),
     "two_arm_left_only": ("box", ("left", "right"), True, "region", None, None, ("arms",)),
     "two_arm_touch": ("box", ("left", "right"), True, "touch", None, "right", ("arms",)),
+    "mesh_push": ("bracket", ("pusher",), False, "region", None, None, ()),
+    "panda_handover": ("box", ("left", "right"), True, "region", None, None, ("arms",)),
+    "panda_iiwa_touch": ("box", ("left", "right"), True, "touch", None, "right", ("arms",)),
 }
 HANG_TASKS = {"mug_hang": ("mug", "hook")}
 
