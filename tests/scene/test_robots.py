@@ -58,3 +58,19 @@ def test_drake_and_pybullet_tip_kinematics_agree(name):
     fd = np.stack([(arm.tip_position(q + h * e) - arm.tip_position(q - h * e)) / (2 * h)
                    for e in np.eye(model.dof)], axis=1)
     assert J.shape == (3, model.dof) and np.abs(J - fd).max() < 1e-6
+
+
+def test_a_folder_must_name_its_check_links_and_real_fixed_joints(tmp_path):
+    from dataclasses import replace
+
+    from robotplan.scene.reader import SchemaError
+    from robotplan.scene.robots import RobotModel, welded_urdf
+
+    data = yaml.safe_load((ROBOTS_DIR / "panda" / "robot.yaml").read_text())
+    data.pop("check_links")
+    with pytest.raises(SchemaError, match="check_links"):
+        read(RobotModel, data)
+    model = load_robot_model("panda")
+    with pytest.raises(ValueError, match="no joint named 'finger'"):
+        welded_urdf(model.source_urdf, ("finger",))
+    assert replace(model, fixed_joints=()).urdf_path == model.source_urdf
