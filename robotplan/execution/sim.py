@@ -168,10 +168,11 @@ class PushWorld:
             # the mesh itself (a prism mesh is its footprint's prism, below): B's point of the
             # scaled mesh is mesh_offset, the body's frame is the centroid at half the height
             at = -np.asarray(shape.mesh_offset) - np.array([com[0], com[1], height / 2])
-            return pb.createCollisionShape(
-                pb.GEOM_MESH, fileName=str(convex_pieces_file(shape.mesh_file)),
-                meshScale=[shape.scale] * 3, collisionFramePosition=at.tolist(),
-                physicsClientId=c)
+            pieces = convex_pieces_file(shape.mesh_file, shape.scale)
+            return pb.createCollisionShape(pb.GEOM_MESH, fileName=str(pieces),
+                                           meshScale=[shape.scale] * 3,
+                                           collisionFramePosition=at.tolist(),
+                                           physicsClientId=c)
         import tempfile
         from pathlib import Path
 

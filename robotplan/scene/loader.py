@@ -11,7 +11,7 @@ from typing import Any
 
 from robotplan.scene.files import read_data
 from robotplan.scene.limits import check_counts, check_grid
-from robotplan.scene.meshes import resolve_mesh_footprints
+from robotplan.scene.meshes import resolve_mesh_footprints, resolve_mesh_solids
 from robotplan.scene.mug_hook_checks import check_hang_scene
 from robotplan.scene.placement import check_placement
 from robotplan.scene.reader import SchemaError, read, show
@@ -56,8 +56,8 @@ def parse_scene(data: Any, path: str | Path = "<scene>") -> Scene:
     try:
         check_counts(data)
         scene = read(Scene, data)
-        if not isinstance(scene.goal, HangGoal):
-            scene = resolve_mesh_footprints(scene, Path(path))
+        scene = (resolve_mesh_solids(scene, Path(path)) if isinstance(scene.goal, HangGoal)
+                 else resolve_mesh_footprints(scene, Path(path)))
         _check_scene(scene)
     except SchemaError as err:
         raise SceneError(path, err.field, err.message) from None

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
@@ -25,8 +26,8 @@ if TYPE_CHECKING:
 
     from robotplan.scene.schema import Scene
 
-__all__ = ["MeshShape", "load_mesh_shape", "mesh_footprint", "mesh_path",
-           "resolve_mesh_footprints"]
+__all__ = ["MeshShape", "MeshSolid", "load_mesh_shape", "mesh_footprint", "mesh_path",
+           "resolve_mesh_footprints", "resolve_mesh_solids"]
 
 PRISM_SLACK = 0.005  # a mesh within 0.5 % of its footprint's prism volume is that prism
 _URL = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
@@ -139,3 +140,60 @@ def resolve_mesh_footprints(scene: Scene, scene_file: Path) -> Scene:
         footprint, _ = resolved(region.shape, "goal.region.shape")
         changes["goal"] = replace(scene.goal, region=replace(region, shape=footprint))
     return replace(scene, **changes)
+
+
+@dataclass(frozen=True)
+class MeshSolid:
+    """A hang scene's mug or hook given as a mesh, resolved: the file's absolute path, its
+    scale and which of the two it is. ``solid()`` is the :class:`MeshMug` or
+    :class:`MeshHook` the hanging task reads."""
+
+    file: str
+    scale: float
+    role: Literal["mug", "hook"]
+    type: Literal["mesh"] = "mesh"
+
+    def solid(self):
+        return _solid(self.file, self.scale, self.role)
+
+
+@lru_cache(maxsize=16)
+def _solid(file: str, scale: float, role: str):
+    from robotplan.geometry.meshes import read_mesh
+    from robotplan.sdf.mesh_solids import MeshHook, MeshMug
+
+    kind = MeshMug if role == "mug" else MeshHook
+    return kind(read_mesh(Path(file), scale), file, scale)
+
+
+def resolve_mesh_solids(scene: Scene, scene_file: Path) -> Scene:
+    """A hang scene with its mesh mug (the object) and mesh hook (the obstacle) resolved
+    and checked: readable, and with a handle's opening or an arm found. Raises SchemaError
+    naming the field."""
+    from robotplan.sdf.mesh_solids import MeshSolidProblem
+
+    def resolved(group: str, role: str) -> list:
+        out = []
+        for i, body in enumerate(getattr(scene, group)):
+            if isinstance(body.shape, MeshShape):
+                where = f"{group}[{i}].shape"
+                load_mesh_shape_at(body.shape, scene_file, where)
+                spec = MeshSolid(str(mesh_path(body.shape, scene_file)), body.shape.scale, role)
+                try:
+                    spec.solid()
+                except MeshSolidProblem as err:
+                    raise SchemaError(f"{where}.file", str(err)) from None
+                body = replace(body, shape=spec)
+            out.append(body)
+        return out
+
+    return replace(scene, objects=resolved("objects", "mug"),
+                   obstacles=resolved("obstacles", "hook"))
+
+
+def load_mesh_shape_at(shape: MeshShape, scene_file: Path, where: str):
+    """:func:`load_mesh_shape` with the error's field under ``where``."""
+    try:
+        return load_mesh_shape(shape, scene_file)
+    except SchemaError as err:
+        raise SchemaError(f"{where}.{err.field}", err.message) from None

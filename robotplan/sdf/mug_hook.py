@@ -141,6 +141,12 @@ class Mug(Shape3D):
         return (self.radius - self.handle_radius, self.handle_height * self.height,
                 self.handle_reach, self.handle_span - self.handle_radius)
 
+    @property
+    def reach(self) -> float:
+        """A bound on the distance of the mug's points from its frame's origin (m)."""
+        return float(np.hypot(self.radius + self.handle_reach + self.handle_radius,
+                              self.height))
+
     def handle_points(self) -> np.ndarray:
         """The handle's centre line ``(segments + 1, 3)``: a half-ellipse from the top
         attachment down to the bottom one, its ends ``handle_radius`` inside the wall."""

@@ -51,8 +51,85 @@ def mug() -> trimesh.Trimesh:
     return trimesh.util.concatenate([cup, handle])
 
 
+def _cup(r_out: float, height: float, wall: float = 0.006, taper: float = 0.0):
+    """A cup revolved from its profile: outer radius ``r_out`` at the rim, ``taper`` less
+    at the bottom."""
+    r_in = r_out - wall
+    profile = np.array([[0, 0], [r_out - taper, 0], [r_out, height], [r_in, height],
+                        [r_in - taper * (1 - wall / height), wall], [0, wall]])
+    return trimesh.creation.revolve(profile, sections=48)
+
+
+def _tube(path: np.ndarray, radius: float, sides: int = 8) -> trimesh.Trimesh:
+    return trimesh.creation.sweep_polygon(Point(0, 0).buffer(radius, max(sides // 4, 1)), path)
+
+
+def mug_tapered() -> trimesh.Trimesh:
+    """A mug in metres: a cup widening from 0.036 to 0.042 m up to 0.095 m, and a handle
+    swept along a half ellipse reaching 0.03 m out."""
+    cup = _cup(0.042, 0.095, taper=0.006)
+    t = np.linspace(-np.pi / 2, np.pi / 2, 25)
+    path = np.stack((0.037 + 0.038 * np.cos(t), np.zeros_like(t), 0.05 + 0.028 * np.sin(t)), 1)
+    return trimesh.util.concatenate([cup, _tube(path, 0.006)])
+
+
+def mug_square_handle() -> trimesh.Trimesh:
+    """A mug in metres: a straight cup (radius 0.04, height 0.11) and a square-cornered
+    handle of three boxes (its opening 0.028 m out and 0.05 m high)."""
+    cup = _cup(0.04, 0.11)
+    bars = []
+    for size, centre in (([0.038, 0.012, 0.01], [0.054, 0.0, 0.085]),
+                         ([0.038, 0.012, 0.01], [0.054, 0.0, 0.025]),
+                         ([0.01, 0.012, 0.07], [0.068, 0.0, 0.055])):
+        bar = trimesh.creation.box(size)
+        bar.apply_translation(centre)
+        bars.append(bar)
+    return trimesh.util.concatenate([cup, *bars])
+
+
+def mug_ring_handle() -> trimesh.Trimesh:
+    """A mug in metres: a wide low cup (radius 0.048, height 0.08) and a ring handle, a torus
+    of radius 0.024 about a point 0.06 m out, sunk into the wall."""
+    cup = _cup(0.048, 0.08)
+    ring = trimesh.creation.torus(major_radius=0.024, minor_radius=0.005, major_sections=32,
+                                  minor_sections=8)
+    ring.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0]))
+    ring.apply_translation([0.066, 0.0, 0.045])
+    return trimesh.util.concatenate([cup, ring])
+
+
+def hook_square_rod() -> trimesh.Trimesh:
+    """A hook in metres: a square post (2.4 cm) 0.30 m high and an arm of square bars, 0.12 m
+    rising at 0.15 rad, then 0.04 m at 0.9 rad."""
+    post = trimesh.creation.box([0.024, 0.024, 0.30])
+    post.apply_translation([0, 0, 0.15])
+    parts, start = [post], np.array([0.0, 0.0, 0.295])
+    for length, angle in ((0.12, 0.15), (0.04, 0.9)):
+        d = np.array([np.cos(angle), 0.0, np.sin(angle)])
+        bar = trimesh.creation.box([length + 0.01, 0.01, 0.01])
+        bar.apply_transform(trimesh.transformations.rotation_matrix(-angle, [0, 1, 0]))
+        bar.apply_translation(start + d * length / 2)
+        parts.append(bar)
+        start = start + d * length
+    return trimesh.util.concatenate(parts)
+
+
+def hook_curved() -> trimesh.Trimesh:
+    """A hook in metres: a round post 0.29 m high and an arm bent along a circular arc (radius
+    0.14 m, through 50°) from horizontal, a 5 mm tube."""
+    post = trimesh.creation.cylinder(0.012, 0.29, sections=24)
+    post.apply_translation([0, 0, 0.145])
+    a = np.linspace(0.0, np.radians(50), 24)
+    path = np.stack((-0.005 + 0.14 * np.sin(a), np.zeros_like(a),
+                     0.285 + 0.14 * (1 - np.cos(a))), 1)
+    return trimesh.util.concatenate([post, _tube(path, 0.005)])
+
+
 MESHES = {"l_bracket.stl": l_bracket, "bench/hex_nut.stl": hex_nut, "bench/arch.ply": arch,
-          "bench/mug.obj": mug}
+          "bench/mug.obj": mug, "hang/mug_tapered.obj": mug_tapered,
+          "hang/mug_square_handle.stl": mug_square_handle,
+          "hang/mug_ring_handle.obj": mug_ring_handle, "hang/hook_square_rod.stl": hook_square_rod,
+          "hang/hook_curved.obj": hook_curved}
 
 if __name__ == "__main__":
     for name, make in MESHES.items():

@@ -1,4 +1,4 @@
-"""A mesh that is not a plate goes to the simulator as V-HACD's convex pieces, once per
+"""A mesh that is not a plate goes to the simulator as convex pieces of its skin, once per
 machine (cached by content)."""
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ def test_a_mug_rests_at_its_pose_as_its_pieces(rng):
 
     shape, height = mesh_footprint(MeshShape("meshes/bench/mug.obj"), TASKS / "scene.yaml")
     assert not shape.prism
-    pieces = convex_pieces_file(shape.mesh_file)
+    pieces = convex_pieces_file(shape.mesh_file, shape.scale)
     assert pieces.read_text().count("\no ") + pieces.read_text().startswith("o ") >= 3
     stamp = pieces.stat().st_mtime_ns
-    assert convex_pieces_file(shape.mesh_file) == pieces and pieces.stat().st_mtime_ns == stamp
+    assert convex_pieces_file(shape.mesh_file, shape.scale) == pieces and pieces.stat().st_mtime_ns == stamp
     pose = (0.1, -0.05, 0.7)
     with PushWorld() as world:
         world.reset(shape, height, pose, None)

@@ -4,7 +4,9 @@ mug dropped from a pose; the drop, and an impulse after it, decide whether the p
 Bodies are compounds of convex primitives built from the same parameters as their SDFs
 (:mod:`robotplan.sdf.mug_hook`): the cup's wall is a ring of boxes, its bottom a
 cylinder, the handle and the hook's arm capsules along their centre lines, the post a
-cylinder. A pose *hangs* when the mug is not in collision with the hook where it starts and,
+cylinder. A mesh hook is its mesh, a mesh mug its mesh's convex pieces.
+
+A pose *hangs* when the mug is not in collision with the hook where it starts and,
 after the drop and the impulse, still touches the hook and keeps clear of the ground; it
 hangs *in place* when, besides, it came to rest (before the impulse) at most a few
 centimetres below where it was released. A mug released above the
@@ -20,6 +22,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from robotplan.base.quiet import connect_direct, import_pybullet
+from robotplan.execution.convex_pieces import convex_pieces_file, obj_file
+from robotplan.sdf.mesh_solids import MeshHook, MeshMug
 from robotplan.sdf.mug_hook import Hook, Mug
 
 __all__ = ["HANG_PHYSICS", "DropResult", "HangPhysics", "HangWorld"]
@@ -126,7 +130,8 @@ def hook_parts(hook: Hook) -> list[dict]:
 class HangWorld:
     """A pybullet DIRECT world with the ground, one static hook at the origin and one mug."""
 
-    def __init__(self, hook: Hook, mug: Mug, physics: HangPhysics = HANG_PHYSICS) -> None:
+    def __init__(self, hook: Hook | MeshHook, mug: Mug | MeshMug,
+                 physics: HangPhysics = HANG_PHYSICS) -> None:
         self.pb = import_pybullet()
         self.physics = physics
         self.client = connect_direct()
@@ -135,8 +140,10 @@ class HangWorld:
         pb.setTimeStep(physics.timestep, physicsClientId=c)
         plane = pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=c)
         self.ground = pb.createMultiBody(0, plane, physicsClientId=c)
-        self.hook = self._body(0.0, hook_parts(hook))
-        self.mug = self._body(physics.mug_mass, mug_parts(mug))
+        self.hook = (self._mesh_body(0.0, hook) if isinstance(hook, MeshHook)
+                     else self._body(0.0, hook_parts(hook)))
+        self.mug = (self._mesh_body(physics.mug_mass, mug) if isinstance(mug, MeshMug)
+                    else self._body(physics.mug_mass, mug_parts(mug)))
         self.mug_height = mug.height
         self.mug_links = range(-1, pb.getNumJoints(self.mug, physicsClientId=c))
         self._record: list | None = None
@@ -167,6 +174,36 @@ class HangWorld:
             linkInertialFrameOrientations=[[0.0, 0.0, 0.0, 1.0]] * n,
             linkParentIndices=[0] * n, linkJointTypes=[pb.JOINT_FIXED] * n,
             linkJointAxis=[[0.0, 0.0, 1.0]] * n, physicsClientId=c)
+
+    def _mesh_body(self, mass: float, solid: MeshHook | MeshMug) -> int:
+        """A mesh as a body whose frame is the solid's: a fixed one (mass 0) as the mesh
+        itself (pybullet collides a static triangle mesh exactly), a moving one as its
+        convex pieces (:func:`robotplan.execution.convex_pieces.convex_pieces_file`) with
+        its mass at the mesh's centre of mass."""
+        pb, c = self.pb, self.client
+        at = (-solid.offset).tolist()
+        if mass == 0.0:
+            shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=str(obj_file(solid.mesh_file)),
+                                            meshScale=[solid.scale] * 3,
+                                            collisionFramePosition=at,
+                                            flags=pb.GEOM_FORCE_CONCAVE_TRIMESH,
+                                            physicsClientId=c)
+            return pb.createMultiBody(0.0, shape, physicsClientId=c)
+        pieces = convex_pieces_file(solid.mesh_file, solid.scale)
+        shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=str(pieces),
+                                        meshScale=[solid.scale] * 3, collisionFramePosition=at,
+                                        physicsClientId=c)
+        # pybullet places a body by its base's inertial frame, so that frame stays the
+        # solid's; the mass sits at the mesh's centre of mass on a link fixed to the base
+        com = list(map(float, solid.mesh.center_mass))
+        return pb.createMultiBody(
+            mass * 1e-3, shape, baseInertialFramePosition=[0.0, 0.0, 0.0],
+            linkMasses=[mass * (1 - 1e-3)], linkCollisionShapeIndices=[-1],
+            linkVisualShapeIndices=[-1], linkPositions=[[0.0, 0.0, 0.0]],
+            linkOrientations=[[0.0, 0.0, 0.0, 1.0]], linkInertialFramePositions=[com],
+            linkInertialFrameOrientations=[[0.0, 0.0, 0.0, 1.0]], linkParentIndices=[0],
+            linkJointTypes=[pb.JOINT_FIXED], linkJointAxis=[[0.0, 0.0, 1.0]],
+            physicsClientId=c)
 
     def _compound(self, parts: list[dict]) -> int:
         pb = self.pb

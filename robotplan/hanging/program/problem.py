@@ -125,7 +125,7 @@ class HangProblem:
         centre = grid.centre(hook)
         self.lo, self.hi = centre - spec.size / 2, centre + spec.size / 2
         self.h_hang = HangSuccessFunctional(model, mug, hook)
-        reach = float(np.hypot(mug.radius + mug.handle_reach + mug.handle_radius, mug.height))
+        reach = mug.reach
         read = None
         if collision == "model" and spec.representation in ("occupancy", "smooth_occupancy"):
             def read(phi, rep=spec.representation, b=spec.occupancy_sharpness):

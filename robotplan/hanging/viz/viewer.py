@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robotplan.sdf.mesh_solids import MeshHook, MeshMug
 from robotplan.sdf.mug_hook import Hook, Mug
 
 __all__ = ["hang_meshes", "write_hang_playback"]
@@ -29,18 +30,32 @@ def _capsules(points: np.ndarray, radius: float) -> list:
     return out
 
 
-def hang_meshes(mug: Mug, hook: Hook) -> tuple[list, list]:
-    """Trimesh parts of the mug (cup revolved from its profile, handle capsules) and of the
-    hook (post, arm capsules), each in its own frame."""
+def hang_meshes(mug: Mug | MeshMug, hook: Hook | MeshHook) -> tuple[list, list]:
+    """Trimesh parts of the mug (cup revolved from its profile, handle capsules; a mesh mug
+    its mesh) and of the hook (post, arm capsules; a mesh hook its mesh), each in its own
+    frame."""
+    return _mug_meshes(mug), _hook_meshes(hook)
+
+
+def _mug_meshes(mug: Mug | MeshMug) -> list:
     import trimesh
 
+    if isinstance(mug, MeshMug):
+        return [mug.mesh]
     r, h, w = mug.radius, mug.height, mug.wall
     cup = trimesh.creation.revolve([(0.0, 0.0), (r, 0.0), (r, h), (r - w, h), (r - w, w),
                                     (0.0, w)], sections=48)
+    return [cup, *_capsules(mug.handle_points(), mug.handle_radius)]
+
+
+def _hook_meshes(hook: Hook | MeshHook) -> list:
+    import trimesh
+
+    if isinstance(hook, MeshHook):
+        return [hook.mesh]
     post = trimesh.creation.cylinder(hook.post_radius, hook.post_height, sections=32)
     post.apply_translation([0, 0, hook.post_height / 2])
-    return ([cup, *_capsules(mug.handle_points(), mug.handle_radius)],
-            [post, *_capsules(hook.arm_points(), hook.rod_radius)])
+    return [post, *_capsules(hook.arm_points(), hook.rod_radius)]
 
 
 def _drake_mesh(part):
