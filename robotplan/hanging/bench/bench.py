@@ -36,7 +36,7 @@ from robotplan.hanging.program.problem import HANG_DEFAULTS, HangProblem, HangSe
 from robotplan.hanging.scene.ranges import load_hang_ranges
 from robotplan.hanging.search.optimise import optimise_hang, sample_hang
 
-__all__ = ["CLOSED_LOOP", "METHODS", "PAPER_HANG", "PAPER_TAB3", "run_bench_hang",
+__all__ = ["CLOSED_LOOP", "METHODS", "PAPER_HANG", "PAPER_TAB3", "SCENE_SETS", "run_bench_hang",
            "summarize_hang"]
 
 METHODS = ("opt_sampling", "opt_only", "sampling_k1", "sampling_k2", "sampling_k3")
@@ -53,7 +53,27 @@ PAPER_TAB3 = {"opt_sampling": (0.987, 0.885, 1.0, 0.873),
 PAPER_HANG = replace(HANG_DEFAULTS, threading=False)
 
 
-def _scene(index: int, seed: int):
+SCENE_SETS = ("procedural", "meshes")
+"""``procedural``: hooks and mugs drawn as the data draws them; ``meshes``: the mesh mugs and
+hooks of ``tasks/meshes/hang/`` (:data:`MESH_MUGS` × :data:`MESH_HOOKS`, scene ``i`` the pair
+``i`` mod 6; the seed draws the starts), none of them drawn by the training generator."""
+MESH_MUGS = ("mug_tapered.obj", "mug_square_handle.stl", "mug_ring_handle.obj")
+MESH_HOOKS = ("hook_square_rod.stl", "hook_curved.obj")
+
+
+def _scene(index: int, seed: int, scene_set: str = "procedural"):
+    """The hook and the mug of scene ``index``."""
+    if scene_set == "meshes":
+        from robotplan.base.resources import tasks_dir
+        from robotplan.geometry.meshes import read_mesh
+        from robotplan.sdf.mesh_solids import MeshHook, MeshMug
+
+        folder = tasks_dir() / "meshes" / "hang"
+        pair = index % (len(MESH_MUGS) * len(MESH_HOOKS))
+        mug_file = folder / MESH_MUGS[pair % len(MESH_MUGS)]
+        hook_file = folder / MESH_HOOKS[pair // len(MESH_MUGS)]
+        return (MeshHook(read_mesh(hook_file), hook_file),
+                MeshMug(read_mesh(mug_file), mug_file))
     ranges = load_hang_ranges()
     rng = np.random.default_rng([seed, index])
     return ranges.hook.sample(rng), ranges.mug.sample(rng)
@@ -61,14 +81,16 @@ def _scene(index: int, seed: int):
 
 def bench_scene(index: int, seed: int, model_dir: str | Path,
                 settings: HangSettings = HANG_DEFAULTS,
-                methods: tuple[str, ...] = METHODS, check_dir: str | Path | None = None) -> dict:
-    """Every method on scene ``index``; the found poses checked by a drop. ``check_dir``: the
-    check network the optimisation's found poses must satisfy too (HangSettings.check_kappa;
-    not the closed loop's, whose drops are its check)."""
+                methods: tuple[str, ...] = METHODS, check_dir: str | Path | None = None,
+                scene_set: str = "procedural") -> dict:
+    """Every method on scene ``index`` of ``scene_set`` (:data:`SCENE_SETS`); the found poses
+    checked by a drop. ``check_dir``: the check network the optimisation's found poses must
+    satisfy too (HangSettings.check_kappa; not the closed loop's, whose drops are its
+    check)."""
     from robotplan.base.threads import one_thread
 
     one_thread()
-    hook, mug = _scene(index, seed)
+    hook, mug = _scene(index, seed, scene_set)
     check = load_hang_model(check_dir) if check_dir is not None else None
     problem = HangProblem(load_hang_model(model_dir), mug, hook, settings.collision, check)
     rng = np.random.default_rng([seed, index, 1])
@@ -152,10 +174,11 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
                    workers: int = 2, progress: bool = True,
                    methods: tuple[str, ...] = METHODS,
                    settings: HangSettings = HANG_DEFAULTS, ray: str | None = None,
-                   check_dir: str | Path | None = None) -> dict:
+                   check_dir: str | Path | None = None, scene_set: str = "procedural") -> dict:
     """Run (or continue) the benchmark in ``out``, its scenes in ``workers`` local processes
     or as Ray tasks (``ray``: :func:`robotplan.base.units.run_units`), with the check network
-    in ``check_dir`` (None: none, the paper's); returns the summary, with where and how long
+    in ``check_dir`` (None: none, the paper's), on the scenes of ``scene_set``
+    (:data:`SCENE_SETS`); returns the summary, with where and how long
     the scenes ran under ``units``."""
     from tqdm import tqdm
 
@@ -167,7 +190,7 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
            "threading": settings.threading,
            "methods": list(methods), "collision": settings.collision,
            "check": None if check_dir is None else str(check_dir),
-           "check_kappa": settings.check_kappa}
+           "check_kappa": settings.check_kappa, "scene_set": scene_set}
     run_path = out / "run.json"
     if run_path.is_file() and json.loads(run_path.read_text()) != run:
         raise ValueError(f"{out}: holds a run with other settings ({run_path}); "
@@ -178,7 +201,7 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
         if rows_path.is_file() else []
     done = {r["scene"] for r in rows}
     todo = [(i, seed, str(model_dir), settings, methods,
-             None if check_dir is None else str(check_dir)) for i in range(scenes)
+             None if check_dir is None else str(check_dir), scene_set) for i in range(scenes)
             if i not in done]
     t0 = time.time()
     with tqdm(total=scenes, initial=len(done), unit="scene", desc="bench hang",
@@ -190,7 +213,7 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
             log.flush()
             bar.update()
     summary = summarize_hang(sorted(rows, key=lambda r: r["scene"]))
-    summary.update(seed=seed, model=str(model_dir), check=run["check"],
+    summary.update(seed=seed, model=str(model_dir), check=run["check"], scene_set=scene_set,
                    evaluations=settings.evaluations,
                    collision=settings.collision,
                    wall_seconds=round(time.time() - t0, 1), paper=PAPER_TAB3,

@@ -190,7 +190,8 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
     try:
         summary = run_bench_hang(args.scenes, args.seed, Path(args.out), model,
                                  workers=args.workers, methods=methods, settings=settings,
-                                 ray=args.ray, check_dir=check)
+                                 ray=args.ray, check_dir=check,
+                                 scene_set="meshes" if args.meshes else "procedural")
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -46,6 +46,9 @@ def add_bench_hang_parser(bsub) -> None:
     bh.add_argument("--collision", choices=["sdf", "model", "none"], default="sdf",
                     help="H_coll on the shapes' SDFs, on what the model reads (ψ: the "
                     "paper's occupancy rows) or none (its point-cloud rows)")
+    bh.add_argument("--meshes", action="store_true",
+                    help="the mesh mugs and hooks of tasks/meshes/hang/ (3 mugs × 2 hooks, "
+                    "scene i the pair i mod 6) in place of procedural ones")
     bh.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     add_ray_option(bh)
     bh.add_argument("--json", action="store_true")
