@@ -28,6 +28,7 @@ from robotplan.sdf.shapes3d import Shape3D
 __all__ = ["GRID_STEP", "GridSDF", "mesh_sdf_lattice"]
 
 GRID_STEP = 0.003  # m: a mug's handle (a 7 mm tube) spans several steps; H_hang reads 1 cm
+FORMAT = 2  # changes when the sampling does: older cached lattices are not read
 MARGIN = 0.015  # m of lattice around the mesh's bounding box: H_coll reads φ < 7 mm
 
 
@@ -63,7 +64,7 @@ class GridSDF(Shape3D):
 
 def _cache_key(mesh_file: Path, scale: float, offset: np.ndarray, step: float) -> str:
     h = hashlib.sha256(Path(mesh_file).read_bytes())
-    h.update(np.asarray([scale, *offset, step, MARGIN], dtype=np.float64).tobytes())
+    h.update(np.asarray([scale, *offset, step, MARGIN, FORMAT], dtype=np.float64).tobytes())
     return h.hexdigest()[:32]
 
 
@@ -102,7 +103,7 @@ def _sample(mesh, lo: np.ndarray, step: float, counts: np.ndarray) -> np.ndarray
         chunk = points[start:start + 50_000]
         _, distance[start:start + len(chunk)], _ = trimesh.proximity.closest_point(mesh, chunk)
     distance = distance.reshape(*counts)
-    free = distance > step / 2
+    free = distance > 0.55 * step  # half a step, and room for rounding at exactly half
     labels, _ = ndimage.label(free)  # 6-connected: neighbours one step apart
     border = np.unique(np.concatenate([labels[0].ravel(), labels[-1].ravel(),
                                        labels[:, 0].ravel(), labels[:, -1].ravel(),
