@@ -3,11 +3,13 @@
 pybullet collides a moving mesh as its convex hull, so a concave mesh goes to it as a
 compound of convex pieces. Each piece here is a patch of the mesh's surface (the
 triangles whose centres fall in one cube of ``PATCH`` m) with the patch's vertices also
-moved ``SKIN`` m inwards along their normals: a thin solid that follows the surface to
+moved ``SKIN`` m inwards along their normals (less where the solid is thinner, so that no
+piece comes out on the other side): a thin solid that follows the surface to
 within the patch's sagitta (~0.2 mm on a 7 mm handle), where an approximate convex
 decomposition (V-HACD) swells a mug's pieces by 2–3 mm and closes most of a handle's
 opening (measured: docs/experiments.md#mesh-pieces). The solid is its skin: a body that
-only ever meets others from outside needs no more.
+only ever meets others from outside needs no more, if the skin is deeper than a body moves
+in one time step (4 mm: 1 m/s at 240 Hz).
 
 The pieces are written as one Wavefront OBJ with an ``o`` group per piece, in the mesh
 file's own units, cached by the file's content and scale.
@@ -25,8 +27,9 @@ from robotplan.base.resources import cache_dir
 
 __all__ = ["PATCH", "SKIN", "convex_pieces_file", "obj_file"]
 
+FORMAT = 2  # changes when the pieces do: older cached ones are not read
 PATCH = 0.008  # m: the cube of mesh surface one piece covers
-SKIN = 0.002  # m: how thick each piece is below the surface
+SKIN = 0.004  # m: how thick each piece is below the surface, at most 0.45 of the solid there
 
 
 def convex_pieces_file(mesh_file: str | Path, scale: float = 1.0) -> Path:
@@ -35,7 +38,7 @@ def convex_pieces_file(mesh_file: str | Path, scale: float = 1.0) -> Path:
     import trimesh
 
     raw = Path(mesh_file).read_bytes()
-    tag = f"|skin{PATCH}|{SKIN}|{scale!r}".encode()
+    tag = f"|skin{FORMAT}|{PATCH}|{SKIN}|{scale!r}".encode()
     out = cache_dir("convex_pieces") / f"{hashlib.sha256(raw + tag).hexdigest()[:32]}.obj"
     if out.is_file():
         return out
@@ -61,11 +64,12 @@ def _skin_pieces(mesh, patch: float, skin: float) -> list:
     cells = np.floor(mesh.triangles_center / patch).astype(np.int64)
     _, group = np.unique(cells, axis=0, return_inverse=True)
     normals = mesh.vertex_normals
+    depth = np.minimum(skin, 0.45 * _thickness(mesh, normals, skin / 20))[:, None]
     pieces = []
     for g in range(group.max() + 1):
         vertices = np.unique(mesh.faces[group.ravel() == g].ravel())
         points = np.vstack((mesh.vertices[vertices],
-                            mesh.vertices[vertices] - skin * normals[vertices]))
+                            mesh.vertices[vertices] - depth[vertices] * normals[vertices]))
         try:
             hull = trimesh.convex.convex_hull(points)
         except Exception:  # a degenerate patch (collinear points): its neighbours cover it
@@ -73,6 +77,18 @@ def _skin_pieces(mesh, patch: float, skin: float) -> list:
         if hull.volume > 0:
             pieces.append(hull)
     return pieces
+
+
+def _thickness(mesh, normals: np.ndarray, gap: float) -> np.ndarray:
+    """How far inwards along its normal each vertex sees the mesh's other side ``(V,)``
+    (infinite where a ray finds none), hits nearer than ``gap`` (the faces at the vertex
+    itself) not counted: a piece reaches at most half-way through."""
+    hits, rays, _ = mesh.ray.intersects_location(mesh.vertices, -normals, multiple_hits=True)
+    far = np.linalg.norm(hits - mesh.vertices[rays], axis=1)
+    keep = far > gap
+    out = np.full(len(mesh.vertices), np.inf)
+    np.minimum.at(out, rays[keep], far[keep])
+    return out
 
 
 def obj_file(mesh_file: str | Path) -> Path:

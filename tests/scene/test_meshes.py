@@ -113,3 +113,34 @@ def test_check_refuses_a_bad_mesh_with_one_line_and_exit_2(folder, capsys):
         lines = res.stderr.strip().splitlines()
         assert len(lines) == 1 and str(path) in lines[0] and field in lines[0], res.stderr
         assert "Traceback" not in res.stderr
+
+
+def test_a_hang_scene_takes_a_mesh_mug_and_hook(tmp_path):
+    """Their solids resolved (the handle's opening, the arm found); a mug mesh without a
+    handle is refused naming the field."""
+    from robotplan.scene.meshes import MeshSolid
+
+    (tmp_path / "meshes").mkdir()
+    for name in ("mug_square_handle.stl", "hook_square_rod.stl"):
+        shutil.copyfile(TASKS / "meshes" / "hang" / name, tmp_path / "meshes" / name)
+    doc = {"version": 1, "name": "mesh_hang",
+           "objects": [{"name": "mug", "pose": [0.3, -0.2, 0.0],
+                        "shape": {"type": "mesh", "file": "meshes/mug_square_handle.stl"}}],
+           "obstacles": [{"name": "hook", "pose": [0.0, 0.0, 0.0],
+                          "shape": {"type": "mesh", "file": "meshes/hook_square_rod.stl"}}],
+           "goal": {"type": "hang", "object": "mug", "on": "hook"}}
+    scene = load_scene(write_scene(tmp_path, doc))
+    mug, hook = scene.objects[0].shape, scene.obstacles[0].shape
+    assert isinstance(mug, MeshSolid) and mug.role == "mug" and hook.role == "hook"
+    assert len(hook.solid().arm_points()) == 3 and mug.solid().opening()[2] > 0.008
+    profile = np.array([[0, 0], [0.04, 0], [0.04, 0.1], [0.034, 0.1], [0.034, 0.006],
+                        [0, 0.006]])
+    trimesh.creation.revolve(profile, sections=32).export(str(tmp_path / "meshes" / "cup.obj"))
+    doc["objects"][0]["shape"]["file"] = "meshes/cup.obj"
+    with pytest.raises(SceneError) as err:
+        load_scene(write_scene(tmp_path, doc, "cup.yaml"))
+    assert err.value.field == "objects[0].shape.file" and "no opening" in str(err.value)
+    doc["objects"][0]["pose"] = [0.02, 0.0, 0.0]
+    doc["objects"][0]["shape"]["file"] = "meshes/mug_square_handle.stl"
+    with pytest.raises(SceneError, match="post"):
+        load_scene(write_scene(tmp_path, doc, "close.yaml"))

@@ -36,7 +36,7 @@ PUSH_TASKS = {
     "panda_handover": ("box", ("left", "right"), True, "region", None, None, ("arms",)),
     "panda_iiwa_touch": ("box", ("left", "right"), True, "touch", None, "right", ("arms",)),
 }
-HANG_TASKS = {"mug_hang": ("mug", "hook")}
+HANG_TASKS = {"mug_hang": ("mug", "hook"), "mesh_mug_hang": ("mug", "hook")}
 
 
 def _doc(name: str) -> dict:

@@ -135,6 +135,7 @@ class HangWorld:
         self.pb = import_pybullet()
         self.physics = physics
         self.client = connect_direct()
+        self._com = np.zeros(3)  # the mug body's centre of mass in the mug's frame
         pb, c = self.pb, self.client
         pb.setGravity(0, 0, -physics.gravity, physicsClientId=c)
         pb.setTimeStep(physics.timestep, physicsClientId=c)
@@ -176,34 +177,32 @@ class HangWorld:
             linkJointAxis=[[0.0, 0.0, 1.0]] * n, physicsClientId=c)
 
     def _mesh_body(self, mass: float, solid: MeshHook | MeshMug) -> int:
-        """A mesh as a body whose frame is the solid's: a fixed one (mass 0) as the mesh
-        itself (pybullet collides a static triangle mesh exactly), a moving one as its
-        convex pieces (:func:`robotplan.execution.convex_pieces.convex_pieces_file`) with
-        its mass at the mesh's centre of mass."""
+        """A mesh as a body: a fixed one (mass 0) as the mesh itself (pybullet collides a
+        static triangle mesh exactly), a moving one as its skin's convex pieces
+        (:func:`robotplan.execution.convex_pieces.convex_pieces_file`) about its centre of
+        mass (``self._com``, in the solid's frame: pybullet places a body by that point)."""
         pb, c = self.pb, self.client
-        at = (-solid.offset).tolist()
         if mass == 0.0:
             shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=str(obj_file(solid.mesh_file)),
                                             meshScale=[solid.scale] * 3,
-                                            collisionFramePosition=at,
+                                            collisionFramePosition=(-solid.offset).tolist(),
                                             flags=pb.GEOM_FORCE_CONCAVE_TRIMESH,
                                             physicsClientId=c)
             return pb.createMultiBody(0.0, shape, physicsClientId=c)
+        self._com = np.asarray(solid.mesh.center_mass, dtype=float)
         pieces = convex_pieces_file(solid.mesh_file, solid.scale)
         shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=str(pieces),
-                                        meshScale=[solid.scale] * 3, collisionFramePosition=at,
+                                        meshScale=[solid.scale] * 3,
+                                        collisionFramePosition=(-solid.offset).tolist(),
                                         physicsClientId=c)
-        # pybullet places a body by its base's inertial frame, so that frame stays the
-        # solid's; the mass sits at the mesh's centre of mass on a link fixed to the base
-        com = list(map(float, solid.mesh.center_mass))
-        return pb.createMultiBody(
-            mass * 1e-3, shape, baseInertialFramePosition=[0.0, 0.0, 0.0],
-            linkMasses=[mass * (1 - 1e-3)], linkCollisionShapeIndices=[-1],
-            linkVisualShapeIndices=[-1], linkPositions=[[0.0, 0.0, 0.0]],
-            linkOrientations=[[0.0, 0.0, 0.0, 1.0]], linkInertialFramePositions=[com],
-            linkInertialFrameOrientations=[[0.0, 0.0, 0.0, 1.0]], linkParentIndices=[0],
-            linkJointTypes=[pb.JOINT_FIXED], linkJointAxis=[[0.0, 0.0, 1.0]],
-            physicsClientId=c)
+        return pb.createMultiBody(mass, shape, baseInertialFramePosition=self._com.tolist(),
+                                  physicsClientId=c)
+
+    def _place(self, X_WM: np.ndarray) -> None:
+        """Put the mug's frame at ``X_WM (7,)``."""
+        R = np.array(self.pb.getMatrixFromQuaternion(_pb_quat(X_WM[3:]))).reshape(3, 3)
+        self.pb.resetBasePositionAndOrientation(self.mug, (X_WM[:3] + R @ self._com).tolist(),
+                                                _pb_quat(X_WM[3:]), physicsClientId=self.client)
 
     def _compound(self, parts: list[dict]) -> int:
         pb = self.pb
@@ -244,8 +243,10 @@ class HangWorld:
         return bool(self.pb.getContactPoints(self.mug, other, physicsClientId=self.client))
 
     def pose(self) -> tuple[float, ...]:
+        """The mug frame's pose ``(x, y, z, qw, qx, qy, qz)``."""
         pos, quat = self.pb.getBasePositionAndOrientation(self.mug, physicsClientId=self.client)
-        return (*pos, *_wxyz(quat))
+        R = np.array(self.pb.getMatrixFromQuaternion(quat)).reshape(3, 3)
+        return (*(np.asarray(pos) - R @ self._com).tolist(), *_wxyz(quat))
 
     def _depth(self) -> float:
         """How deep (m, ≥ 0) the mug where it is now reaches into the hook."""
@@ -258,8 +259,7 @@ class HangWorld:
         """The mug placed at ``X_WM (7,)`` starts in collision with the hook (deeper than
         ``physics.start_penetration``): a drop from there is a failure without simulating."""
         X = np.asarray(X_WM, dtype=float)
-        self.pb.resetBasePositionAndOrientation(self.mug, X[:3].tolist(), _pb_quat(X[3:]),
-                                                physicsClientId=self.client)
+        self._place(X)
         return self._depth() > self.physics.start_penetration
 
     def drop(self, X_WM, record: list | None = None) -> DropResult:
@@ -269,8 +269,7 @@ class HangWorld:
         self._record = record
         pb, c, ph = self.pb, self.client, self.physics
         X = np.asarray(X_WM, dtype=float)
-        pb.resetBasePositionAndOrientation(self.mug, X[:3].tolist(), _pb_quat(X[3:]),
-                                           physicsClientId=c)
+        self._place(X)
         pb.resetBaseVelocity(self.mug, [0, 0, 0], [0, 0, 0], physicsClientId=c)
         if record is not None:
             record.append((0.0, self.pose()))
