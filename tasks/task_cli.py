@@ -53,3 +53,24 @@ def run(scene: robotplan.Scene, out: Path, fast: bool, fast_skeleton: str,
 
 def out_dir(args: argparse.Namespace, script: str) -> Path:
     return Path(args.out) if args.out else Path("runs") / Path(script).stem
+
+
+def run_hang(scene_file: Path, args: argparse.Namespace, script: str,
+             fast_restarts: int = 3) -> None:
+    """Solve the hang scene in ``scene_file`` (``--fast``: at most ``fast_restarts``
+    optimisations; ``--open-loop``: drop the first pose found only), write its playback and
+    picture, print one line."""
+    from robotplan.hanging.api.planner import solve_hang
+    from robotplan.scene.task import load_task
+
+    task = load_task(scene_file)
+    out = out_dir(args, script)
+    doc = solve_hang(task, out, restarts=fast_restarts if args.fast else None,
+                     mode="open_loop" if args.open_loop else "closed_loop")
+    ex = doc["execution"]
+    outcome = ("hangs" + (" in place" if ex["in_place"] else "")) if ex["hung"] else "falls"
+    before = f" (it fell from {len(ex['replans'])} poses before)" if ex["replans"] else ""
+    print(f"{task.scene.name}: {'solved' if doc['status'] == 'solved' else 'not solved'}, H_hang "
+          f"{doc['h_hang']:.3g}, H_coll {doc['h_coll_cm3']:.3g} cm³ after {doc['restarts']} "
+          f"optimisations ({doc['plan_seconds']} s); in pybullet the mug {outcome}{before}; "
+          f"{out / 'playback.html'}, {out / doc['picture']}")
