@@ -36,8 +36,8 @@ from robotplan.hanging.program.problem import HANG_DEFAULTS, HangProblem, HangSe
 from robotplan.hanging.scene.ranges import load_hang_ranges
 from robotplan.hanging.search.optimise import optimise_hang, sample_hang
 
-__all__ = ["CLOSED_LOOP", "METHODS", "PAPER_HANG", "PAPER_TAB3", "SCENE_SETS", "run_bench_hang",
-           "summarize_hang"]
+__all__ = ["CLOSED_LOOP", "METHODS", "PAPER_HANG", "PAPER_TAB3", "SCENE_SETS", "mesh_pair",
+           "run_bench_hang", "summarize_hang"]
 
 METHODS = ("opt_sampling", "opt_only", "sampling_k1", "sampling_k2", "sampling_k3")
 CLOSED_LOOP = "closed_loop"  # not in the paper: run when asked for (module docstring)
@@ -61,17 +61,22 @@ MESH_MUGS = ("mug_tapered.obj", "mug_square_handle.stl", "mug_ring_handle.obj")
 MESH_HOOKS = ("hook_square_rod.stl", "hook_curved.obj")
 
 
+def mesh_pair(index: int) -> tuple[Path, Path]:
+    """The mug and hook mesh files of mesh scene ``index``."""
+    from robotplan.base.resources import tasks_dir
+
+    folder = tasks_dir() / "meshes" / "hang"
+    pair = index % (len(MESH_MUGS) * len(MESH_HOOKS))
+    return folder / MESH_MUGS[pair % len(MESH_MUGS)], folder / MESH_HOOKS[pair // len(MESH_MUGS)]
+
+
 def _scene(index: int, seed: int, scene_set: str = "procedural"):
     """The hook and the mug of scene ``index``."""
     if scene_set == "meshes":
-        from robotplan.base.resources import tasks_dir
         from robotplan.geometry.meshes import read_mesh
         from robotplan.sdf.mesh_solids import MeshHook, MeshMug
 
-        folder = tasks_dir() / "meshes" / "hang"
-        pair = index % (len(MESH_MUGS) * len(MESH_HOOKS))
-        mug_file = folder / MESH_MUGS[pair % len(MESH_MUGS)]
-        hook_file = folder / MESH_HOOKS[pair // len(MESH_MUGS)]
+        mug_file, hook_file = mesh_pair(index)
         return (MeshHook(read_mesh(hook_file), hook_file),
                 MeshMug(read_mesh(mug_file), mug_file))
     ranges = load_hang_ranges()

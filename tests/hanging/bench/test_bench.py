@@ -64,3 +64,12 @@ def test_one_real_scene_and_bad_arguments(tmp_path, tiny_hang_data, capsys):
     assert f"{tmp_path}: --check: not a model folder" in err
     assert set(METHODS) == {"opt_sampling", "opt_only", "sampling_k1", "sampling_k2",
                             "sampling_k3"}
+
+
+def test_mesh_scenes_go_through_every_mug_and_hook_pair():
+    from robotplan.hanging.bench.bench import MESH_HOOKS, MESH_MUGS, mesh_pair
+
+    pairs = [mesh_pair(i) for i in range(12)]
+    assert len(set(pairs)) == len(MESH_MUGS) * len(MESH_HOOKS) == 6
+    assert pairs[:6] == pairs[6:]
+    assert all(m.is_file() and h.is_file() for m, h in pairs)
