@@ -26,7 +26,7 @@ from torch import Tensor
 from robotplan.sdf.grid_sdf import GRID_STEP, GridSDF, mesh_sdf_lattice
 from robotplan.sdf.shapes3d import Shape3D
 
-__all__ = ["MeshHook", "MeshMug", "MeshSolidProblem"]
+__all__ = ["CLEARANCE", "MeshHook", "MeshMug", "MeshSolidProblem"]
 
 OPENING_STEP = 0.001  # m: the cross-section's pixels when looking for the handle's opening
 ARM_STEP = 0.005  # m between traced points of a hook's arm
@@ -59,14 +59,23 @@ class _MeshSolid(Shape3D):
         return float(self.mesh.bounds[1, 2])
 
 
+CLEARANCE = 0.001  # m a mesh mug is read fatter (measured: docs/experiments.md#mesh-clearance)
+
+
 class MeshMug(_MeshSolid):
-    """A mug from a mesh: its SDF (a cached lattice), its handle's opening, its reach."""
+    """A mug from a mesh: its SDF (a cached lattice, read ``CLEARANCE`` fatter: the lattice
+    and the simulator's pieces of a mesh each stray a millimetre or two from it, and a pose
+    found touching the hook would start inside it in pybullet), its handle's opening, its
+    reach."""
 
     def __init__(self, mesh, mesh_file: str | Path, scale: float = 1.0,
                  step: float = GRID_STEP) -> None:
         super().__init__(mesh, mesh_file, scale, step)
         self.x0, self.z0, self.a, self.b = self._find_opening()
         self.radius = self.x0 - self.a  # the opening's wall side: the threading row's bound
+
+    def sdf(self, p_B: Tensor) -> Tensor:
+        return self.lattice.sdf(p_B) - CLEARANCE
 
     def opening(self) -> tuple[float, float, float, float]:
         """``(x0, z0, a, b)``: an ellipse (centre, semi-axes along x and z) inside the
