@@ -29,7 +29,9 @@ if TYPE_CHECKING:
 __all__ = ["MeshShape", "MeshSolid", "load_mesh_shape", "mesh_footprint", "mesh_path",
            "resolve_mesh_footprints", "resolve_mesh_solids"]
 
-PRISM_SLACK = 0.005  # a mesh within 0.5 % of its footprint's prism volume is that prism
+# a mesh within 0.5 % of its footprint's prism volume is that prism; the footprint's default
+# tolerance: docs/experiments.md#mesh-footprint
+PRISM_SLACK = 0.005
 _URL = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
 
 

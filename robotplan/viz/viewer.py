@@ -13,6 +13,7 @@ import numpy as np
 
 from robotplan.geometry.polygons import triangulate
 from robotplan.scene import Scene
+from robotplan.sdf.mesh_footprint import MeshFootprint
 
 __all__ = ["GHOST_ALPHA", "Layer", "extrude", "write_playback"]
 
@@ -110,8 +111,24 @@ def write_playback(scene: Scene, path: Path, layers: list[Layer], fps: float = 1
 
 
 def _body_mesh(scene: Scene, name: str):
+    """A body's surface in its frame: a mesh object's own mesh, else its footprint
+    extruded."""
     spec = next(o for o in (*scene.objects, *scene.obstacles) if o.name == name)
-    return extrude(scene.bodies[name].shape.outline(), spec.height)
+    shape = scene.bodies[name].shape
+    if isinstance(shape, MeshFootprint):
+        return _mesh_surface(shape)
+    return extrude(shape.outline(), spec.height)
+
+
+def _mesh_surface(shape: MeshFootprint):
+    """The mesh of a mesh footprint, scaled and placed in the footprint's frame."""
+    import trimesh
+    from pydrake.geometry import SurfaceTriangle, TriangleSurfaceMesh
+
+    mesh = trimesh.load_mesh(shape.mesh_file, force="mesh")
+    vertices = mesh.vertices * shape.scale - np.asarray(shape.mesh_offset)
+    return TriangleSurfaceMesh([SurfaceTriangle(*map(int, f)) for f in mesh.faces],
+                               list(vertices))
 
 
 def _color(scene: Scene, name: str, alpha: float = 1.0):
