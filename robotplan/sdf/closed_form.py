@@ -10,7 +10,7 @@ import torch
 from torch import Tensor
 
 __all__ = ["box_sdf", "box_sdf_and_grad", "lshape_boxes", "lshape_sdf", "polygon_sdf",
-           "safe_hypot", "safe_norm"]
+           "polygon_sdf_and_grad", "safe_hypot", "safe_norm"]
 
 _EPS = 1e-30  # under the square root: the value moves by at most sqrt(_EPS) = 1e-15 m
 
@@ -60,6 +60,39 @@ def polygon_sdf(p: Tensor, vertices: Tensor | np.ndarray) -> Tensor:
     assert dist2 is not None and inside is not None, "a polygon has at least 3 vertices"
     dist = (dist2 + _EPS).sqrt() - _EPS**0.5
     return torch.where(inside, -dist, dist)
+
+
+def polygon_sdf_and_grad(px: Tensor, py: Tensor, vertices: np.ndarray
+                         ) -> tuple[Tensor, Tensor, Tensor]:
+    """:func:`polygon_sdf` and its gradient in closed form at coordinate planes ``px, py
+    (...)``: φ, ∂φ/∂x, ∂φ/∂y. The gradient is the unit vector from the nearest boundary
+    point, outwards: one pass over the edges keeps the nearest one's offset, no autograd
+    (about half the cost of the value and a backward pass)."""
+    verts = np.asarray(vertices, dtype=np.float64)
+    n = len(verts)
+    dist2 = ox = oy = inside = None
+    for i in range(n):
+        ax, ay = float(verts[i, 0]), float(verts[i, 1])
+        bx, by = float(verts[(i + 1) % n, 0]), float(verts[(i + 1) % n, 1])
+        ex, ey = bx - ax, by - ay
+        wx, wy = px - ax, py - ay
+        t = ((wx * ex + wy * ey) * (1.0 / (ex * ex + ey * ey))).clamp(0.0, 1.0)
+        dx, dy = wx - ex * t, wy - ey * t
+        d2 = dx * dx + dy * dy
+        if dist2 is None:
+            dist2, ox, oy = d2, dx, dy
+        else:
+            nearer = d2 < dist2
+            dist2 = torch.where(nearer, d2, dist2)
+            ox, oy = torch.where(nearer, dx, ox), torch.where(nearer, dy, oy)
+        if ay != by:
+            crosses = ((ay <= py) != (by <= py)) & (px < ax + (py - ay) * (ex / ey))
+            inside = crosses if inside is None else inside ^ crosses
+    assert dist2 is not None and inside is not None, "a polygon has at least 3 vertices"
+    dist = (dist2 + _EPS).sqrt() - _EPS**0.5
+    sign = torch.where(inside, -1.0, 1.0).to(px.dtype)
+    inv = sign / dist.clamp_min(1e-12)
+    return sign * dist, ox * inv, oy * inv
 
 
 def box_sdf(px: Tensor, py: Tensor, cx: float, cy: float, hx: float, hy: float) -> Tensor:

@@ -17,7 +17,7 @@ import torch
 from torch import Tensor
 
 from robotplan.geometry.polygons import signed_area
-from robotplan.sdf.closed_form import polygon_sdf
+from robotplan.sdf.closed_form import polygon_sdf, polygon_sdf_and_grad
 from robotplan.sdf.shapes2d import Polygon
 
 __all__ = ["MeshFootprint"]
@@ -47,6 +47,15 @@ class MeshFootprint(Polygon):
         for hole in self._hole_arrays:
             phi = torch.maximum(phi, -polygon_sdf(p_B, hole))
         return phi
+
+    def sdf_and_grad_planes(self, px: Tensor, py: Tensor) -> tuple[Tensor, Tensor, Tensor]:
+        phi, gx, gy = polygon_sdf_and_grad(px, py, self._vertices)
+        for hole in self._hole_arrays:
+            h, hx, hy = polygon_sdf_and_grad(px, py, hole)
+            deeper = -h > phi
+            phi = torch.where(deeper, -h, phi)
+            gx, gy = torch.where(deeper, -hx, gx), torch.where(deeper, -hy, gy)
+        return phi, gx, gy
 
     @cached_property
     def _hole_arrays(self) -> list[np.ndarray]:

@@ -26,6 +26,7 @@ from robotplan.sdf.closed_form import (
     lshape_boxes,
     lshape_sdf,
     polygon_sdf,
+    polygon_sdf_and_grad,
     safe_hypot,
     safe_norm,
 )
@@ -162,7 +163,8 @@ class Circle(Shape2D):
 
 
 class _PolygonalShape(Shape2D):
-    """Shapes whose boundary is a polygon: exact SDF through :func:`polygon_sdf`."""
+    """Shapes whose boundary is a polygon: exact SDF through :func:`polygon_sdf`, its
+    gradient in closed form (:func:`polygon_sdf_and_grad`)."""
 
     @cached_property
     def _vertices(self) -> np.ndarray:
@@ -170,6 +172,13 @@ class _PolygonalShape(Shape2D):
 
     def sdf(self, p_B: Tensor) -> Tensor:
         return polygon_sdf(p_B, self._vertices)
+
+    def sdf_and_grad(self, p_B: Tensor) -> tuple[Tensor, Tensor]:
+        phi, gx, gy = self.sdf_and_grad_planes(p_B[..., 0], p_B[..., 1])
+        return phi, torch.stack((gx, gy), dim=-1)
+
+    def sdf_and_grad_planes(self, px: Tensor, py: Tensor) -> tuple[Tensor, Tensor, Tensor]:
+        return polygon_sdf_and_grad(px, py, self._vertices)
 
 
 @dataclass(frozen=True)

@@ -34,3 +34,13 @@ def test_area_takes_the_holes_out_and_the_outline_is_the_outer_loop():
     assert shape.area == pytest.approx(ShapelyPolygon(OUTER, HOLES).area)
     assert len(shape.outline()) == len(OUTER) and shape.type == "polygon"
     assert "2 holes" in shape.describe()
+
+
+def test_the_closed_form_gradient_is_autograds(rng):
+    shape = MeshFootprint(vertices=OUTER, holes=HOLES)
+    points = torch.from_numpy(rng.uniform(-0.14, 0.14, size=(2000, 2)))
+    phi, g = shape.sdf_and_grad(points)
+    p = points.clone().requires_grad_(True)
+    (ref,) = torch.autograd.grad(shape.sdf(p).sum(), p)
+    assert (phi - shape.sdf(points)).abs().max() < 1e-14
+    assert (g - ref).abs().max() < 1e-9
