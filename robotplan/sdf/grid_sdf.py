@@ -9,7 +9,7 @@ within half a step of the surface are tested by rays. Overlapping closed shells 
 sunk into a cup's wall) count as their union.
 
 The lattice is cached on disk by the mesh file's content, its scale and the step, so a mesh
-is sampled once per machine (tens of seconds for a mug at 3 mm). Between lattice points
+is sampled once per machine (10–20 s for a mug at 3 mm). Between lattice points
 the SDF is trilinear (differentiable in the points); beyond the lattice's box, the value
 at the nearest box point plus the distance to the box (a lower bound of the true one).
 """
