@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "area_centroid",
     "as_ccw",
     "clip_convex",
     "convex_parts",
@@ -27,6 +28,18 @@ def signed_area(poly: np.ndarray) -> float:
     """Shoelace area: positive for counter-clockwise, negative for clockwise vertices."""
     x, y = poly[:, 0], poly[:, 1]
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def area_centroid(loops: list[np.ndarray]) -> np.ndarray:
+    """Area centroid ``(2,)`` of a polygon given as its loops ``[(V, 2)]``: the outer one
+    counter-clockwise, holes clockwise (their signed areas and moments subtract)."""
+    moment, area = 0.0, 0.0
+    for p in loops:
+        q = np.roll(p, -1, axis=0)
+        cross = p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]
+        moment = moment + ((p + q) * cross[:, None]).sum(0)
+        area = area + signed_area(p)
+    return moment / (6.0 * area)
 
 
 def as_ccw(poly: np.ndarray) -> np.ndarray:

@@ -9,6 +9,8 @@ the 2D planner then runs on it as on any polygon.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
@@ -17,7 +19,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from robotplan.geometry.meshes import MeshProblem, footprint_loops, read_mesh
-from robotplan.geometry.polygons import signed_area
+from robotplan.geometry.polygons import area_centroid, signed_area
 from robotplan.scene.limits import MAX_POLYGON_VERTICES
 from robotplan.scene.reader import SchemaError
 
@@ -65,19 +67,30 @@ def mesh_path(shape: MeshShape, scene_file: Path) -> Path:
     return path
 
 
-def load_mesh_shape(shape: MeshShape, scene_file: Path) -> trimesh.Trimesh:
-    """The checked, scaled mesh of ``shape``. Raises SchemaError (field ``file``)."""
+def load_mesh_shape(shape: MeshShape, scene_file: Path) -> tuple[trimesh.Trimesh, Path]:
+    """The checked, scaled mesh of ``shape`` and its file's absolute path. Raises
+    SchemaError (field ``file``)."""
+    path = mesh_path(shape, scene_file)
     try:
-        return read_mesh(mesh_path(shape, scene_file), shape.scale)
+        return read_mesh(path, shape.scale), path
     except MeshProblem as err:
         raise SchemaError("file", str(err)) from None
+
+
+@contextmanager
+def _under(where: str) -> Iterator[None]:
+    """Re-raise a SchemaError of a shape's field as the field under ``where``."""
+    try:
+        yield
+    except SchemaError as err:
+        raise SchemaError(f"{where}.{err.field}", err.message) from None
 
 
 def mesh_footprint(shape: MeshShape, scene_file: Path):
     """``(MeshFootprint, height)`` of a mesh shape in a scene file. Raises SchemaError."""
     from robotplan.sdf.mesh_footprint import MeshFootprint
 
-    mesh = load_mesh_shape(shape, scene_file)
+    mesh, path = load_mesh_shape(shape, scene_file)
     try:
         outer, holes = footprint_loops(mesh, shape.tolerance)
     except MeshProblem as err:
@@ -86,7 +99,7 @@ def mesh_footprint(shape: MeshShape, scene_file: Path):
     if count > MAX_POLYGON_VERTICES:
         raise SchemaError("tolerance", f"the footprint keeps {count} vertices at tolerance "
                           f"{shape.tolerance:g} m; at most {MAX_POLYGON_VERTICES}: raise it")
-    centre = _centroid(outer, holes)
+    centre = area_centroid([outer, *holes])
     z0 = float(mesh.vertices[:, 2].min())
 
     def loop(points: np.ndarray) -> tuple[tuple[float, float], ...]:
@@ -96,21 +109,10 @@ def mesh_footprint(shape: MeshShape, scene_file: Path):
     area = signed_area(outer) + sum(signed_area(h) for h in holes)  # holes: negative
     extruded = area * height
     footprint = MeshFootprint(vertices=loop(outer), holes=tuple(loop(h) for h in holes),
-                              mesh_file=str(mesh_path(shape, scene_file)), scale=shape.scale,
+                              mesh_file=str(path), scale=shape.scale,
                               mesh_offset=(float(centre[0]), float(centre[1]), z0),
                               prism=abs(mesh.volume - extruded) < PRISM_SLACK * extruded)
     return footprint, height
-
-
-def _centroid(outer: np.ndarray, holes: list[np.ndarray]) -> np.ndarray:
-    """Area centroid ``(2,)`` of a polygon with holes."""
-    def moment(p: np.ndarray) -> tuple[float, np.ndarray]:
-        q = np.roll(p, -1, axis=0)
-        cross = p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]
-        return signed_area(p), ((p + q) * cross[:, None]).sum(0) / 6.0
-
-    parts = [moment(outer)] + [moment(h) for h in holes]  # holes wind clockwise: negative
-    return sum(m for _, m in parts) / sum(a for a, _ in parts)
 
 
 def resolve_mesh_footprints(scene: Scene, scene_file: Path) -> Scene:
@@ -121,10 +123,8 @@ def resolve_mesh_footprints(scene: Scene, scene_file: Path) -> Scene:
 
     def resolved(shape: MeshShape, where: str):
         if shape not in made:
-            try:
+            with _under(where):
                 made[shape] = mesh_footprint(shape, scene_file)
-            except SchemaError as err:
-                raise SchemaError(f"{where}.{err.field}", err.message) from None
         return made[shape]
 
     def bodies(group: str) -> list:
@@ -178,24 +178,16 @@ def resolve_mesh_solids(scene: Scene, scene_file: Path) -> Scene:
         out = []
         for i, body in enumerate(getattr(scene, group)):
             if isinstance(body.shape, MeshShape):
-                where = f"{group}[{i}].shape"
-                load_mesh_shape_at(body.shape, scene_file, where)
-                spec = MeshSolid(str(mesh_path(body.shape, scene_file)), body.shape.scale, role)
-                try:
-                    spec.solid()
-                except MeshSolidProblem as err:
-                    raise SchemaError(f"{where}.file", str(err)) from None
+                with _under(f"{group}[{i}].shape"):
+                    spec = MeshSolid(str(mesh_path(body.shape, scene_file)), body.shape.scale,
+                                     role)
+                    try:
+                        spec.solid()  # reads and checks the mesh, finds the opening or arm
+                    except (MeshProblem, MeshSolidProblem) as err:
+                        raise SchemaError("file", str(err)) from None
                 body = replace(body, shape=spec)
             out.append(body)
         return out
 
     return replace(scene, objects=resolved("objects", "mug"),
                    obstacles=resolved("obstacles", "hook"))
-
-
-def load_mesh_shape_at(shape: MeshShape, scene_file: Path, where: str):
-    """:func:`load_mesh_shape` with the error's field under ``where``."""
-    try:
-        return load_mesh_shape(shape, scene_file)
-    except SchemaError as err:
-        raise SchemaError(f"{where}.{err.field}", err.message) from None

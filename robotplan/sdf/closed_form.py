@@ -25,6 +25,22 @@ def safe_norm(v: Tensor, dim: int = -1) -> Tensor:
     return ((v * v).sum(dim) + _EPS).sqrt() - _EPS**0.5
 
 
+def _polygon_edges(px: Tensor, py: Tensor, verts: np.ndarray):
+    """Per edge of the polygon ``verts (V, 2)``: the offset ``(dx, dy)`` of the points
+    ``px, py (...)`` from the edge's nearest point, and whether the edge crosses the ray from
+    each point to +x (None for a horizontal edge, which never does)."""
+    n = len(verts)
+    for i in range(n):
+        ax, ay = float(verts[i, 0]), float(verts[i, 1])
+        bx, by = float(verts[(i + 1) % n, 0]), float(verts[(i + 1) % n, 1])
+        ex, ey = bx - ax, by - ay
+        wx, wy = px - ax, py - ay
+        t = ((wx * ex + wy * ey) * (1.0 / (ex * ex + ey * ey))).clamp(0.0, 1.0)
+        crosses = (((ay <= py) != (by <= py)) & (px < ax + (py - ay) * (ex / ey))
+                   if ay != by else None)
+        yield wx - ex * t, wy - ey * t, crosses
+
+
 def polygon_sdf(p: Tensor, vertices: Tensor | np.ndarray) -> Tensor:
     """Exact SDF of a simple polygon (convex or not, either winding).
 
@@ -41,21 +57,12 @@ def polygon_sdf(p: Tensor, vertices: Tensor | np.ndarray) -> Tensor:
     """
     verts = np.asarray(vertices.tolist() if isinstance(vertices, Tensor) else vertices,
                        dtype=np.float64)
-    px, py = p[..., 0], p[..., 1]
-    n = len(verts)
     dist2: Tensor | None = None
     inside: Tensor | None = None
-    for i in range(n):
-        ax, ay = float(verts[i, 0]), float(verts[i, 1])
-        bx, by = float(verts[(i + 1) % n, 0]), float(verts[(i + 1) % n, 1])
-        ex, ey = bx - ax, by - ay
-        wx, wy = px - ax, py - ay
-        t = ((wx * ex + wy * ey) * (1.0 / (ex * ex + ey * ey))).clamp(0.0, 1.0)
-        dx, dy = wx - ex * t, wy - ey * t
+    for dx, dy, crosses in _polygon_edges(p[..., 0], p[..., 1], verts):
         d2 = dx * dx + dy * dy
         dist2 = d2 if dist2 is None else torch.minimum(dist2, d2)
-        if ay != by:  # a horizontal edge never crosses the horizontal ray
-            crosses = ((ay <= py) != (by <= py)) & (px < ax + (py - ay) * (ex / ey))
+        if crosses is not None:
             inside = crosses if inside is None else inside ^ crosses
     assert dist2 is not None and inside is not None, "a polygon has at least 3 vertices"
     dist = (dist2 + _EPS).sqrt() - _EPS**0.5
@@ -66,18 +73,10 @@ def polygon_sdf_and_grad(px: Tensor, py: Tensor, vertices: np.ndarray
                          ) -> tuple[Tensor, Tensor, Tensor]:
     """:func:`polygon_sdf` and its gradient in closed form at coordinate planes ``px, py
     (...)``: φ, ∂φ/∂x, ∂φ/∂y. The gradient is the unit vector from the nearest boundary
-    point, outwards: one pass over the edges keeps the nearest one's offset, no autograd
-    (about half the cost of the value and a backward pass)."""
-    verts = np.asarray(vertices, dtype=np.float64)
-    n = len(verts)
+    point, outwards: the same pass over the edges keeps the nearest one's offset, no
+    autograd (about half the cost of the value and a backward pass)."""
     dist2 = ox = oy = inside = None
-    for i in range(n):
-        ax, ay = float(verts[i, 0]), float(verts[i, 1])
-        bx, by = float(verts[(i + 1) % n, 0]), float(verts[(i + 1) % n, 1])
-        ex, ey = bx - ax, by - ay
-        wx, wy = px - ax, py - ay
-        t = ((wx * ex + wy * ey) * (1.0 / (ex * ex + ey * ey))).clamp(0.0, 1.0)
-        dx, dy = wx - ex * t, wy - ey * t
+    for dx, dy, crosses in _polygon_edges(px, py, np.asarray(vertices, dtype=np.float64)):
         d2 = dx * dx + dy * dy
         if dist2 is None:
             dist2, ox, oy = d2, dx, dy
@@ -85,8 +84,7 @@ def polygon_sdf_and_grad(px: Tensor, py: Tensor, vertices: np.ndarray
             nearer = d2 < dist2
             dist2 = torch.where(nearer, d2, dist2)
             ox, oy = torch.where(nearer, dx, ox), torch.where(nearer, dy, oy)
-        if ay != by:
-            crosses = ((ay <= py) != (by <= py)) & (px < ax + (py - ay) * (ex / ey))
+        if crosses is not None:
             inside = crosses if inside is None else inside ^ crosses
     assert dist2 is not None and inside is not None, "a polygon has at least 3 vertices"
     dist = (dist2 + _EPS).sqrt() - _EPS**0.5

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotplan.geometry.polygons import as_ccw, convex_parts, signed_area
+from robotplan.geometry.polygons import area_centroid, as_ccw, convex_parts
 from robotplan.sdf.shapes2d import Box, Circle, LShape, Shape2D
 
 __all__ = ["footprint_boxes", "footprint_centroid", "footprint_parts", "support_corners"]
@@ -14,10 +14,7 @@ __all__ = ["footprint_boxes", "footprint_centroid", "footprint_parts", "support_
 
 def footprint_centroid(shape: Shape2D) -> np.ndarray:
     """Area centroid ``(2,)`` of a footprint in its own frame (centre of mass, uniform)."""
-    p = shape.outline()
-    q = np.roll(p, -1, axis=0)
-    cross = p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]
-    return ((p + q) * cross[:, None]).sum(0) / (6.0 * signed_area(p))
+    return area_centroid([shape.outline()])
 
 
 def footprint_boxes(shape: Shape2D) -> list[tuple[tuple[float, float], tuple[float, float]]]:

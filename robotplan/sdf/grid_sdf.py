@@ -42,6 +42,7 @@ class GridSDF(Shape3D):
         self.step = float(step)
         self.values = torch.from_numpy(np.ascontiguousarray(values, dtype=np.float64))
         self.hi = self.lo + self.step * (np.array(values.shape) - 1)
+        self._cast: dict[torch.dtype, Tensor] = {torch.float64: self.values}
 
     def sdf(self, p_B: Tensor) -> Tensor:
         lo = torch.as_tensor(self.lo, dtype=p_B.dtype, device=p_B.device)
@@ -53,7 +54,9 @@ class GridSDF(Shape3D):
         i0 = torch.minimum(u.floor(), top - 1).clamp_min(0)
         f = u - i0  # (..., 3) in [0, 1]
         i0 = i0.long()
-        v = self.values.to(p_B.dtype)
+        v = self._cast.get(p_B.dtype)
+        if v is None:  # once per dtype: H_hang reads the lattice in its model's float32
+            v = self._cast[p_B.dtype] = self.values.to(p_B.dtype)
         out = torch.zeros_like(outside)
         for corner in range(8):
             bits = [(corner >> axis) & 1 for axis in range(3)]
