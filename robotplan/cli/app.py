@@ -23,6 +23,7 @@ from robotplan.cli.common import (
     add_program_option,
     add_ray_option,
     add_rehearse_option,
+    add_sim_option,
 )
 from robotplan.cli.reproduce_commands import add_reproduce_parser
 from robotplan.cli.robot_commands import add_robot_parser
@@ -33,11 +34,11 @@ from robotplan.hanging.cli.parsers import (
     add_eval_hang_parser,
     add_train_hang_parser,
 )
+from robotplan.pushing.cli.bench_push_commands import cmd_bench_push
 from robotplan.pushing.cli.model_commands import (
     cmd_bench,
     cmd_bench_contact_push,
     cmd_bench_functional,
-    cmd_bench_push,
     cmd_data_push,
     cmd_eval_push,
 )
@@ -108,6 +109,7 @@ def _parser() -> argparse.ArgumentParser:
     bp.add_argument("--perturb", type=int, nargs="?", const=0, default=None, metavar="SEED",
                     help="execute in a perturbed world (friction and mass ±20 %%, observation "
                     "noise 1 mm / 0.5°), drawn per scene from SEED (default 0)")
+    add_sim_option(bp, several=True)
     add_loop_option(bp)
     add_rehearse_option(bp)
     add_program_option(bp)
@@ -118,7 +120,8 @@ def _parser() -> argparse.ArgumentParser:
     add_reproduce_parser(sub)
 
     default_model = str(learned_dir("push_flow"))
-    so = sub.add_parser("solve", help="plan a scene, execute it in pybullet, write the result")
+    so = sub.add_parser("solve", help="plan a scene, execute it in pybullet or MuJoCo, write "
+                        "the result")
     so.add_argument("scene", metavar="SCENE")
     so.add_argument("--out", required=True, metavar="DIR")
     add_dynamics_options(so)
@@ -152,9 +155,10 @@ def _parser() -> argparse.ArgumentParser:
 
     d = sub.add_parser("data", help="generate training data")
     dsub = d.add_subparsers(dest="what", required=True)
-    dp = dsub.add_parser("push", help="push data from pybullet (boxes and L-shapes, or "
-                         "unseen footprints)")
+    dp = dsub.add_parser("push", help="push data from pybullet or MuJoCo (boxes and "
+                         "L-shapes, or unseen footprints)")
     add_data_options(dp, shard_size=50)
+    add_sim_option(dp, role="simulates the pushes")
     dp.add_argument("--shapes", choices=["train", "ood"], default="train",
                     help="train: boxes and L-shapes (the training distribution); ood: "
                     "footprints never trained on (triangle, pentagon, hexagon, circle, T, "

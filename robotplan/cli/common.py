@@ -151,8 +151,34 @@ def add_execution_options(parser) -> None:
                         metavar="SEED", help="execute in a perturbed world: friction and "
                         "mass ±20 %%, observation noise 1 mm / 0.5°, drawn from SEED "
                         "(default 0)")
+    add_sim_option(parser)
     add_loop_option(parser)
     add_rehearse_option(parser)
+
+
+def add_sim_option(parser, several: bool = False, role: str = "executes the plan") -> None:
+    """``--sim``: the simulator that does ``role`` (``several``: a comma-separated list,
+    each executing the same plans)."""
+    from robotplan.execution.physics import SIMULATORS
+
+    names = ", ".join(SIMULATORS)
+    parser.add_argument("--sim", default="pybullet", metavar="NAMES" if several else "NAME",
+                        help=(f"comma-separated simulators, each executing the same plans "
+                              f"({names}; default pybullet)" if several else
+                              f"the simulator that {role} ({names}; default pybullet)"))
+
+
+def simulators(value: str) -> list[str] | None:
+    """The simulators of ``--sim`` (a comma-separated list), or None after printing why
+    they are not."""
+    from robotplan.execution.physics import simulator_problem
+
+    names = [v.strip() for v in value.split(",") if v.strip()]
+    problem = simulator_problem(names) if names else "no simulator given"
+    if problem is not None:
+        print(f"error: --sim: {problem}", file=sys.stderr)
+        return None
+    return names
 
 
 def add_rehearse_option(parser) -> None:

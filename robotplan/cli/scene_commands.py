@@ -17,6 +17,7 @@ from robotplan.cli.common import (
     perturbation,
     print_result,
     program_overrides,
+    simulators,
 )
 from robotplan.hanging.cli.commands import solve_hang_scene
 from robotplan.scene import SceneError, load_scene
@@ -72,7 +73,11 @@ def cmd_solve(args: argparse.Namespace) -> int:
         print(f"error: {args.scene}: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
     loop, program = loop_overrides(args), program_overrides(args)
-    if loop is None or program is None:
+    sims = simulators(args.sim)
+    if loop is None or program is None or sims is None:
+        return EXIT_BAD_INPUT
+    if len(sims) > 1:
+        print("error: --sim: solve executes in one simulator", file=sys.stderr)
         return EXIT_BAD_INPUT
     out = Path(args.out)
     if out.exists() and any(out.iterdir()) and not args.overwrite:
@@ -80,7 +85,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
               "its result", file=sys.stderr)
         return EXIT_BAD_INPUT
     if task.family == "hang":
-        return solve_hang_scene(task, out, args.model, args.open_loop)
+        return solve_hang_scene(task, out, args.model, args.open_loop, sims[0])
     args.model = model_folder(args)
     if not_a_model(args.model):
         return EXIT_BAD_INPUT
@@ -91,7 +96,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
                     exhaustive=args.exhaustive, time_budget=args.time_budget,
                     mode="open_loop" if args.open_loop else "closed_loop",
                     perturb=perturbation(args.perturb), loop=loop, program=program,
-                    rehearse_plan=not args.no_rehearse)
+                    rehearse_plan=not args.no_rehearse, sim=sims[0])
     except ValueError as err:  # a bad --skeleton
         print(f"error: --skeleton: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -99,7 +104,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     loop = (f" ({ex['mode'].replace('_', ' ')}, {len(ex['replans'])} re-plans)" if ex else "")
     plan = "" if doc["status"] == doc["plan_status"] else f" (plan: {doc['plan_status']})"
     violation = "none" if doc["violation"] is None else f"{doc['violation']:.3g}"
-    print(f"{doc['status']}{plan}: violation {violation}, coverage in pybullet "
+    print(f"{doc['status']}{plan}: violation {violation}, coverage in {sims[0]} "
           f"{ex.get('coverage')}{loop}, plan {doc['plan_seconds']} s; "
           f"wrote {out / 'result.json'}"
           + (f" and {out / 'playback.html'}" if "playback" in doc else ""))

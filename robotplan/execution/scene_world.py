@@ -1,5 +1,5 @@
-"""A whole scene in one pybullet world, driven by planned actuation and observed as a
-perception system would see it.
+"""A whole scene in one simulated world (``physics.simulator``), driven by planned actuation
+and observed as a perception system would see it.
 
 The actuation of a plan is one array of states per actor, ``(N+1, d)``: the free pusher's
 positions ``(x, y)`` or each arm's joint angles. A planned step runs ``n`` simulation steps
@@ -14,8 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from robotplan.execution.sim import PHYSICS, Physics, PushWorld
-from robotplan.execution.sim_arms import add_arm
+from robotplan.execution.physics import PHYSICS, Physics, push_world
 from robotplan.scene import Scene
 from robotplan.scene.task import PushTask
 
@@ -49,13 +48,14 @@ class Observation:
 
 
 class SceneWorld:
-    """``task.scene`` in a :class:`PushWorld`: the task's object first, the other objects
-    movable, the obstacles fixed, and either the one free pusher or every arm."""
+    """``task.scene`` in the world of ``physics.simulator``
+    (:class:`~robotplan.execution.physics.PushSimulator`): the task's object first, the other
+    objects movable, the obstacles fixed, and either the one free pusher or every arm."""
 
     def __init__(self, task: PushTask, physics: Physics = PHYSICS) -> None:
         scene, obj = task.scene, task.obj
         self.scene, self.obj = scene, obj
-        self.world = world = PushWorld(physics)
+        self.world = world = push_world(physics)
         spec = next(o for o in scene.objects if o.name == obj)
         self.others = [o for o in scene.objects if o.name != obj]
         movable = [(scene.bodies[o.name].shape, o.height, scene.bodies[o.name].pose)
@@ -65,7 +65,7 @@ class SceneWorld:
         xy = self.pusher.position if self.pusher is not None else (0.0, 0.0)
         world.reset(scene.bodies[obj].shape, spec.height, scene.bodies[obj].pose, radius, xy,
                     obstacle_bodies(scene), movable)
-        self.arms = {r.name: add_arm(world, r) for r in scene.robots}
+        self.arms = {r.name: world.add_arm(r) for r in scene.robots}
         allowed = self.pusher.touches if self.pusher is not None else None
         self._watch = [i for i, o in enumerate(self.others)
                        if allowed is not None and o.name not in allowed]
@@ -91,7 +91,7 @@ class SceneWorld:
             else:
                 for name, arm in self.arms.items():
                     arm.drive(start[name] + (end[name] - start[name]) * u)
-                world.pb.stepSimulation(physicsClientId=world.client)
+                world.advance()
             self.obstacle_contact = (self.obstacle_contact
                                      or world.touches_obstacle(OBSTACLE_GAP))
             self.forbidden.update(self.others[i].name for i in self._watch

@@ -11,7 +11,7 @@ from tests.conftest import TASKS
 
 
 def test_a_mug_rests_at_its_pose_as_its_pieces(rng):
-    from robotplan.execution.sim import PushWorld
+    from robotplan.execution.pybullet_world import PushWorld
 
     shape, height = mesh_footprint(MeshShape("meshes/bench/mug.obj"), TASKS / "scene.yaml")
     assert not shape.prism

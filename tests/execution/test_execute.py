@@ -1,10 +1,13 @@
-"""Open-loop execution in real pybullet physics, and the MeshCat playback page."""
+"""Open-loop execution in real physics (pybullet, and MuJoCo where the outcome is the
+world's), and the MeshCat playback page."""
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
+from robotplan.execution.physics import PHYSICS, SIMULATORS
 from robotplan.pushing.execution.execute import REACH_SPEED, execute_push, reach_substeps
 from robotplan.scene import parse_scene
 from robotplan.scene.bodies import Body
@@ -21,14 +24,21 @@ def hand_made_push() -> np.ndarray:
     return np.vstack([approach, push[1:]])
 
 
-def test_execution_pushes_the_box_into_the_goal():
+@pytest.fixture(params=list(SIMULATORS))
+def physics(request):
+    """The push data's physics in each simulator."""
+    return replace(PHYSICS, simulator=request.param)
+
+
+def test_execution_pushes_the_box_into_the_goal(physics):
     task = load_task(TASKS / "box_push.yaml")
     q = hand_made_push()
-    ex = execute_push(task, q)
+    ex = execute_push(task, q, physics)
+    assert ex.simulator == physics.simulator
     assert ex.object_poses.shape == (len(q), 3)
     assert np.abs(ex.pusher_positions - q).max() < 0.01  # the pusher tracks its path
     assert ex.final_pose[0] > 0.25 and ex.coverage > 0.9
-    still = execute_push(task, np.tile(q[:1], (5, 1)))
+    still = execute_push(task, np.tile(q[:1], (5, 1)), physics)
     assert still.coverage == 0.0 and np.allclose(still.final_pose,
                                                  task.scene.bodies["box"].pose, atol=1e-3)
 
@@ -90,20 +100,20 @@ def test_arm_execution_tracks_the_plan_and_pushes_with_its_tip(tmp_path):
     assert b"/plan/left/lbr_iiwa_link_3/" not in commands
 
 
-def test_obstacles_are_fixed_bodies_and_contact_is_reported():
+def test_obstacles_are_fixed_bodies_and_contact_is_reported(physics):
     """Pushing the box straight east drives it into the wall: the wall holds, the contact
     is reported; a short push that stops 8 cm before it is not."""
     task = load_task(TASKS / "obstacle_push.yaml")
     into = np.vstack([np.linspace([-0.40, 0.0], [-0.34, 0.0], 5),
                       np.linspace([-0.34, 0.0], [0.0, 0.0], 16)[1:]])
-    ex = execute_push(task, into)
+    ex = execute_push(task, into, physics)
     assert ex.obstacle_contact
     assert ex.final_pose[0] + 0.06 < 0.02 + 0.005  # the box's face stays at the wall's
-    short = execute_push(task, into[:8])
+    short = execute_push(task, into[:8], physics)
     assert not short.obstacle_contact and short.final_pose[0] > -0.25 + 0.01
 
 
-def test_every_object_is_simulated_and_forbidden_touches_are_reported():
+def test_every_object_is_simulated_and_forbidden_touches_are_reported(physics):
     """three_objects: a straight push of red into blue moves both (blue's coverage is
     reported); driving the pusher into blue, which it may not touch, is reported."""
     task = load_task(TASKS / "three_objects.yaml")
@@ -111,13 +121,13 @@ def test_every_object_is_simulated_and_forbidden_touches_are_reported():
     assert (task.obj, task.chained) == ("red", "blue")
     through_red = np.vstack([np.linspace([-0.40, -0.10], [-0.26, 0.02], 8),
                              np.linspace([-0.26, 0.02], [0.10, 0.02], 13)[1:]])
-    ex = execute_push(task, through_red)
+    ex = execute_push(task, through_red, physics)
     assert set(ex.others) == {"blue"} and ex.others["blue"].shape == (len(through_red), 3)
     assert ex.others["blue"][-1, 0] > scene.bodies["blue"].pose[0] + 0.1  # red pushed blue
     assert ex.forbidden_contacts == [] and 0.0 <= ex.coverage < 0.95
     at_blue = np.vstack([np.linspace([-0.40, -0.10], [0.05, -0.10], 10),
                          np.linspace([0.05, -0.10], [0.05, -0.02], 5)[1:]])
-    ex = execute_push(task, at_blue)
+    ex = execute_push(task, at_blue, physics)
     assert ex.forbidden_contacts == ["blue"]
 
 
@@ -167,7 +177,7 @@ def test_a_plate_mesh_is_simulated_as_its_footprints_prism(file, rng):
 def assert_simulated_as_outline(shape, height: float, rng) -> None:
     import torch
 
-    from robotplan.execution.sim import PushWorld
+    from robotplan.execution.pybullet_world import PushWorld
 
     pose = (0.1, -0.05, 0.7)
     body = Body("o", "object", shape, pose, 0.0, height)

@@ -1,1 +1,2 @@
-"""Hanging's execution layer: the pybullet world a mug is dropped in."""
+"""Hanging's execution layer: the worlds a mug is dropped in (pybullet, MuJoCo) and the drop
+test they share."""

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from robotplan.execution.sim import PHYSICS
+from robotplan.execution.physics import PHYSICS
 from robotplan.pushing.execution.execute import Execution, plan_substeps
 from robotplan.pushing.program.solution import Solution
 from robotplan.scene.task import PushTask

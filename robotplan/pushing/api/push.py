@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
+from robotplan.execution.physics import PHYSICS
 from robotplan.execution.scene_world import actuation
-from robotplan.execution.sim import PHYSICS
 from robotplan.pushing.api.playback import playback_layers
 from robotplan.pushing.api.results import (
     candidate_summary,
@@ -168,8 +168,11 @@ class PushPlanner:
 
     def execute(self, planned: PushPlan, scene: Scene | None = None, *,
                 mode: str = "closed_loop", perturb: Perturbation | None = None,
-                loop: LoopSettings | None = None, quiet: bool = True) -> Execution:
-        """Run the best plan in pybullet in ``scene`` (default: the plan's): closed loop
+                loop: LoopSettings | None = None, quiet: bool = True,
+                sim: str = "pybullet") -> Execution:
+        """Run the best plan in the simulator ``sim`` (a key of
+        :data:`~robotplan.execution.physics.SIMULATORS`) in ``scene`` (default: the
+        plan's): closed loop
         (re-planning from the observed state, :mod:`robotplan.pushing.execution.closed_loop`) or
         open loop, the paper's protocol: a rehearsed plan's pusher states, else the best
         plan's. ``perturb``: friction, mass
@@ -182,7 +185,7 @@ class PushPlanner:
             raise ValueError(f"mode {mode!r}: expected one of {', '.join(MODES)}")
         task = planned.task if scene is None else planned.task.at(scene)
         best = planned.best
-        physics = perturb.physics() if perturb is not None else PHYSICS
+        physics = replace(perturb.physics() if perturb is not None else PHYSICS, simulator=sim)
         if mode == "open_loop" and planned.rehearsal is not None:
             r = planned.rehearsal
             return run_open_loop(task, {task.actors[0]: r.pusher}, r.substeps, physics)
@@ -220,27 +223,38 @@ class PushPlanner:
               quiet: bool = False, mode: str = "closed_loop",
               perturb: Perturbation | None = None, compare_open_loop: bool = False,
               loop: Mapping[str, object] | None = None, rehearse_plan: bool = True,
-              **options: object) -> dict:
+              sim: str = "pybullet", **options: object) -> dict:
         """Plan, execute the best plan (``mode``, in a world perturbed by ``perturb``),
         write ``out/playback.html`` and ``out/result.json`` (whole or not at all); the
         result document. ``compare_open_loop`` also runs the same plan open loop and records
         its outcome under ``open_loop``. ``loop``: closed-loop settings that replace those
         of the task's class (:class:`~robotplan.pushing.execution.closed_loop.LoopSettings` fields,
         recorded in the result). ``rehearse_plan``: rehearse the plan in F_q (:meth:`plan`)
-        when an open loop runs. ``options``: those of :meth:`plan`."""
-        out = Path(out)
+        when an open loop runs. ``sim``: the simulator that executes it. ``options``: those
+        of :meth:`plan`."""
         rehearse_plan = rehearse_plan and (mode == "open_loop" or compare_open_loop)
         planned = self.plan(task, model, quiet=quiet, rehearse_plan=rehearse_plan, **options)
+        return self.report(planned, Path(out), quiet=quiet, mode=mode, perturb=perturb,
+                           compare_open_loop=compare_open_loop, loop=loop, sim=sim)
+
+    def report(self, planned: PushPlan, out: Path, *, quiet: bool = False,
+               mode: str = "closed_loop", perturb: Perturbation | None = None,
+               compare_open_loop: bool = False, loop: Mapping[str, object] | None = None,
+               sim: str = "pybullet") -> dict:
+        """Execute a plan made by :meth:`plan` and write ``out/playback.html`` and
+        ``out/result.json`` (whole or not at all): the second half of :meth:`solve`, which
+        a benchmark runs once per simulator on the same plan."""
+        task = planned.task
         doc: dict = {"scene": task.scene.name, **planned.summary()}
         best = planned.best
         if best is not None:
             if not quiet and best.q_others:
                 print(f"plan: {' and '.join([planned.obj, *best.q_others])} pushed by "
-                      f"{best.skeleton.phases[0].actor}; executing in pybullet")
+                      f"{best.skeleton.phases[0].actor}; executing in {sim}")
             t0 = time.perf_counter()
             settings = loop_settings_for(task, overrides=loop)
             executed = self.execute(planned, mode=mode, perturb=perturb, loop=settings,
-                                    quiet=quiet)
+                                    quiet=quiet, sim=sim)
             doc.update(execution_summary(planned, executed, perturb))
             doc["execution"]["goal_reached"] = settings.goal_met(
                 task, executed.coverage, executed.touch_distance)
@@ -249,7 +263,7 @@ class PushPlanner:
             doc["execution"]["seconds"] = round(time.perf_counter() - t0, 2)
             if compare_open_loop:
                 t0 = time.perf_counter()
-                baseline = self.execute(planned, mode="open_loop", perturb=perturb)
+                baseline = self.execute(planned, mode="open_loop", perturb=perturb, sim=sim)
                 doc["open_loop"] = {"coverage": baseline.coverage,
                                     "touch_distance": baseline.touch_distance,
                                     "seconds": round(time.perf_counter() - t0, 2)}

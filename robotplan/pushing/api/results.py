@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from robotplan.base.files import write_atomically
-from robotplan.execution.sim import PHYSICS
+from robotplan.execution.physics import PHYSICS
 from robotplan.functionals.clearance import OBSTACLE_MARGIN
 from robotplan.pushing.execution.execute import Execution, plan_substeps
 from robotplan.pushing.execution.perturb import Perturbation
@@ -83,7 +83,7 @@ def execution_summary(planned, executed: Execution,
     for step, sol in plans:
         track = _track_doc(sol, planned.task)
         tracks.append({"step": step, "time": round(float(ex.times[step]), 4), **track})
-    doc = {"execution": {"simulator": "pybullet", "mode": ex.mode,
+    doc = {"execution": {"simulator": ex.simulator, "mode": ex.mode,
                          "coverage": ex.coverage,
                          "final_poses": {k: [float(x) for x in v] for k, v in final.items()},
                          "touch_distance": ex.touch_distance,

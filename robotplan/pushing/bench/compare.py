@@ -16,8 +16,9 @@ import numpy as np
 
 from robotplan.base.files import write_atomically
 from robotplan.base.resources import DYNAMICS_FOLDERS, learned_dir
-from robotplan.pushing.bench.push import MODEL_NAMES, run_bench_push, summarize
+from robotplan.pushing.bench.push import run_bench_push
 from robotplan.pushing.bench.push_scenes import scene_name
+from robotplan.pushing.bench.push_summary import MODEL_NAMES, summarize
 
 __all__ = ["compare_rows", "run_bench_compare"]
 

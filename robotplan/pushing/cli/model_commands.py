@@ -9,33 +9,38 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from robotplan.base.resources import DYNAMICS_FOLDERS
 from robotplan.cli.common import (
     EXIT_BAD_INPUT,
     device_name,
     load_footprint_scene,
-    loop_overrides,
-    model_folder,
     not_a_model,
     print_result,
-    program_overrides,
+    simulators,
     training_folders_problem,
 )
-from robotplan.pushing.cli.plan_commands import SHAPES
 from robotplan.pushing.cli.push_options import architecture, architecture_problem
 
-__all__ = ["cmd_bench", "cmd_bench_contact_push", "cmd_bench_functional", "cmd_bench_push",
+__all__ = ["cmd_bench", "cmd_bench_contact_push", "cmd_bench_functional",
            "cmd_data_push", "cmd_eval_push", "cmd_train_push"]
 
 
 def cmd_data_push(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
+    from robotplan.execution.physics import PHYSICS
     from robotplan.pushing.training.push_data import PushDataSpec, generate
 
+    sims = simulators(args.sim)
+    if sims is None:
+        return EXIT_BAD_INPUT
+    if len(sims) > 1:
+        print("error: --sim: a data set is made in one simulator", file=sys.stderr)
+        return EXIT_BAD_INPUT
     t0 = time.time()
     try:
         summary = generate(Path(args.out), args.scenes, args.seed, workers=args.workers,
                            shard_size=args.shard_size, spec=PushDataSpec(shapes=args.shapes),
-                           ray=args.ray)
+                           ray=args.ray, physics=replace(PHYSICS, simulator=sims[0]))
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -153,107 +158,6 @@ def views_problem(args: argparse.Namespace, spec: dict) -> str | None:
     if spec.get("frame", "table") == "object" and spec.get("kind") != "rigid":
         return "an object-frame F_flow or F turns its grid with the object; give --views 1"
     return None
-
-
-def dynamics_list_problem(kinds: list[str], model: str | None) -> str | None:
-    """What is wrong with ``--dynamics`` given as ``kinds`` (None: nothing)."""
-    known = ["auto", *sorted(DYNAMICS_FOLDERS)]
-    bad = next((k for k in kinds if k not in known), None)
-    if bad is not None:
-        return f"{bad!r} is not one of {', '.join(known)}"
-    if len(kinds) > 1 and ("auto" in kinds or model):
-        return "a list names shipped kinds only (flow, rigid, direct), without auto or --model"
-    return None
-
-
-def cmd_bench_push(args: argparse.Namespace) -> int:
-    from robotplan.pushing.bench.push import run_bench_push, time_profile_line
-
-    kinds = args.dynamics.split(",")
-    problem = dynamics_list_problem(kinds, args.model)
-    if problem:
-        print(f"error: --dynamics: {problem}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    args.loop, args.program = loop_overrides(args), program_overrides(args)
-    if args.loop is None or args.program is None:
-        return EXIT_BAD_INPUT
-    if len(kinds) == 1:
-        args.model = model_folder(args)
-    if not_a_model(args.model):
-        return EXIT_BAD_INPUT
-    if args.scenes < 1:
-        print("error: --scenes: must be at least 1", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    bad = set(args.shapes.split(",")) - set(SHAPES)
-    if bad:
-        print(f"error: --shapes: unknown shape type {sorted(bad)[0]!r} "
-              f"({', '.join(SHAPES)})", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    out = Path(args.out)
-    if len(kinds) > 1:
-        return _bench_compare(args, kinds, out)
-    summary_path = out / "summary.json"
-    if summary_path.exists() and not args.overwrite:
-        print(f"error: {out}: --out: holds a finished benchmark; pass --overwrite to redo it",
-              file=sys.stderr)
-        return EXIT_BAD_INPUT
-    if args.overwrite and out.exists():
-        for name in ("summary.json", "rows.jsonl", "results.csv", "coverage.png"):
-            (out / name).unlink(missing_ok=True)
-    summary = run_bench_push(args.scenes, args.seed, out, args.model, args.workers,
-                             tuple(args.shapes.split(",")), args.exhaustive, args.time_budget,
-                             args.perturb, args.loop, args.ray, args.program,
-                             rehearse=not args.no_rehearse)
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        for kind, q in summary["coverage"].items():
-            o = summary["open_loop_coverage"][kind]
-            t = summary["plan_seconds"][kind]
-            r, a = summary["replans"][kind], summary["replans_adopted"][kind]
-            c, w = summary["closed_loop_seconds"][kind], summary["open_loop_seconds"][kind]
-            print(f"{kind:>7}: coverage median closed loop {q['median']:.3f} (quartiles "
-                  f"{q['q1']:.3f}–{q['q3']:.3f}, min {q['min']:.3f}), open loop "
-                  f"{o['median']:.3f} ({o['q1']:.3f}–{o['q3']:.3f}, min {o['min']:.3f}), "
-                  f"n={q['n']}; re-plans per scene median {r['median']:.0f} ({a['adopted']} "
-                  f"of {a['of']} adopted); plan time median "
-                  f"{t['median']:.1f} s; plan + execution median {c['median']:.1f} s closed, "
-                  f"{w['median']:.1f} s open loop")
-        line = time_profile_line(summary["time_profile"])
-        if line:
-            print(line)
-        print(f"wrote {out / 'results.csv'}, {out / 'coverage.png'}, {summary_path}")
-    return 0
-
-
-def _bench_compare(args: argparse.Namespace, kinds: list[str], out: Path) -> int:
-    """``bench push --dynamics A,B,…``: one benchmark per kind, then the comparison."""
-    from robotplan.pushing.bench.compare import run_bench_compare
-
-    if (out / "compare.json").exists() and not args.overwrite:
-        print(f"error: {out}: --out: holds a finished comparison; pass --overwrite to redo it",
-              file=sys.stderr)
-        return EXIT_BAD_INPUT
-    if args.overwrite:
-        for kind in kinds:
-            for name in ("summary.json", "rows.jsonl", "results.csv", "coverage.png"):
-                (out / kind / name).unlink(missing_ok=True)
-    result = run_bench_compare(kinds, args.scenes, args.seed, out, args.workers,
-                               tuple(args.shapes.split(",")), args.exhaustive,
-                               args.time_budget, args.perturb, args.loop, args.ray,
-                               args.program, rehearse=not args.no_rehearse)
-    if args.json:
-        print(json.dumps(result))
-        return 0
-    for kind, shapes in result["models"].items():
-        for shape, v in shapes.items():
-            c, o, t = v["closed_loop"], v["open_loop"], v["plan_seconds"]
-            print(f"{kind:>7} {shape:>7}: closed loop {c['median']:.3f} (q1 {c['q1']:.3f}), "
-                  f"open loop {o['median']:.3f} (q1 {o['q1']:.3f}); below 0.9 "
-                  f"{v['below_0_9']['closed_loop']} / {v['below_0_9']['open_loop']}; "
-                  f"unsolved {v['unsolved']} of {c['n']}; plan time median {t['median']:.1f} s")
-    print(f"wrote {out / 'compare.json'}, {out / 'compare.png'}")
-    return 0
 
 
 def cmd_bench_functional(args: argparse.Namespace) -> int:

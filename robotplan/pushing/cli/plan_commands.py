@@ -43,7 +43,7 @@ def add_bench_plan_parser(bsub) -> None:
 
 def cmd_bench_plan(args: argparse.Namespace) -> int:
     from robotplan.pushing.bench.plan_profile import run_bench_plan
-    from robotplan.pushing.bench.push import time_profile_line
+    from robotplan.pushing.bench.push_summary import time_profile_line
 
     program = program_overrides(args)
     if program is None:

@@ -36,8 +36,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from robotplan.execution.physics import PHYSICS, Physics
 from robotplan.execution.scene_world import Observation, SceneWorld, actuation
-from robotplan.execution.sim import PHYSICS, Physics
 from robotplan.geometry.transforms import wrap_angle
 from robotplan.pushing.execution.execute import Execution, outcome, plan_substeps, recorded
 from robotplan.pushing.execution.loop_settings import (

@@ -1,7 +1,7 @@
-"""Execution of a push plan in pybullet: open loop as in the paper (§7.2.3), where the
-actors follow the planned states with ``keep_every`` (20) linear interpolation steps
-between consecutive ones, in the same world as the push data; the result comes from the
-simulator alone.
+"""Execution of a push plan in a simulator (``physics.simulator``, pybullet by default):
+open loop as in the paper (§7.2.3), where the actors follow the planned states with
+``keep_every`` (20) linear interpolation steps between consecutive ones, at the push data's
+time step; the result comes from the simulator alone.
 
 Free moves (reach steps, where the plan holds the object still) are not bound to the
 data's speeds in the program and can be long (up to 60 cm a step); squeezed into 20
@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from robotplan.execution.physics import PHYSICS, Physics
 from robotplan.execution.scene_world import Observation, SceneWorld, obstacle_bodies
-from robotplan.execution.sim import PHYSICS, Physics
 from robotplan.functionals.coverage import coverage
 from robotplan.pushing.program.settings import ARM_PROGRAM_SETTINGS
 from robotplan.pushing.program.solution import Solution
@@ -50,6 +50,7 @@ class Execution:
     plans: list = field(default_factory=list)
     # why a closed loop stopped before its plan's end (LoopSettings.stop_when_lost), or None
     stopped: str | None = None
+    simulator: str = "pybullet"  # the world it ran in (Physics.simulator)
 
 
 def reach_substeps(q_pusher: np.ndarray, push_step: np.ndarray, physics: Physics = PHYSICS
@@ -135,7 +136,8 @@ def recorded(task: PushTask, seen: list[Observation], obstacle_contact: bool,
     cov, touch = outcome(task, body, final, pusher[-1], radius)
     steps = np.asarray(substeps, dtype=float) * physics.timestep
     return Execution(poses, pusher, poses[-1], cov, touch, tips, joints, obstacle_contact,
-                     others, forbidden, np.concatenate(([0.0], np.cumsum(steps))))
+                     others, forbidden, np.concatenate(([0.0], np.cumsum(steps))),
+                     simulator=physics.simulator)
 
 
 def _last_arm(task: PushTask, body, final: np.ndarray, tips: dict[str, np.ndarray]) -> str:

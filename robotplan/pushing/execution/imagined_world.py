@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 import torch
 
+from robotplan.execution.physics import PHYSICS, Physics
 from robotplan.execution.scene_world import Observation
-from robotplan.execution.sim import PHYSICS, Physics
 from robotplan.geometry.transforms import planar_to_world
 from robotplan.pushing.functionals.rigid_dynamics import RigidDynamics
 from robotplan.pushing.models.rigid import RigidMotion, moved_pose

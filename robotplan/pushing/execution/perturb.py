@@ -15,8 +15,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from robotplan.execution.physics import PHYSICS, Physics
 from robotplan.execution.scene_world import Observation
-from robotplan.execution.sim import PHYSICS, Physics
 
 __all__ = ["Perturbation"]
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from robotplan.base.resources import REHEARSAL_FOLDERS, learned_dir
-from robotplan.execution.sim import PHYSICS, Physics
+from robotplan.execution.physics import PHYSICS, Physics
 from robotplan.pushing.execution.closed_loop import Replanner, execute_closed_loop
 from robotplan.pushing.execution.imagined_world import ImaginedWorld
 from robotplan.pushing.execution.loop_settings import LoopSettings

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from robotplan.execution.sim import PHYSICS, PushWorld
+from robotplan.execution.physics import PHYSICS, push_world
 from robotplan.geometry.transforms import wrap_angle
 from robotplan.pushing.execution.execute import obstacle_bodies
 from robotplan.pushing.models.dynamics import load_model
@@ -63,7 +63,7 @@ def check_steps(task: PushTask, result: dict, model_dir: str | Path) -> list[Ste
     tool = scene.bodies[task.actors[0]]
     model = load_model(model_dir)  # LearnedDynamics freezes its parameters
     checks = []
-    with PushWorld(PHYSICS) as world:
+    with push_world(PHYSICS) as world:
         for t in range(1, len(Q1)):
             # push steps: the pusher within 2 mm of the object at either end of the step
             gap = min(float(body.sdf(torch.tensor(Q2[k][None]), torch.tensor(Q1[k]))[0])

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from robotplan.base.units import check_ray
-from robotplan.execution.sim import PHYSICS, PushWorld
+from robotplan.execution.physics import PHYSICS, Physics, PushSimulator, push_world
 from robotplan.pushing.training.footprints import (
     BOX,
     LSHAPE,
@@ -101,7 +101,7 @@ def _world_outline(shape: Shape2D, pose: np.ndarray) -> np.ndarray:
 
 
 def simulate_scene(index: int, seed: int, spec: PushDataSpec = PushDataSpec(),
-                   world: PushWorld | None = None) -> SceneRecord:
+                   world: PushSimulator | None = None) -> SceneRecord:
     """Draw scene ``index`` of ``seed`` and simulate it (deterministic)."""
     rng = np.random.default_rng([seed, index])
     if spec.shapes == "ood":
@@ -122,7 +122,7 @@ def simulate_scene(index: int, seed: int, spec: PushDataSpec = PushDataSpec(),
         if np.abs(start).max() < PHYSICS.table_size / 2 - radius:
             break
     own = world is None
-    world = world or PushWorld()
+    world = world or push_world()
     try:
         world.reset(shape, spec.height, tuple(pose), radius, tuple(start))
         return _rollout(world, shape, radius, rng, spec)
@@ -136,7 +136,7 @@ def _rotate(v: np.ndarray, yaw: float) -> np.ndarray:
     return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
 
 
-def _rollout(world: PushWorld, shape: Shape2D, radius: float, rng: np.random.Generator,
+def _rollout(world: PushSimulator, shape: Shape2D, radius: float, rng: np.random.Generator,
              spec: PushDataSpec) -> SceneRecord:
     dt, keep = world.physics.timestep, world.physics.keep_every
     centroid = footprint_centroid(shape)
@@ -172,14 +172,15 @@ def _rollout(world: PushWorld, shape: Shape2D, radius: float, rng: np.random.Gen
                        np.array(contacts, dtype=bool))
 
 
-def _make_shard(args: tuple[int, int, int, PushDataSpec]) -> tuple[dict[str, np.ndarray], int]:
-    """Scenes ``first ≤ i < last`` of ``seed``, simulated in a pybullet client of this
+def _make_shard(args: tuple[int, int, int, PushDataSpec, Physics]
+                ) -> tuple[dict[str, np.ndarray], int]:
+    """Scenes ``first ≤ i < last`` of ``seed``, simulated in a world of ``physics`` in this
     worker: the shard's arrays and its number of samples."""
-    first, last, seed, spec = args
+    first, last, seed, spec, physics = args
     from robotplan.base.threads import one_thread
 
     one_thread()
-    world = PushWorld()
+    world = push_world(physics)
     try:
         records = [simulate_scene(i, seed, spec, world) for i in range(first, last)]
     finally:
@@ -204,20 +205,24 @@ def _make_shard(args: tuple[int, int, int, PushDataSpec]) -> tuple[dict[str, np.
 def _legacy_settings(key: str, before: object) -> object:
     if key == "spec" and isinstance(before, dict):  # folders made before ``shapes``
         before.setdefault("shapes", "train")
+    if key == "physics" and isinstance(before, dict):  # folders made in pybullet alone
+        before.setdefault("link_friction", PHYSICS.link_friction)
+        before.setdefault("simulator", "pybullet")
     return before
 
 
 def generate(out: Path, scenes: int, seed: int, workers: int = 2, shard_size: int = 50,
              spec: PushDataSpec = PushDataSpec(), progress: bool = True,
-             ray: str | None = None) -> dict:
+             ray: str | None = None, physics: Physics = PHYSICS) -> dict:
     """Make (or finish) the data set in ``out``, in ``workers`` local processes or on Ray
-    (``ray``: :func:`robotplan.base.units.run_units`). Returns a summary."""
+    (``ray``: :func:`robotplan.base.units.run_units`), simulated in ``physics``'s world
+    (``physics.simulator``). Returns a summary."""
     meta = {"format": FORMAT, "seed": seed, "shard_size": shard_size,
-            "physics": PHYSICS.as_dict(), "spec": asdict(spec)}
+            "physics": physics.as_dict(), "spec": asdict(spec)}
     check_ray(ray)
     prepare_folder(out, meta, scenes, _legacy_settings)
-    shards, made, samples = make_shards(out, scenes, shard_size, _make_shard, (seed, spec),
-                                        workers, progress, "push data", ray)
+    shards, made, samples = make_shards(out, scenes, shard_size, _make_shard,
+                                        (seed, spec, physics), workers, progress, "push data", ray)
     return {"scenes": scenes, "shards": shards, "made_shards": made, "new_samples": samples}
 
 

@@ -5,7 +5,7 @@ import json
 import pytest
 
 from robotplan.pushing.bench.compare import compare_rows
-from robotplan.pushing.cli.model_commands import dynamics_list_problem
+from robotplan.pushing.cli.bench_push_commands import dynamics_list_problem
 from tests.cli.test_app import run
 
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from robotplan.functionals.coverage import coverage
-from robotplan.pushing.bench.push import candidate_timings, summarize, time_profile
 from robotplan.pushing.bench.push_scenes import GOAL_DISTANCE, draw_scene
+from robotplan.pushing.bench.push_summary import candidate_timings, summarize, time_profile
 from robotplan.pushing.program.skeleton import load_skeleton_space
 from robotplan.pushing.search.planner import order_candidates
 from robotplan.scene import parse_scene

@@ -11,8 +11,8 @@ import pytest
 
 import robotplan
 from robotplan import load_scene
+from robotplan.execution.physics import PHYSICS
 from robotplan.execution.scene_world import Observation
-from robotplan.execution.sim import PHYSICS
 from robotplan.pushing.execution.closed_loop import (
     LoopSettings,
     _goal_met,

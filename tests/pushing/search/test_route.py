@@ -98,7 +98,7 @@ def test_long_segments_are_split_into_several_pushes():
 def test_pybullet_turns_a_box_pushed_off_its_centre_line():
     """Why routes push straight through the centroid: in pybullet a centred face push moves
     the box straight, one 2 mm off the centre line turns it by > 0.1 rad within 0.3 m."""
-    from robotplan.execution.sim import PushWorld
+    from robotplan.execution.pybullet_world import PushWorld
     from robotplan.sdf import Box
 
     def yaw_after_push(offset: float) -> float:

@@ -1,51 +1,33 @@
-"""The pybullet world of table-top pushing, shared by data generation and plan execution.
-
-One fixed set of physics (``PHYSICS``) is part of the learned model's world: the push data
-is generated with it and plans are executed in it. The table top is the plane z = 0, a
-1.4 × 1.4 m slab; objects are footprints extruded to their height, their centre of mass at
-the footprint's centroid (uniform density); the pusher is a sphere whose centre is held at
-z = radius and driven kinematically along a path by a stiff fixed constraint.
+"""The pybullet world of table-top pushing (:mod:`robotplan.execution.physics`), shared by
+data generation and plan execution: the push data's world. The pusher is driven
+kinematically along its path by a stiff fixed constraint; arms are
+:mod:`robotplan.execution.pybullet_arms`.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from robotplan.base.quiet import c_output_silenced, connect_direct, import_pybullet
-from robotplan.execution.convex_pieces import convex_pieces_file
-from robotplan.sdf import Box, Circle, LShape, Shape2D
-from robotplan.sdf.footprint import footprint_boxes, footprint_centroid, footprint_parts
-from robotplan.sdf.mesh_footprint import MeshFootprint
+from robotplan.execution.physics import PHYSICS, Physics
+from robotplan.execution.solids import (
+    Solid,
+    footprint_solids,
+    planar_body_pose,
+    shape_frame_pose,
+)
+from robotplan.sdf import Shape2D
+from robotplan.sdf.footprint import footprint_centroid
 
-__all__ = ["PHYSICS", "Physics", "PushWorld"]
+if TYPE_CHECKING:
+    from robotplan.execution.pybullet_arms import Arm
 
-
-@dataclass(frozen=True)
-class Physics:
-    """Simulation constants (SI units). pybullet multiplies the friction of two bodies."""
-
-    timestep: float = 1.0 / 240.0
-    keep_every: int = 20  # keep the state every 20th step (paper, appendix I)
-    gravity: float = 9.81
-    table_size: float = 1.4
-    table_friction: float = 1.0
-    object_mass: float = 0.5  # kg, whatever the size
-    object_friction: float = 0.5  # → object–table μ = 0.5
-    pusher_friction: float = 0.3  # → pusher–object μ = 0.15
-    restitution: float = 0.0
-    pusher_max_force: float = 500.0  # N, the constraint that drives the pusher
-    solver_iterations: int = 50
-
-    def as_dict(self) -> dict:
-        return asdict(self)
+__all__ = ["PushWorld"]
 
 
-PHYSICS = Physics()
-
-
-def _prism_obj(parts: list[np.ndarray], height: float) -> str:
+def _prism_obj(parts, height: float) -> str:
     """Wavefront OBJ text of convex prisms, one ``o`` group per footprint part: pybullet
     loads each group as one convex hull of a compound shape (concave footprints)."""
     lines, base = [], 1
@@ -94,7 +76,7 @@ class PushWorld:
               movable: list[tuple[Shape2D, float, tuple[float, float, float]]] = ()
               ) -> None:
         """Place a new object (footprint ``shape``) at ``pose`` and a pusher at ``pusher_xy``
-        (none if ``pusher_radius`` is None: arms push, see robotplan.execution.sim_arms); fixed
+        (none if ``pusher_radius`` is None: arms push, see robotplan.execution.pybullet_arms); fixed
         ``obstacles`` and more ``movable`` objects (same mass and friction) as
         ``(footprint, height, pose)``."""
         pb, c, ph = self.pb, self.client, self.physics
@@ -136,11 +118,8 @@ class PushWorld:
         """A footprint extruded to ``height`` at planar ``pose`` (mass 0: fixed). Its base
         frame is the footprint's centroid (the centre of mass)."""
         pb, c, ph = self.pb, self.client, self.physics
-        com = footprint_centroid(shape)
-        col = self._collision_shape(shape, height, com)
-        x, y, yaw = pose
-        cs, sn = np.cos(yaw), np.sin(yaw)
-        com_w = (x + cs * com[0] - sn * com[1], y + sn * com[0] + cs * com[1])
+        col = self._collision_shape(footprint_solids(shape, height))
+        com_w, yaw = planar_body_pose(pose, shape)
         body = pb.createMultiBody(mass, col, basePosition=[com_w[0], com_w[1], height / 2 + 1e-4],
                                   baseOrientation=pb.getQuaternionFromEuler([0, 0, yaw]),
                                   physicsClientId=c)
@@ -148,38 +127,31 @@ class PushWorld:
                           restitution=ph.restitution, physicsClientId=c)
         return body
 
-    def _collision_shape(self, shape: Shape2D, height: float, com: np.ndarray) -> int:
-        """The footprint extruded to ``height`` around its centroid ``com``: boxes for boxes
-        and L-shapes (as the push data), a cylinder for a disc, the mesh's convex pieces for
-        a mesh, convex prisms (one per :func:`footprint_parts` piece) for polygons."""
+    def _collision_shape(self, solids: list[Solid]) -> int:
+        """One collision shape of a body's solids (:func:`footprint_solids`): boxes as a
+        compound of boxes, a cylinder, mesh pieces from their file, prisms as an OBJ of
+        convex groups."""
         pb, c = self.pb, self.client
-        if isinstance(shape, Box | LShape):
-            boxes = footprint_boxes(shape)
+        kind = solids[0].kind
+        if kind == "box":
             return pb.createCollisionShapeArray(
-                [pb.GEOM_BOX] * len(boxes),
-                halfExtents=[[hx, hy, height / 2] for _, (hx, hy) in boxes],
-                collisionFramePositions=[[cx - com[0], cy - com[1], 0.0]
-                                         for (cx, cy), _ in boxes],
-                physicsClientId=c)
-        if isinstance(shape, Circle):
-            return pb.createCollisionShape(pb.GEOM_CYLINDER, radius=shape.radius,
-                                           height=height, physicsClientId=c)
-        if isinstance(shape, MeshFootprint) and not shape.prism:
-            # the mesh itself (a prism mesh is its footprint's prism, below): B's point of the
-            # scaled mesh is mesh_offset, the body's frame is the centroid at half the height
-            at = -np.asarray(shape.mesh_offset) - np.array([com[0], com[1], height / 2])
-            pieces = convex_pieces_file(shape.mesh_file, shape.scale)
-            return pb.createCollisionShape(pb.GEOM_MESH, fileName=str(pieces),
-                                           meshScale=[shape.scale] * 3,
-                                           collisionFramePosition=at.tolist(),
+                [pb.GEOM_BOX] * len(solids), halfExtents=[list(s.half) for s in solids],
+                collisionFramePositions=[list(s.centre) for s in solids], physicsClientId=c)
+        (solid,) = solids
+        if kind == "cylinder":
+            return pb.createCollisionShape(pb.GEOM_CYLINDER, radius=solid.radius,
+                                           height=solid.length, physicsClientId=c)
+        if kind == "pieces":
+            return pb.createCollisionShape(pb.GEOM_MESH, fileName=str(solid.file),
+                                           meshScale=[solid.scale] * 3,
+                                           collisionFramePosition=list(solid.centre),
                                            physicsClientId=c)
         import tempfile
         from pathlib import Path
 
-        parts = [part - com for part in footprint_parts(shape)]
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / "footprint.obj"
-            path.write_text(_prism_obj(parts, height))
+            path.write_text(_prism_obj(solid.parts, solid.length))
             return pb.createCollisionShape(pb.GEOM_MESH, fileName=str(path),
                                            physicsClientId=c)
 
@@ -220,11 +192,17 @@ class PushWorld:
 
     def _planar_pose(self, body: int, com: np.ndarray) -> tuple[np.ndarray, float]:
         pos, quat = self.pb.getBasePositionAndOrientation(body, physicsClientId=self.client)
-        roll, pitch, yaw = self.pb.getEulerFromQuaternion(quat)
-        cs, sn = np.cos(yaw), np.sin(yaw)
-        x = pos[0] - (cs * com[0] - sn * com[1])
-        y = pos[1] - (sn * com[0] + cs * com[1])
-        return np.array([x, y, yaw]), float(max(abs(roll), abs(pitch)))
+        R = np.array(self.pb.getMatrixFromQuaternion(quat)).reshape(3, 3)
+        return shape_frame_pose(np.asarray(pos), R, com)
+
+    def add_arm(self, spec) -> Arm:
+        """``spec``'s robot with its tip (:func:`robotplan.execution.pybullet_arms.add_arm`)."""
+        from robotplan.execution.pybullet_arms import add_arm
+
+        return add_arm(self, spec)
+
+    def advance(self) -> None:
+        self.pb.stepSimulation(physicsClientId=self.client)
 
     def pusher_position(self) -> np.ndarray:
         pos, _ = self.pb.getBasePositionAndOrientation(self.pusher, physicsClientId=self.client)

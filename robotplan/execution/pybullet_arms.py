@@ -1,12 +1,13 @@
-"""Arms in the pybullet world of :mod:`robotplan.execution.sim`: each robot folder's URDF at
-its base, a tip sphere fixed to its flange, joints under position control. The world, the object and
-the tip's friction are those of the push data."""
+"""Arms in the pybullet world of :mod:`robotplan.execution.pybullet_world`: each robot
+folder's URDF at its base, a tip sphere fixed to its flange, joints under position control.
+The world, the object and the tip's friction are those of the push data."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from robotplan.execution.sim import PushWorld
+from robotplan.execution.physics import damped_step
+from robotplan.execution.pybullet_world import PushWorld
 from robotplan.scene.robots import load_robot_model
 from robotplan.scene.schema import RobotSpec
 
@@ -16,7 +17,6 @@ JOINT_FORCE = 300.0  # N·m: the iiwa 14's largest joint torques are 320 N·m
 # pybullet's default gain (0.1) lags behind a planned reach; 1.0 tracks it at the planned
 # speeds (measured: docs/experiments.md#arm-position-gain)
 POSITION_GAIN = 1.0
-DAMPING = 0.01  # m: the damped least-squares step of :meth:`Arm.steered` near singularities
 
 
 class Arm:
@@ -48,9 +48,7 @@ class Arm:
     def steered(self, q: np.ndarray, shift: np.ndarray) -> np.ndarray:
         """Joint angles near ``q`` that move the tip centre by ``shift (3,)`` m in the world
         frame, to first order: one damped least-squares step on :meth:`tip_jacobian`."""
-        J = self.tip_jacobian(q)
-        step = J.T @ np.linalg.solve(J @ J.T + DAMPING**2 * np.eye(3), np.asarray(shift, float))
-        return np.asarray(q, dtype=float) + step
+        return damped_step(self.tip_jacobian(q), q, shift)
 
     def tip_position(self) -> np.ndarray:
         pos, _ = self.world.pb.getBasePositionAndOrientation(self.tip,

@@ -1,4 +1,4 @@
-"""Arms in the pybullet world: the tip Jacobian and the steered joints (sim_arms), and an
+"""Arms in the pybullet world: the tip Jacobian and the steered joints (pybullet_arms), and an
 acting arm steered in the closed loop (steering)."""
 
 from __future__ import annotations
