@@ -1,5 +1,5 @@
 """The public facade: :func:`plan` (skeleton search and Drake programs, no simulator),
-:func:`execute` (pybullet), :func:`write_playback` (MeshCat page) and :func:`solve`, which
+:func:`execute` (pybullet, or MuJoCo with ``sim="mujoco"``), :func:`write_playback` (MeshCat page) and :func:`solve`, which
 composes them and writes ``result.json``, as ``robotplan solve`` does.
 
 A scene is classified once into its task (:func:`~robotplan.scene.task.make_task`): a
@@ -62,10 +62,11 @@ def plan(task, model=None, **options):
 
 def execute(planned: PushPlan | HangPlan, scene: Scene | None = None, *,
             mode: str = "closed_loop", **options: object) -> Execution | HangExecution:
-    """Run a plan in pybullet, closed loop (``mode="closed_loop"``, the default: re-planning
-    from the observed state) or open loop (the paper's protocol), in ``scene`` (default: the
-    plan's). ``options``: the family planner's (:meth:`PushPlanner.execute`: ``perturb``,
-    ``loop``, ``quiet``)."""
+    """Run a plan in a simulator, closed loop (``mode="closed_loop"``, the default:
+    re-planning from the observed state) or open loop (the paper's protocol), in ``scene``
+    (default: the plan's). ``options``: the family planner's (:meth:`PushPlanner.execute`:
+    ``sim`` (``"pybullet"``, the default, or ``"mujoco"``), ``perturb``, ``loop``,
+    ``quiet``)."""
     return planner_for(planned.task).execute(planned, scene=scene, mode=mode, **options)
 
 

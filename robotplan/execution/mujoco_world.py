@@ -14,9 +14,9 @@ Contacts get pybullet's friction coefficients (the product of the two bodies',
 :meth:`Physics.friction`): MuJoCo takes the coefficient of the contact's geom of higher
 ``priority``, so the table's geoms carry the object–table coefficient at priority 1, the
 pusher's and tips' the pusher–object one at priority 2 and objects and links their own
-products at priority 0; friction cones are elliptic. The pusher is held to its path by a stiff critically damped servo
-of at most ``pusher_max_force`` that also feeds the path's velocity forward
-(``SERVO_RATE``); the integrator is MuJoCo's implicit-in-velocity one.
+products at priority 0; friction cones are elliptic. The pusher is held to its path by a
+stiff critically damped servo of at most ``pusher_max_force`` that also feeds the path's
+velocity forward (``SERVO_RATE``); the integrator is MuJoCo's implicit-in-velocity one.
 """
 
 from __future__ import annotations

@@ -267,3 +267,20 @@ def test_solve_open_loop_without_rehearsal_runs_the_plan_as_searched(tmp_path, c
     doc = json.loads((out / "result.json").read_text())
     assert doc["execution"]["mode"] == "open_loop" and doc["rehearsal"] is None
     assert len(doc["executed"]["pusher"]) == len(doc["trajectory"]["pusher"])
+
+
+def test_an_unknown_simulator_is_one_line_and_exit_2(tmp_path, capsys):
+    """``--sim`` names simulators: a wrong one is refused before anything runs, for the
+    commands that execute (one simulator) and those that compare (a list)."""
+    res = run("solve", str(TASKS / "box_push.yaml"), "--out", str(tmp_path / "s"),
+              "--sim", "bullet3")
+    assert res.returncode == 2 and "Traceback" not in res.stderr
+    assert res.stderr.strip() == ("error: --sim: unknown simulator 'bullet3'; expected one "
+                                  "of pybullet, mujoco")
+    for args in (("solve", str(TASKS / "box_push.yaml"), "--sim", "pybullet,mujoco"),
+                 ("bench", "push", "--sim", "pybullet,physx"),
+                 ("data", "push", "--scenes", "2", "--seed", "0", "--sim", "pybullet,mujoco")):
+        res = call(capsys, *args, "--out", str(tmp_path / "o"))
+        assert res.returncode == 2 and res.stderr.startswith("error: --sim: "), res.stderr
+        assert len(res.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()

@@ -58,7 +58,7 @@ def time_profile_line(profile: dict, top: int = 6) -> str | None:
         return None
     shares = ", ".join(f"{k} {100 * v:.0f} %" for k, v in list(profile["share"].items())[:top])
     return (f"time: {profile['programs']} programs, {profile['candidate_seconds']:.0f} s in "
-            f"their callbacks and solver: {shares}")
+            f"their callbacks and solver" + (f": {shares}" if shares else ""))
 
 
 def summarize(rows: list[dict]) -> dict:

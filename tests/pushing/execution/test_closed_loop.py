@@ -11,7 +11,7 @@ import pytest
 
 import robotplan
 from robotplan import load_scene
-from robotplan.execution.physics import PHYSICS
+from robotplan.execution.physics import PHYSICS, SIMULATORS
 from robotplan.execution.scene_world import Observation
 from robotplan.pushing.execution.closed_loop import (
     LoopSettings,
@@ -148,14 +148,16 @@ def _implausible_when_fresh(observed, tail, fresh, last_resort=None, deadline=No
     return robotplan.PushPlan(observed, real.best, False)
 
 
-def test_closed_loop_recovers_a_box_that_is_not_where_it_was_planned(box_plan):
+@pytest.mark.parametrize("sim", list(SIMULATORS))
+def test_closed_loop_recovers_a_box_that_is_not_where_it_was_planned(box_plan, sim):
     """The box is 6 cm and 17° from where the plan expects it: the plan pushes past it open
-    loop; closed loop sees that after the first step and re-plans from there."""
+    loop; closed loop sees that after the first step and re-plans from there, in each
+    simulator."""
     assert box_plan.solved
     moved = _box_moved(box_plan).scene
-    open_loop = robotplan.execute(box_plan, moved, mode="open_loop")
-    assert open_loop.coverage < 0.5
-    closed = robotplan.execute(box_plan, moved)
+    open_loop = robotplan.execute(box_plan, moved, mode="open_loop", sim=sim)
+    assert open_loop.coverage < 0.5 and open_loop.simulator == sim
+    closed = robotplan.execute(box_plan, moved, sim=sim)
     assert closed.mode == "closed_loop" and closed.coverage >= 0.95
     first = closed.replans[0]
     assert first.step == 1 and "box" in first.reason
@@ -165,11 +167,12 @@ def test_closed_loop_recovers_a_box_that_is_not_where_it_was_planned(box_plan):
     assert np.all(np.diff(closed.times) > 0)
 
 
-def test_closed_loop_reaches_the_goal_in_a_perturbed_world(box_plan):
+@pytest.mark.parametrize("sim", list(SIMULATORS))
+def test_closed_loop_reaches_the_goal_in_a_perturbed_world(box_plan, sim):
     """Mass and frictions off by up to 20 %, observations noisy: the plan is re-planned
-    from what is observed and the box still ends in the goal."""
+    from what is observed and the box still ends in the goal, in each simulator."""
     world = Perturbation(1)
-    closed = robotplan.execute(box_plan, perturb=world)
+    closed = robotplan.execute(box_plan, perturb=world, sim=sim)
     assert closed.coverage >= 0.95
     assert all(isinstance(v, int | float) for v in world.describe().values())
 
@@ -224,7 +227,8 @@ def _recording_nothing_plans():
 
 
 @pytest.mark.slow
-def test_closed_loop_recovers_an_arm_push_when_the_box_is_not_where_it_was_planned():
+@pytest.mark.parametrize("sim", list(SIMULATORS))
+def test_closed_loop_recovers_an_arm_push_when_the_box_is_not_where_it_was_planned(sim):
     """The left iiwa's two pushes are planned for the box where the scene puts it; the box
     stands 6 cm further back. Open loop the arm pushes air; closed loop sees that after the
     first step, re-plans the arm's joints from there and the box ends in the goal."""
@@ -234,9 +238,9 @@ def test_closed_loop_recovers_an_arm_push_when_the_box_is_not_where_it_was_plann
     assert planned.solved
     x, y, yaw = scene.bodies["box"].pose
     moved = scene.with_state({"box": (x, y - 0.06, yaw)})
-    open_loop = robotplan.execute(planned, moved, mode="open_loop")
+    open_loop = robotplan.execute(planned, moved, mode="open_loop", sim=sim)
     assert open_loop.coverage < 0.5
-    closed = robotplan.execute(planned, moved)
+    closed = robotplan.execute(planned, moved, sim=sim)
     assert closed.coverage >= 0.95
     first = closed.replans[0]
     assert first.step == 1 and first.solved and "left" in first.skeleton
