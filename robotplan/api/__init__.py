@@ -1,6 +1,7 @@
 """The public facade: :func:`plan` (skeleton search and Drake programs, no simulator),
-:func:`execute` (pybullet, or MuJoCo with ``sim="mujoco"``), :func:`write_playback` (MeshCat page) and :func:`solve`, which
-composes them and writes ``result.json``, as ``robotplan solve`` does.
+:func:`execute` (pybullet, or MuJoCo with ``sim="mujoco"``), :func:`write_playback`
+(MeshCat page) and :func:`solve`, which composes them and writes ``result.json``, as
+``robotplan solve`` does.
 
 A scene is classified once into its task (:func:`~robotplan.scene.task.make_task`): a
 :class:`~robotplan.scene.task.PushTask` or a :class:`~robotplan.scene.task.HangTask`. Each

@@ -13,20 +13,24 @@ other arms.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from robotplan.execution.mujoco_world import OBJECT, MujocoPushWorld
 from robotplan.execution.physics import damped_step
 from robotplan.execution.pybullet_arms import JOINT_FORCE
 from robotplan.scene.robots import load_robot_model
 from robotplan.scene.schema import RobotSpec
+
+if TYPE_CHECKING:
+    from robotplan.execution.mujoco_world import MujocoPushWorld
 
 __all__ = ["MujocoArm", "attach_arm"]
 
 # rad/s: each joint's servo, critically damped; tracks planned reaches at 240 Hz
 # (docs/experiments.md#mujoco-servo)
 SERVO_RATE = 60.0
-FIRST_ARM_BIT = 8  # contype bits from here on: one per arm
+FIRST_ARM_BIT = 8  # contype bits from here on, one per arm (the world's are below)
 
 
 class MujocoArm:
@@ -104,17 +108,17 @@ def attach_arm(world: MujocoPushWorld, spec: RobotSpec, index: int) -> MujocoArm
     prefix = f"{spec.name}/"
     world.spec.attach(robot, frame=frame, prefix=prefix)
     own = FIRST_ARM_BIT << index
-    others = sum(FIRST_ARM_BIT << k for k in range(8) if k != index)
+    others = world.object_bit | sum(FIRST_ARM_BIT << k for k in range(8) if k != index)
     link_mu = ph.friction("link", "object")
     for body in world.spec.bodies:
         if not body.name.startswith(prefix):
             continue
         for geom in body.geoms:
-            geom.contype, geom.conaffinity = own, OBJECT | others
+            geom.contype, geom.conaffinity = own, others
             geom.friction = [link_mu, 0.005, 0.0001]
     flange = world.spec.body(prefix + model.tip.link)
     flange.add_geom(name=prefix + "tip", type=mj.mjtGeom.mjGEOM_SPHERE,
                     size=[spec.tip_radius, 0, 0], pos=list(model.tip.offset), mass=0.1,
-                    contype=own, conaffinity=OBJECT | others, priority=2,
+                    contype=own, conaffinity=others, priority=2,
                     friction=[ph.friction("pusher", "object"), 0.005, 0.0001])
     return MujocoArm(world, prefix, q0, model.tip.link, np.asarray(model.tip.offset))

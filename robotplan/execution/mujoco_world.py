@@ -39,7 +39,7 @@ from robotplan.sdf.footprint import footprint_centroid
 if TYPE_CHECKING:
     from robotplan.execution.mujoco_arms import MujocoArm
 
-__all__ = ["OBJECT", "SERVO_RATE", "MujocoPushWorld"]
+__all__ = ["OBJECT", "SERVO_RATE", "MujocoPushWorld", "mujoco_spec"]
 
 # contype / conaffinity bits: two geoms collide when one's type meets the other's affinity
 OBJECT, TABLE, PUSHER = 1, 2, 4
@@ -51,9 +51,27 @@ NEAR = 0.002  # m: object–obstacle pairs closer than this are reported (not pu
 SETTLE_STEPS = 10
 
 
+def mujoco_spec(timestep: float, gravity: float):
+    """An empty ``mujoco.MjSpec`` with the options every robotplan world has: the time step,
+    gravity along −z, the implicit-in-velocity integrator and Coulomb's elliptic friction
+    cone, stiffened in friction (``IMPRATIO``): on MuJoCo's default pyramid a pushed box
+    slips off the pusher (docs/experiments.md#mujoco-contacts)."""
+    import mujoco
+
+    spec = mujoco.MjSpec()
+    spec.option.timestep = timestep
+    spec.option.gravity = [0.0, 0.0, -gravity]
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    spec.option.impratio = IMPRATIO
+    return spec
+
+
 class MujocoPushWorld:
     """A MuJoCo world with a table, one object, obstacles, movable objects and a free
     pusher or arms (see the module docstring)."""
+
+    object_bit = OBJECT  # the contype of objects and obstacles, which arms collide with
 
     def __init__(self, physics: Physics = PHYSICS) -> None:
         import mujoco
@@ -77,15 +95,8 @@ class MujocoPushWorld:
               pusher_xy=(0.0, 0.0), obstacles=(), movable=()) -> None:
         """A fresh scene (:meth:`~robotplan.execution.physics.PushSimulator.reset`)."""
         mj, ph = self.mj, self.physics
-        spec = self.spec = mj.MjSpec()
-        spec.option.timestep = ph.timestep
-        spec.option.gravity = [0.0, 0.0, -ph.gravity]
+        spec = self.spec = mujoco_spec(ph.timestep, ph.gravity)
         spec.option.iterations = ph.solver_iterations
-        spec.option.integrator = mj.mjtIntegrator.mjINT_IMPLICITFAST
-        # Coulomb's elliptic cone, stiffened in friction: on MuJoCo's default pyramid a
-        # pushed box slips off the pusher (docs/experiments.md#mujoco-contacts)
-        spec.option.cone = mj.mjtCone.mjCONE_ELLIPTIC
-        spec.option.impratio = IMPRATIO
         self.model = self.data = None
         self.arms = []
         half = ph.table_size / 2

@@ -4,12 +4,16 @@ The world, the object and the tip's friction are those of the push data."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from robotplan.execution.physics import damped_step
-from robotplan.execution.pybullet_world import PushWorld
 from robotplan.scene.robots import load_robot_model
 from robotplan.scene.schema import RobotSpec
+
+if TYPE_CHECKING:
+    from robotplan.execution.pybullet_world import PushWorld
 
 __all__ = ["Arm", "add_arm"]
 

@@ -1,6 +1,7 @@
 """The facade for hang tasks (:class:`~robotplan.scene.task.HangTask`): ``plan`` finds a mug
 pose on the hook (H_hang and H_coll, with restarts), ``execute`` drops the mug from it in
-pybullet, ``write_playback`` shows both; :class:`HangPlanner` offers them as its methods.
+a simulator (pybullet by default, or MuJoCo: :mod:`robotplan.hanging.execution.worlds`),
+``write_playback`` shows both; :class:`HangPlanner` offers them as its methods.
 
 Closed loop (the default of ``execute``): when the mug falls from the found pose, the search
 goes on from where it stopped (same random starts, the same budget of restarts and
@@ -25,7 +26,8 @@ import numpy as np
 from robotplan.base.files import write_atomically
 from robotplan.base.resources import learned_dir
 from robotplan.hanging.api.poses import compose, inverse_pose, table_pose
-from robotplan.hanging.execution.world import DropResult, HangWorld
+from robotplan.hanging.execution.drop import DropResult
+from robotplan.hanging.execution.worlds import hang_world
 from robotplan.hanging.models.hang_model import load_hang_model
 from robotplan.hanging.program.problem import HANG_DEFAULTS, HangProblem, HangSettings, HangSolution
 from robotplan.hanging.scene.parts import hang_parts
@@ -83,6 +85,7 @@ class HangExecution:
     drop: list = field(default_factory=list)  # [(t, X_WM)] every 1/30 s
     seconds: float = 0.0
     mode: str = "closed_loop"
+    simulator: str = "pybullet"  # the world the mug was dropped in
     # closed loop: one entry per found pose the mug fell from, after which the search went on
     # while its budget lasted: step (the drop's number), reason, violation (of the program's
     # rows at that pose, within tolerance), h_hang, h_coll_cm3, seconds of the drop
@@ -121,17 +124,18 @@ def _fell(result: DropResult) -> str | None:
     return None
 
 
-def execute_hang(planned: HangPlan, mode: str = "closed_loop") -> HangExecution:
-    """Drop the mug from the found pose (in the hook's world, then reported in W); in closed
-    loop, while it falls, go on with the search and drop the next pose found (module
-    docstring). ``replans`` lists the poses dropped before the one reported, each with why
-    the mug did not hang there."""
+def execute_hang(planned: HangPlan, mode: str = "closed_loop",
+                 sim: str = "pybullet") -> HangExecution:
+    """Drop the mug from the found pose in simulator ``sim`` (in the hook's world, then
+    reported in W); in closed loop, while it falls, go on with the search and drop the next
+    pose found (module docstring). ``replans`` lists the poses dropped before the one
+    reported, each with why the mug did not hang there."""
     if mode not in ("closed_loop", "open_loop"):
         raise ValueError(f"mode {mode!r}: expected closed_loop or open_loop")
     mug, hook, _, _ = hang_parts(planned.scene)
     t0 = time.perf_counter()
     trials: list[tuple[HangSolution, DropResult, list, float]] = []
-    with HangWorld(hook, mug) as world:
+    with hang_world(hook, mug, sim) as world:
 
         def dropped(sol: HangSolution) -> DropResult:
             t, record = time.perf_counter(), []
@@ -158,7 +162,7 @@ def execute_hang(planned: HangPlan, mode: str = "closed_loop") -> HangExecution:
     return HangExecution(result.hangs, result.collision_at_start, result.on_ground,
                          compose(planned.X_WH, np.asarray(result.X_WM_end)),
                          result.in_place(world.physics), result.fall_m, drop,
-                         time.perf_counter() - t0, mode, replans, sol)
+                         time.perf_counter() - t0, mode, sim, replans, sol)
 
 
 def _dropped_pose(planned: HangPlan, executed: HangExecution) -> HangSolution:
@@ -182,7 +186,7 @@ def write_hang_still(planned: HangPlan, executed: HangExecution, path: Path) -> 
     write_hang_picture(mug, hook, _dropped_pose(planned, executed).pose,
                        compose(X_HW, executed.X_WM_end),
                        Path(path), title=f"{planned.scene.name}: found pose (light), after "
-                       f"the drop in pybullet (solid): the mug {outcome}")
+                       f"the drop in {executed.simulator} (solid): the mug {outcome}")
 
 
 def write_hang_scene_picture(scene: Scene, path: Path) -> None:
@@ -199,9 +203,11 @@ def _r(v: np.ndarray) -> list[float]:
 
 def solve_hang(task: HangTask, out: Path, model: str | Path | None = None, *, seed: int = 0,
                restarts: int | None = None, settings: HangSettings | None = None,
-               mode: str = "closed_loop", check: str | Path | None = CHECK) -> dict:
-    """Plan, drop (``mode``: closed loop goes on searching while the mug falls), write
-    ``out/result.json``, ``out/playback.html`` and ``out/hang.png``; returns the result.
+               mode: str = "closed_loop", check: str | Path | None = CHECK,
+               sim: str = "pybullet") -> dict:
+    """Plan, drop in simulator ``sim`` (``mode``: closed loop goes on searching while the
+    mug falls), write ``out/result.json``, ``out/playback.html`` and ``out/hang.png``;
+    returns the result.
     Its pose, H_hang, restarts and evaluations are those of the pose dropped last;
     ``check`` as :func:`plan_hang`'s, in open loop only: the closed loop's drops are its
     check, and the network's refusals would spend the restarts it drops from
@@ -210,7 +216,7 @@ def solve_hang(task: HangTask, out: Path, model: str | Path | None = None, *, se
     check = check if mode == "open_loop" else None
     planned = plan_hang(task, model, seed=seed, restarts=restarts, settings=settings,
                         check=check)
-    executed = execute_hang(planned, mode)
+    executed = execute_hang(planned, mode, sim)
     sol = _dropped_pose(planned, executed)
     doc = {"scene": task.scene.name, "status": "solved" if sol.feasible else "no_solution",
            "goal": "hang", "model": planned.model,
@@ -221,7 +227,7 @@ def solve_hang(task: HangTask, out: Path, model: str | Path | None = None, *, se
            "evaluations": sol.evaluations, "h_hang": round(sol.h_hang, 5),
            "h_coll_cm3": round(sol.h_coll_cm3, 6), "pose": _r(compose(planned.X_WH, sol.pose)),
            "pose_in_hook_frame": _r(sol.pose),
-           "execution": {"simulator": "pybullet", "mode": executed.mode,
+           "execution": {"simulator": executed.simulator, "mode": executed.mode,
                          "replans": executed.replans, "hung": executed.hung,
                          "collision_at_start": executed.collision_at_start,
                          "on_ground": executed.on_ground, "in_place": executed.in_place,
@@ -244,10 +250,12 @@ class HangPlanner:
         """:func:`plan_hang` (``options``: ``seed``, ``settings``, ``restarts``, ``check``)."""
         return plan_hang(task, model, **options)
 
-    def execute(self, planned: HangPlan, mode: str = "closed_loop", **_ignored) -> HangExecution:
-        """:func:`execute_hang`; the facade's options of a push execution (a perturbed world,
-        closed-loop settings, ``quiet``) do not apply to a drop and are ignored."""
-        return execute_hang(planned, mode)
+    def execute(self, planned: HangPlan, mode: str = "closed_loop", sim: str = "pybullet",
+                **_ignored) -> HangExecution:
+        """:func:`execute_hang` in simulator ``sim``; the facade's options of a push execution
+        (a perturbed world, closed-loop settings, ``quiet``) do not apply to a drop and are
+        ignored."""
+        return execute_hang(planned, mode, sim)
 
     def playback(self, planned: HangPlan, executed: HangExecution, path: str | Path) -> None:
         """:func:`write_hang_playback_page`: the carry to the found pose and the drop."""
@@ -256,5 +264,5 @@ class HangPlanner:
     def solve(self, task: HangTask, out: str | Path, model: str | Path | None = None, *,
               mode: str = "closed_loop", quiet: bool = False, **options) -> dict:
         """:func:`solve_hang` into ``out`` (``options``: ``seed``, ``restarts``, ``settings``,
-        ``check``); a hang solve prints nothing, whatever ``quiet``."""
+        ``check``, ``sim``); a hang solve prints nothing, whatever ``quiet``."""
         return solve_hang(task, Path(out), model, mode=mode, **options)

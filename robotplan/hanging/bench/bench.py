@@ -4,16 +4,22 @@ Scene ``i`` of ``seed`` draws its hook and mug as the data does (``default_rng([
 :mod:`robotplan.hanging.scene.ranges`). Each method looks for a pose within the same budget of
 functional evaluations: optimisation + sampling (SNOPT from up to 20 random poses),
 optimisation only (one), and sampling only at the thresholds κ1, κ2, κ3. A found pose is
-dropped in pybullet: *sim success* when the mug hangs, *collision free* when it did not
-start inside the hook; *total* = found and hanging and collision free. Beside the paper's
-columns, *in place*: the found poses that hang without first falling onto the hook
-(:meth:`robotplan.hanging.execution.world.DropResult.in_place`). The three sampling runs share
+dropped in each simulator asked for (pybullet by default, MuJoCo,
+:data:`robotplan.hanging.execution.worlds.HANG_SIMULATORS`): *sim success* when the mug
+hangs, *collision free* when it did not start inside the hook; *total* = found and hanging
+and collision free. Beside the paper's columns, *in place*: the found poses that hang
+without first falling onto the hook
+(:meth:`robotplan.hanging.execution.drop.DropResult.in_place`). The three sampling runs share
 one stream of random poses (:func:`robotplan.hanging.search.optimise.sample_hang`).
 
 Beside Tab. 3, ``closed_loop`` (on request, ``--methods``): optimisation + sampling that
 drops each pose it finds and goes on searching, within the same budget, while the mug falls
 (robotplan's default execution, :func:`robotplan.hanging.api.planner.execute_hang`); its starts are
-those of optimisation + sampling, so its first found pose is that method's.
+those of optimisation + sampling, so its first found pose is that method's; its drops are
+in the first simulator named.
+
+A row's outcomes are the first simulator's; with several, each simulator's are under
+``by_simulator``, and the summary's under ``by_simulator`` too.
 
 ``DIR/rows.jsonl`` gets one line per finished scene (an interrupted run with the same
 settings, ``DIR/run.json``, continues), then ``summary.json``.
@@ -23,6 +29,7 @@ from __future__ import annotations
 
 import json
 import time
+from contextlib import ExitStack
 from dataclasses import replace
 from pathlib import Path
 
@@ -30,7 +37,8 @@ import numpy as np
 
 from robotplan.base.files import write_atomically
 from robotplan.base.units import UnitsReport, check_ray, run_units
-from robotplan.hanging.execution.world import HangWorld
+from robotplan.hanging.execution.drop import DropResult
+from robotplan.hanging.execution.worlds import hang_world
 from robotplan.hanging.models.hang_model import HANG_THRESHOLDS, load_hang_model
 from robotplan.hanging.program.problem import HANG_DEFAULTS, HangProblem, HangSettings
 from robotplan.hanging.scene.ranges import load_hang_ranges
@@ -87,11 +95,12 @@ def _scene(index: int, seed: int, scene_set: str = "procedural"):
 def bench_scene(index: int, seed: int, model_dir: str | Path,
                 settings: HangSettings = HANG_DEFAULTS,
                 methods: tuple[str, ...] = METHODS, check_dir: str | Path | None = None,
-                scene_set: str = "procedural") -> dict:
+                scene_set: str = "procedural",
+                simulators: tuple[str, ...] = ("pybullet",)) -> dict:
     """Every method on scene ``index`` of ``scene_set`` (:data:`SCENE_SETS`); the found poses
-    checked by a drop. ``check_dir``: the check network the optimisation's found poses must
-    satisfy too (HangSettings.check_kappa; not the closed loop's, whose drops are its
-    check)."""
+    checked by a drop in each of ``simulators`` (module docstring). ``check_dir``: the check
+    network the optimisation's found poses must satisfy too (HangSettings.check_kappa; not
+    the closed loop's, whose drops are its check)."""
     from robotplan.base.threads import one_thread
 
     one_thread()
@@ -109,7 +118,9 @@ def bench_scene(index: int, seed: int, model_dir: str | Path,
     if sampling:
         kappas = tuple(HANG_THRESHOLDS[m.split("_")[1]] for m in sampling)
         found.update(zip(sampling, sample_hang(problem, rng, kappas, settings), strict=True))
-    with HangWorld(hook, mug) as world:
+    with ExitStack() as stack:
+        worlds = [stack.enter_context(hang_world(hook, mug, sim)) for sim in simulators]
+        world = worlds[0]
         drops = 0
 
         def hangs(sol) -> bool:
@@ -123,11 +134,9 @@ def bench_scene(index: int, seed: int, model_dir: str | Path,
                                                settings, accept=hangs)
         for method in methods:
             sol = found[method]
-            drop = world.drop(sol.pose) if sol.feasible else None
-            row[method] = {"found": sol.feasible,
-                           "sim_success": bool(drop and drop.hangs),
-                           "in_place": bool(drop and drop.in_place(world.physics)),
-                           "collision_free": bool(drop and not drop.collision_at_start),
+            outcomes = [_outcome(w.drop(sol.pose) if sol.feasible else None, w.physics)
+                        for w in worlds]
+            row[method] = {"found": sol.feasible, **outcomes[0],
                            "h_hang": round(sol.h_hang, 4),
                            "h_coll_cm3": round(sol.h_coll_cm3, 5),
                            "evaluations": sol.evaluations, "restarts": sol.restarts,
@@ -138,18 +147,31 @@ def bench_scene(index: int, seed: int, model_dir: str | Path,
                                          else round(sol.thread_mm, 3)),
                            "seconds": round(sol.seconds, 2),
                            "pose": [round(float(v), 5) for v in sol.pose]}
+            if len(simulators) > 1:
+                row[method]["by_simulator"] = dict(zip(simulators, outcomes, strict=True))
         if CLOSED_LOOP in methods:
             row[CLOSED_LOOP]["drops"] = drops
     return row
 
 
-def summarize_hang(rows: list[dict]) -> dict:
+def _outcome(drop: DropResult | None, physics) -> dict:
+    """A found pose's drop (None: no pose found) as a row's outcome fields."""
+    return {"sim_success": bool(drop and drop.hangs),
+            "in_place": bool(drop and drop.in_place(physics)),
+            "collision_free": bool(drop and not drop.collision_at_start)}
+
+
+def summarize_hang(rows: list[dict], simulator: str | None = None) -> dict:
     """Tab. 3's columns per method (fractions as the paper counts them), the in-place
     fraction of the found poses, and the median seconds of optimisation + sampling per
-    scene (of the closed loop, and its median number of drops, under its own key)."""
+    scene (of the closed loop, and its median number of drops, under its own key); the
+    drops' outcomes those of ``simulator`` (a row's ``by_simulator``; None: the row's own,
+    the first simulator's)."""
     out: dict = {"scenes": len(rows)}
     for method in (*METHODS, CLOSED_LOOP):
-        runs = [r[method] for r in rows if method in r]
+        runs = [r[method] if simulator is None else {**r[method],
+                                                     **r[method]["by_simulator"][simulator]}
+                for r in rows if method in r]
         if not runs:
             continue
         found = [r for r in runs if r["found"]]
@@ -171,6 +193,16 @@ def summarize_hang(rows: list[dict]) -> dict:
     return out
 
 
+def _summaries(rows: list[dict], simulators: tuple[str, ...]) -> dict:
+    """The first simulator's summary (:func:`summarize_hang`), with each simulator's under
+    ``by_simulator`` when there are several."""
+    rows = sorted(rows, key=lambda r: r["scene"])
+    summary = summarize_hang(rows)
+    if len(simulators) > 1:
+        summary["by_simulator"] = {sim: summarize_hang(rows, sim) for sim in simulators}
+    return summary
+
+
 def _run(args: tuple) -> dict:
     return bench_scene(*args)
 
@@ -179,12 +211,15 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
                    workers: int = 2, progress: bool = True,
                    methods: tuple[str, ...] = METHODS,
                    settings: HangSettings = HANG_DEFAULTS, ray: str | None = None,
-                   check_dir: str | Path | None = None, scene_set: str = "procedural") -> dict:
+                   check_dir: str | Path | None = None, scene_set: str = "procedural",
+                   simulators: tuple[str, ...] = ("pybullet",)) -> dict:
     """Run (or continue) the benchmark in ``out``, its scenes in ``workers`` local processes
     or as Ray tasks (``ray``: :func:`robotplan.base.units.run_units`), with the check network
     in ``check_dir`` (None: none, the paper's), on the scenes of ``scene_set``
-    (:data:`SCENE_SETS`); returns the summary, with where and how long
-    the scenes ran under ``units``."""
+    (:data:`SCENE_SETS`), the found poses dropped in each of ``simulators``; returns the
+    summary (its ``simulators`` named), with where and how long the scenes ran under
+    ``units``. A run of pybullet alone keeps ``run.json`` as it was before simulators
+    could be chosen (so its folders continue); another names its ``simulators`` there."""
     from tqdm import tqdm
 
     check_ray(ray)
@@ -196,6 +231,9 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
            "methods": list(methods), "collision": settings.collision,
            "check": None if check_dir is None else str(check_dir),
            "check_kappa": settings.check_kappa, "scene_set": scene_set}
+    simulators = tuple(simulators)
+    if simulators != ("pybullet",):
+        run["simulators"] = list(simulators)
     run_path = out / "run.json"
     if run_path.is_file() and json.loads(run_path.read_text()) != run:
         raise ValueError(f"{out}: holds a run with other settings ({run_path}); "
@@ -206,8 +244,8 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
         if rows_path.is_file() else []
     done = {r["scene"] for r in rows}
     todo = [(i, seed, str(model_dir), settings, methods,
-             None if check_dir is None else str(check_dir), scene_set) for i in range(scenes)
-            if i not in done]
+             None if check_dir is None else str(check_dir), scene_set, simulators)
+            for i in range(scenes) if i not in done]
     t0 = time.time()
     with tqdm(total=scenes, initial=len(done), unit="scene", desc="bench hang",
               disable=not progress) as bar, rows_path.open("a") as log:
@@ -217,8 +255,9 @@ def run_bench_hang(scenes: int, seed: int, out: Path, model_dir: str | Path,
             log.write(json.dumps(row) + "\n")
             log.flush()
             bar.update()
-    summary = summarize_hang(sorted(rows, key=lambda r: r["scene"]))
-    summary.update(seed=seed, model=str(model_dir), check=run["check"], scene_set=scene_set,
+    summary = _summaries(rows, simulators)
+    summary.update(simulators=list(simulators), seed=seed, model=str(model_dir),
+                   check=run["check"], scene_set=scene_set,
                    evaluations=settings.evaluations,
                    collision=settings.collision,
                    wall_seconds=round(time.time() - t0, 1), paper=PAPER_TAB3,

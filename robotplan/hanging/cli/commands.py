@@ -161,6 +161,7 @@ def cmd_eval_hang(args: argparse.Namespace) -> int:
 
 def cmd_bench_hang(args: argparse.Namespace) -> int:
     from robotplan.hanging.bench.bench import CLOSED_LOOP, METHODS, run_bench_hang
+    from robotplan.hanging.execution.worlds import hang_simulator_problem
     from robotplan.hanging.program.problem import HANG_DEFAULTS
 
     model = args.model or str(learned_dir("hang"))
@@ -172,6 +173,11 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
     robust = (HANG_DEFAULTS.robust_samples if args.robust_samples is None
               else args.robust_samples)
     unknown = [m for m in methods if m not in (*METHODS, CLOSED_LOOP)]
+    sims = tuple(dict.fromkeys(v.strip() for v in args.sim.split(",") if v.strip()))
+    sim_problem = hang_simulator_problem(sims) if sims else "no simulator given"
+    if sim_problem:
+        print(f"error: --sim: {sim_problem}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     problem = model_folder_problem(model) or (
         check and model_folder_problem(check, "--check")) or (
         f"--methods: unknown {unknown}; choose from {','.join((*METHODS, CLOSED_LOOP))}"
@@ -191,21 +197,15 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
         summary = run_bench_hang(args.scenes, args.seed, Path(args.out), model,
                                  workers=args.workers, methods=methods, settings=settings,
                                  ray=args.ray, check_dir=check,
-                                 scene_set="meshes" if args.meshes else "procedural")
+                                 scene_set="meshes" if args.meshes else "procedural",
+                                 simulators=sims)
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
     if args.json:
         print(json.dumps(summary))
         return 0
-    print(f"{'method':<14}{'found':>8}{'sim ok':>8}{'coll.free':>10}{'total':>8}"
-          f"{'paper total':>13}{'in place':>10}")
-    for m in methods:
-        if m in summary:
-            r, paper = summary[m], summary["paper"].get(m)
-            print(f"{m:<14}{r['found']:>8.3f}{r['sim_success']:>8.3f}"
-                  f"{r['collision_free']:>10.3f}{r['total']:>8.3f}"
-                  f"{f'{paper[3]:.3f}' if paper else '—':>13}{r['in_place']:>10.3f}")
+    _print_bench_table(summary, methods, sims)
     if args.evaluations != HANG_DEFAULTS.evaluations:
         print(f"budget: {args.evaluations} functional evaluations per method and scene "
               f"(the paper: {HANG_DEFAULTS.evaluations})")
@@ -220,9 +220,25 @@ def cmd_bench_hang(args: argparse.Namespace) -> int:
     return 0
 
 
-def solve_hang_scene(task, out: Path, model: str | None, open_loop: bool = False) -> int:
-    """``robotplan solve`` of a hang scene: find the pose, drop it (closed loop: search on
-    while the mug falls), write the result."""
+def _print_bench_table(summary: dict, methods: tuple[str, ...], sims: tuple[str, ...]) -> None:
+    """Tab. 3's columns, a row per method and simulator (the simulators side by side)."""
+    by_sim = summary.get("by_simulator", {sims[0]: summary})
+    print(f"{'method':<14}{'simulator':<10}{'found':>8}{'sim ok':>8}{'coll.free':>10}"
+          f"{'total':>8}{'paper total':>13}{'in place':>10}")
+    for m in methods:
+        paper = summary["paper"].get(m)
+        for k, sim in enumerate(sims):
+            if m in by_sim[sim]:
+                r = by_sim[sim][m]
+                print(f"{m if k == 0 else '':<14}{sim:<10}{r['found']:>8.3f}"
+                      f"{r['sim_success']:>8.3f}{r['collision_free']:>10.3f}{r['total']:>8.3f}"
+                      f"{f'{paper[3]:.3f}' if paper else '—':>13}{r['in_place']:>10.3f}")
+
+
+def solve_hang_scene(task, out: Path, model: str | None, open_loop: bool = False,
+                     sim: str = "pybullet") -> int:
+    """``robotplan solve`` of a hang scene: find the pose, drop it in simulator ``sim``
+    (closed loop: search on while the mug falls), write the result."""
     from robotplan.hanging.api.planner import solve_hang
 
     folder = Path(model) if model else learned_dir("hang")
@@ -230,13 +246,14 @@ def solve_hang_scene(task, out: Path, model: str | None, open_loop: bool = False
         print(f"error: {folder}: no trained H_hang here (spec.json); train one with "
               "robotplan train hang, or pass --model DIR", file=sys.stderr)
         return EXIT_BAD_INPUT
-    doc = solve_hang(task, out, folder,
-                     mode="open_loop" if open_loop else "closed_loop")
+    doc = solve_hang(task, out, folder, mode="open_loop" if open_loop else "closed_loop",
+                     sim=sim)
     ex = doc["execution"]
     fell = f" after {len(ex['replans'])} poses it fell from" if ex["replans"] else ""
     print(f"{doc['status']}: H_hang {doc['h_hang']:.3g}, H_coll {doc['h_coll_cm3']:.3g} cm³ "
           f"after {doc['restarts']} optimisations ({doc['evaluations']} evaluations, "
-          f"{doc['plan_seconds']} s); dropped in pybullet ({ex['mode'].replace('_', ' ')}) "
+          f"{doc['plan_seconds']} s); dropped in {ex['simulator']} "
+          f"({ex['mode'].replace('_', ' ')}) "
           f"the mug {'hangs' if ex['hung'] else 'falls'}{fell}; wrote {out / 'result.json'} and "
           f"{out / 'playback.html'}")
     return 0 if doc["status"] == "solved" else 1

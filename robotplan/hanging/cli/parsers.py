@@ -15,7 +15,7 @@ __all__ = ["add_bench_hang_parser", "add_eval_hang_parser", "add_train_hang_pars
 def add_bench_hang_parser(bsub) -> None:
     """``bench hang`` under the ``bench`` subparsers ``bsub``."""
     bh = bsub.add_parser("hang", help="find hanging poses on random mug-and-hook scenes and "
-                         "drop them in pybullet (paper Tab. 3)")
+                         "drop them in pybullet or MuJoCo (paper Tab. 3)")
     bh.add_argument("--scenes", type=int, default=150)
     bh.add_argument("--seed", type=int, default=2)
     bh.add_argument("--out", required=True, metavar="DIR",
@@ -49,6 +49,9 @@ def add_bench_hang_parser(bsub) -> None:
     bh.add_argument("--meshes", action="store_true",
                     help="the mesh mugs and hooks of tasks/meshes/hang/ (3 mugs × 2 hooks, "
                     "scene i the pair i mod 6) in place of procedural ones")
+    bh.add_argument("--sim", default="pybullet", metavar="NAMES",
+                    help="comma-separated simulators, each dropping the same found poses "
+                    "(pybullet, mujoco; default pybullet): the results side by side")
     bh.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     add_ray_option(bh)
     bh.add_argument("--json", action="store_true")

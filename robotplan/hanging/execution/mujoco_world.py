@@ -16,7 +16,8 @@ mug–hook and mug–ground contacts get pybullet's product of the two bodies' c
 mug's geoms report contacts out to ``TOUCH`` (their margin) that act only once they
 penetrate (their gap as large): the mug *touches* a body within ``TOUCH``, and starts in
 collision when a contact with the hook is deeper than ``physics.start_penetration``.
-Integrator: MuJoCo's implicit-in-velocity one (implicitfast).
+The options (integrator, elliptic friction cones) are the pushing world's
+(:func:`robotplan.execution.mujoco_world.mujoco_spec`).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from robotplan.execution.convex_pieces import convex_pieces_file
+from robotplan.execution.mujoco_world import mujoco_spec
 from robotplan.execution.solids import read_pieces
 from robotplan.hanging.execution.drop import HANG_PHYSICS, DropTest, HangPhysics
 from robotplan.hanging.execution.parts import hook_parts, mug_parts
@@ -46,10 +48,7 @@ class MujocoHangWorld(DropTest):
 
         self.mj, self.physics = mujoco, physics
         self.mug_height = mug.height
-        spec = mujoco.MjSpec()
-        spec.option.timestep = physics.timestep
-        spec.option.gravity = [0.0, 0.0, -physics.gravity]
-        spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+        spec = mujoco_spec(physics.timestep, physics.gravity)
         mu = physics.friction * physics.friction
         common = dict(friction=[mu, 0.005, 0.0001], priority=0)
         spec.worldbody.add_geom(name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE,

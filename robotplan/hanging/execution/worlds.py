@@ -8,7 +8,7 @@ from robotplan.hanging.execution.drop import HANG_PHYSICS, DropTest, HangPhysics
 from robotplan.sdf.mesh_solids import MeshHook, MeshMug
 from robotplan.sdf.mug_hook import Hook, Mug
 
-__all__ = ["HANG_SIMULATORS", "hang_world", "hang_simulator_problem"]
+__all__ = ["HANG_SIMULATORS", "hang_simulator_problem", "hang_world"]
 
 HANG_SIMULATORS = ("pybullet", "mujoco")
 

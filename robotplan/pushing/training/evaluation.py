@@ -10,6 +10,7 @@ import torch
 
 from robotplan.pushing.models.dynamics import load_model
 from robotplan.pushing.models.symmetry import symmetric_field
+from robotplan.pushing.training.push_data import data_simulator
 from robotplan.pushing.training.samples import PushSamples, SampleBatch
 from robotplan.pushing.training.train import framed, scored_workspace
 
@@ -84,7 +85,8 @@ def evaluate_push(model_dir: str | Path, data_dir: str | Path, scenes: int | Non
 
     return {
         "model": str(model_dir), "kind": spec.kind, "data": str(data_dir),
-        "representation": spec.representation, "frame": spec.frame,
+        "simulator": data_simulator(data_dir), "representation": spec.representation,
+        "frame": spec.frame,
         "scenes": samples.num_scenes,
         "samples": {"contact": int(contact.sum()), "free": int((~contact).sum())},
         "rmse_mm": stats(err), "rmse_std_mm": spread(err),

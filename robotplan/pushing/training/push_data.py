@@ -39,8 +39,8 @@ from robotplan.sdf import Box, LShape, Shape2D
 from robotplan.sdf.footprint import footprint_centroid
 from robotplan.training.shards import make_shards, prepare_folder
 
-__all__ = ["PushDataSpec", "SceneRecord", "generate", "load_shards", "scene_families",
-           "scene_footprint", "simulate_scene"]
+__all__ = ["PushDataSpec", "SceneRecord", "data_simulator", "generate", "load_shards",
+           "scene_families", "scene_footprint", "simulate_scene"]
 
 FORMAT = 1
 PER_SCENE = ("scene_index", "shape_type", "size", "thickness", "vertices", "pusher_radius")
@@ -261,6 +261,13 @@ def scene_footprint(data: dict[str, np.ndarray], scene: int) -> Shape2D:
     """The footprint of ``scene`` (a row of :func:`load_shards`' per-scene arrays)."""
     return decode_footprint(int(data["shape_type"][scene]), data["size"][scene],
                             float(data["thickness"][scene]), data["vertices"][scene])
+
+
+def data_simulator(folder: Path) -> str:
+    """The simulator that made the push data in ``folder`` (``meta.json``; pybullet for
+    folders made before there was a choice)."""
+    meta = json.loads((Path(folder) / "meta.json").read_text())
+    return meta.get("physics", {}).get("simulator", "pybullet")
 
 
 def scene_families(folder: Path, data: dict[str, np.ndarray]) -> np.ndarray:

@@ -21,7 +21,7 @@ from robotplan.models.spec import DynamicsSpec
 from robotplan.pushing.models.rigid import load_rigid, moved_pose
 from robotplan.pushing.training.evaluation import pick_samples
 from robotplan.pushing.training.footprints import BOX, LSHAPE
-from robotplan.pushing.training.push_data import scene_families
+from robotplan.pushing.training.push_data import data_simulator, scene_families
 from robotplan.pushing.training.rigid import delta_q_predictions, table5_errors, turn_gain
 from robotplan.pushing.training.samples import PushSamples, SampleBatch
 
@@ -81,7 +81,7 @@ def evaluate_rigid(model_dir: str | Path, data_dir: str | Path, scenes: int | No
 
     return {
         "model": str(model_dir), "kind": "rigid", "data": str(data_dir),
-        "scenes": samples.num_scenes,
+        "simulator": data_simulator(data_dir), "scenes": samples.num_scenes,
         "samples": {"contact": int(c.sum()), "free": int((~c).sum())},
         "delta_q_error": table5_errors(pred[c], true[c]),
         "delta_q_error_free": table5_errors(pred[~c], true[~c]),

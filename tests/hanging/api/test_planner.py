@@ -96,7 +96,7 @@ def test_the_planner_hands_each_call_to_its_function(monkeypatch, tmp_path):
                          restarts=1) == "solve_hang"
     assert calls == [
         ("plan_hang", (task, "m"), {"seed": 3, "restarts": 2}),
-        ("execute_hang", ("p", "open_loop"), {}),
+        ("execute_hang", ("p", "open_loop", "pybullet"), {}),
         ("write_hang_playback_page", ("p", "e", tmp_path / "x.html"), {}),
         ("solve_hang", (task, tmp_path, "m"), {"mode": "open_loop", "restarts": 1})]
 
@@ -137,7 +137,13 @@ def test_solve_writes_the_result_or_refuses_a_missing_model(tiny_model, tmp_path
     assert set(doc["execution"]) >= {"hung", "collision_at_start", "final_pose", "in_place",
                                      "mode", "replans"}
     assert doc["execution"]["mode"] == "closed_loop"
+    assert doc["execution"]["simulator"] == "pybullet"
     assert len(doc["pose"]) == 7
+    in_mujoco = solve_hang(task, tmp_path / "mujoco", tiny_model, restarts=1, mode="open_loop",
+                           settings=HangSettings(major_iterations=5, approach_iterations=3),
+                           check=None, sim="mujoco")
+    assert in_mujoco["execution"]["simulator"] == "mujoco"
+    assert in_mujoco["pose"] == opened["pose"], "the same plan, dropped in MuJoCo"
     assert (tmp_path / "out" / doc["picture"]).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

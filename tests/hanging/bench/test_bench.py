@@ -73,3 +73,22 @@ def test_mesh_scenes_go_through_every_mug_and_hook_pair():
     assert len(set(pairs)) == len(MESH_MUGS) * len(MESH_HOOKS) == 6
     assert pairs[:6] == pairs[6:]
     assert all(m.is_file() and h.is_file() for m, h in pairs)
+
+
+def test_each_simulator_is_summarized_and_a_bad_one_refused(tmp_path, capsys):
+    """Rows of two simulators: the row's own outcomes are the first's, each one's under
+    ``by_simulator``; ``--sim`` names only known simulators (exit 2, one line)."""
+    both = {"pybullet": {"sim_success": True, "collision_free": True, "in_place": True},
+            "mujoco": {"sim_success": False, "collision_free": True, "in_place": False}}
+    rows = [{"scene": 0, "opt_sampling": {**run(True, True, True, True), "by_simulator": both}},
+            {"scene": 1, "opt_sampling": {**run(False, False, False), "by_simulator": {
+                s: run(False, False, False) for s in both}}}]
+    assert summarize_hang(rows)["opt_sampling"]["total"] == 0.5
+    assert summarize_hang(rows, "pybullet") == summarize_hang(rows)
+    mujoco = summarize_hang(rows, "mujoco")["opt_sampling"]
+    assert mujoco["found"] == 0.5 and mujoco["sim_success"] == 0.0 and mujoco["total"] == 0.0
+    assert main(["bench", "hang", "--out", str(tmp_path / "b"), "--sim",
+                 "pybullet,nosuch"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "error: --sim: unknown simulator 'nosuch'; expected one of pybullet, mujoco")
+    assert not (tmp_path / "b").exists()

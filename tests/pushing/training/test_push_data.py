@@ -150,3 +150,26 @@ def test_scene_families_name_each_scene_footprint(tiny_push_data, tiny_ood_push_
             assert isinstance(shape, Circle)
         else:
             assert isinstance(shape, Polygon) and len(shape.vertices) == corners[name]
+
+
+def test_push_data_from_mujoco_reads_as_pybullets(tiny_push_data, tmp_path):
+    """The same scenes simulated in MuJoCo: the folder names its simulator and holds the
+    same arrays (the same draws, the same footprints) with pushes that move the objects; an
+    older folder reads as pybullet's, and a folder of one simulator refuses the other's."""
+    from dataclasses import replace
+
+    from robotplan.execution.physics import PHYSICS
+    from robotplan.pushing.training.push_data import data_simulator
+
+    mujoco = tmp_path / "mujoco"
+    generate(mujoco, scenes=12, seed=5, workers=1, shard_size=4, progress=False,
+             physics=replace(PHYSICS, simulator="mujoco"))
+    assert data_simulator(mujoco) == "mujoco" and data_simulator(tiny_push_data) == "pybullet"
+    a, b = load_shards(mujoco), load_shards(tiny_push_data)
+    assert set(a) == set(b)
+    for key in ("shape_type", "size", "pusher_radius"):
+        assert np.array_equal(a[key], b[key]), key
+    moved = np.linalg.norm(np.diff(a["object_pose"][:, :2], axis=0), axis=1)
+    assert a["contact"].any() and moved[moved < 0.1].max() > 0.005  # pushes move objects
+    with pytest.raises(ValueError, match="physics"):
+        generate(mujoco, scenes=12, seed=5, workers=1, shard_size=4, progress=False)
