@@ -180,8 +180,8 @@ class MujocoPushWorld:
         mj, ph = self.mj, self.physics
         self.model = model = self.spec.compile()
         self.data = mj.MjData(model)
-        self._ids = [model.body(b.name).id for b in self._bodies]
-        for body_id in self._ids:  # object_mass about the centroid, as pybullet
+        self.body_ids = [model.body(b.name).id for b in self._bodies]
+        for body_id in self.body_ids:  # object_mass about the centroid, as pybullet
             scale = ph.object_mass / model.body_mass[body_id]
             model.body_mass[body_id] *= scale
             model.body_inertia[body_id] *= scale
@@ -190,7 +190,7 @@ class MujocoPushWorld:
         self._obstacle_geoms = {g for g in range(model.ngeom)
                                 if model.body(model.geom_bodyid[g]).name.startswith("obstacle")}
         self._object_of_geom = {g: i for g in range(model.ngeom)
-                                for i, b in enumerate(self._ids) if model.geom_bodyid[g] == b}
+                                for i, b in enumerate(self.body_ids) if model.geom_bodyid[g] == b}
         if self._has_pusher:
             self._pusher_dofs = [model.joint(f"pusher_{a}").dofadr[0] for a in "xy"]
             self._pusher_q = [model.joint(f"pusher_{a}").qposadr[0] for a in "xy"]
@@ -257,7 +257,7 @@ class MujocoPushWorld:
                    and dist <= gap for a, b, dist in self._contacts())
 
     def _planar(self, index: int) -> tuple[np.ndarray, float]:
-        body = self._ids[index]
+        body = self.body_ids[index]
         R = self.data.xmat[body].reshape(3, 3)
         return shape_frame_pose(self.data.xpos[body], R, self._coms[index])
 
@@ -267,7 +267,7 @@ class MujocoPushWorld:
 
     def other_poses(self) -> list[np.ndarray]:
         self.ready()
-        return [self._planar(i)[0] for i in range(1, len(self._ids))]
+        return [self._planar(i)[0] for i in range(1, len(self.body_ids))]
 
     def pusher_position(self) -> np.ndarray:
         self.ready()

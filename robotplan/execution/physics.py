@@ -23,7 +23,7 @@ from typing import Protocol
 import numpy as np
 
 __all__ = ["PHYSICS", "SIMULATORS", "ArmDriver", "Physics", "PushSimulator", "damped_step",
-           "push_world", "simulator_problem"]
+           "open_simulator", "push_world", "simulator_problem"]
 
 SIMULATORS = {"pybullet": "robotplan.execution.pybullet_world:PushWorld",
               "mujoco": "robotplan.execution.mujoco_world:MujocoPushWorld"}
@@ -63,12 +63,24 @@ class Physics:
 PHYSICS = Physics()
 
 
-def simulator_problem(names: str | list[str]) -> str | None:
-    """Why ``names`` (one or a list) are not all simulators, or None."""
+def simulator_problem(names: str | list[str] | tuple[str, ...],
+                      known: dict[str, str] = SIMULATORS) -> str | None:
+    """Why ``names`` (one or several) are not all simulators of ``known`` (name →
+    ``module:class``, default :data:`SIMULATORS`), or None."""
     for name in [names] if isinstance(names, str) else names:
-        if name not in SIMULATORS:
-            return f"unknown simulator {name!r}; expected one of {', '.join(SIMULATORS)}"
+        if name not in known:
+            return f"unknown simulator {name!r}; expected one of {', '.join(known)}"
     return None
+
+
+def open_simulator(name: str, known: dict[str, str], *args: object) -> object:
+    """An instance of the class ``known[name]`` (``module:class``) made with ``args``;
+    ValueError naming the choices for another name."""
+    problem = simulator_problem(name, known)
+    if problem is not None:
+        raise ValueError(problem)
+    module, cls = known[name].split(":")
+    return getattr(importlib.import_module(module), cls)(*args)
 
 
 class ArmDriver(Protocol):
@@ -135,11 +147,7 @@ class PushSimulator(Protocol):
 
 def push_world(physics: Physics = PHYSICS) -> PushSimulator:
     """A fresh :class:`PushSimulator` of ``physics.simulator`` running ``physics``."""
-    problem = simulator_problem(physics.simulator)
-    if problem is not None:
-        raise ValueError(problem)
-    module, name = SIMULATORS[physics.simulator].split(":")
-    return getattr(importlib.import_module(module), name)(physics)
+    return open_simulator(physics.simulator, SIMULATORS, physics)
 
 
 DAMPING = 0.01  # m: the damped least-squares step of ArmDriver.steered near singularities

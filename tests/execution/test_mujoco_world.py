@@ -40,7 +40,7 @@ def test_contacts_have_the_product_of_the_bodies_frictions() -> None:
         pusher = int(np.argmax(model.geom_priority == 2))
         assert model.geom_friction[table, 0] == pytest.approx(0.5)
         assert model.geom_friction[pusher, 0] == pytest.approx(0.15)
-        assert model.body_mass[world._ids[0]] == pytest.approx(PHYSICS.object_mass)
+        assert model.body_mass[world.body_ids[0]] == pytest.approx(PHYSICS.object_mass)
 
 
 @pytest.mark.parametrize("shape", [
@@ -65,7 +65,7 @@ def test_footprints_are_simulated_as_their_outlines(shape, rng) -> None:
         assert np.abs(world.object_pose()[0] - pose).max() < 2e-3
         model, data = world.model, world.data
         ball = model.body("probe").geomadr[0]
-        geoms = [g for g in range(model.ngeom) if model.geom_bodyid[g] == world._ids[0]]
+        geoms = [g for g in range(model.ngeom) if model.geom_bodyid[g] == world.body_ids[0]]
         points = rng.uniform(-0.2, 0.2, (40, 2)) + np.array(pose[:2])
         phi = body.sdf(torch.tensor(points), torch.tensor(pose, dtype=torch.float64)).numpy()
         for p, d in zip(points, phi, strict=True):
