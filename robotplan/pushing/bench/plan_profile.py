@@ -24,13 +24,9 @@ import numpy as np
 import yaml
 
 from robotplan.base.files import write_atomically
-from robotplan.pushing.bench.push import (
-    candidate_timings,
-    finished_rows,
-    quartiles,
-    time_profile,
-)
+from robotplan.pushing.bench.push import finished_rows
 from robotplan.pushing.bench.push_scenes import copy_meshes, draw_scene, scene_name
+from robotplan.pushing.bench.push_summary import candidate_timings, quartiles, time_profile
 from robotplan.pushing.program.solution import FEASIBLE, Solution
 from robotplan.pushing.search.planner import is_solved
 from robotplan.scene import parse_scene
@@ -77,7 +73,7 @@ def profile_scene(i: int, kind: str, seed: int, out: Path, model_dir: str | Path
 def summarize_profile(rows: list[dict]) -> dict:
     """Per shape: plan seconds, searches without a solved plan, programs per search and
     the seconds spent in programs that did not solve; over all: the time per timer
-    (:func:`~robotplan.pushing.bench.push.time_profile`) and the failed programs by SNOPT
+    (:func:`~robotplan.pushing.bench.push_summary.time_profile`) and the failed programs by SNOPT
     exit, by stage and by the rows they left violated (count, median violation)."""
     out: dict = {"scenes": len(rows), "by_shape": {}}
     for kind in sorted({r["shape"] for r in rows}):

@@ -159,8 +159,12 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
                     "rehearse": rehearse,
                     "units": report.as_dict()})
     buf = io.StringIO()
-    flat = [{**{k: v for k, v in r.items() if k not in ("timings", "replans", "footprint")},
-             "replans": len(r.get("replans", []))} for r in rows]
+    flat = [{**{k: v for k, v in r.items()
+                if k not in ("timings", "replans", "footprint", "sims")},
+             "replans": len(r.get("replans", [])),
+             **{f"{key}_{sim}": len(ex[key]) if key == "replans" else ex[key]
+                for sim, ex in r.get("sims", {}).items() if len(sims) > 1
+                for key in ("coverage", "open_loop_coverage", "replans")}} for r in rows]
     fields = list(dict.fromkeys(k for r in flat for k in r))
     writer = csv.DictWriter(buf, fieldnames=fields)
     writer.writeheader()

@@ -53,3 +53,6 @@ def test_one_plan_runs_in_both_simulators(tmp_path, capsys) -> None:
     summary = json.loads((out / "summary.json").read_text())
     assert summary["simulators"]["names"] == ["pybullet", "mujoco"]
     assert (out / "coverage_mujoco.png").stat().st_size > 10_000
+    header = (out / "results.csv").read_text().splitlines()[0].split(",")
+    assert {"coverage_pybullet", "coverage_mujoco", "open_loop_coverage_mujoco"} <= set(header)
+    assert "sims" not in header
