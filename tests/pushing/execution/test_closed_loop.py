@@ -231,7 +231,8 @@ def _recording_nothing_plans():
 def test_closed_loop_recovers_an_arm_push_when_the_box_is_not_where_it_was_planned(sim):
     """The left iiwa's two pushes are planned for the box where the scene puts it; the box
     stands 6 cm further back. Open loop the arm pushes air; closed loop sees that after the
-    first step, re-plans the arm's joints from there and the box ends in the goal."""
+    first step, re-plans the arm's joints from there (the re-plan that solves may come later,
+    as the measured joints move it) and the box ends in the goal."""
     scene = load_scene(TASKS / "two_arm_left_only.yaml")
     planned = robotplan.plan(scene, skeleton="left:push@2,left:push@3", workers=2,
                              progress=False, quiet=True)
@@ -242,8 +243,9 @@ def test_closed_loop_recovers_an_arm_push_when_the_box_is_not_where_it_was_plann
     assert open_loop.coverage < 0.5
     closed = robotplan.execute(planned, moved, sim=sim)
     assert closed.coverage >= 0.95
-    first = closed.replans[0]
-    assert first.step == 1 and first.solved and "left" in first.skeleton
+    assert closed.replans[0].step == 1  # it sees the box off the plan at once
+    solved = [r for r in closed.replans if r.solved]
+    assert solved and all("left" in r.skeleton for r in solved)
     assert set(closed.joints) == {"left", "right"}
     assert len(closed.joints["left"]) == len(closed.object_poses)
 
