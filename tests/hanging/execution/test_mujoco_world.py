@@ -12,7 +12,7 @@ from robotplan.hanging.execution.drop import HANG_PHYSICS
 from robotplan.hanging.execution.mujoco_world import MujocoHangWorld
 from robotplan.hanging.execution.world import HangWorld
 from robotplan.hanging.execution.worlds import hang_world
-from tests.hanging.execution.test_world import HOOK, MUG, quarter_turn, threaded_pose
+from tests.hanging.execution.test_world import HOOK, MUG, threaded_mesh_pose, threaded_pose
 
 
 @pytest.fixture(scope="module")
@@ -59,28 +59,13 @@ def test_the_mug_weighs_and_rubs_as_in_pybullet(world):
     assert world.model.opt.timestep == HANG_PHYSICS.timestep
 
 
-@pytest.fixture(scope="module")
-def mesh_parts():
-    from robotplan.geometry.meshes import read_mesh
-    from robotplan.sdf.mesh_solids import MeshHook, MeshMug
-    from tests.conftest import TASKS
-
-    folder = TASKS / "meshes" / "hang"
-    mug, hook = folder / "mug_square_handle.stl", folder / "hook_square_rod.stl"
-    return MeshMug(read_mesh(mug), mug), MeshHook(read_mesh(hook), hook)
-
-
 def test_a_mesh_mug_loads_hangs_threaded_and_falls_when_clear(mesh_parts):
     mug, hook = mesh_parts
     with MujocoHangWorld(hook, mug) as w:
         body = w.model.body("mug").id
         assert np.allclose(w.model.body_ipos[body], mug.mesh.center_mass)
         assert w.model.nmesh > 10, "a mesh geom per convex piece"
-        x0, z0, _, _ = mug.opening()
-        arm = hook.arm_points()
-        along = 0.07
-        arm_z = np.interp(along, arm[:, 0], arm[:, 2])
-        result = w.drop((along, -x0, arm_z - z0, *quarter_turn()))
+        result = w.drop(threaded_mesh_pose(mug, hook))
         assert result.hangs, result
         clear = w.drop((0.4, 0.4, 0.2, math.cos(0.3), 0.0, 0.0, math.sin(0.3)))
         assert clear.on_ground and not clear.hangs

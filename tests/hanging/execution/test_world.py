@@ -69,17 +69,6 @@ def test_the_simulated_bodies_are_the_sdf_shapes(world, rng):
     assert_bodies_are_the_shapes(world, MUG, HOOK, rng, 1.5e-3)
 
 
-@pytest.fixture(scope="module")
-def mesh_parts():
-    from robotplan.geometry.meshes import read_mesh
-    from robotplan.sdf.mesh_solids import MeshHook, MeshMug
-    from tests.conftest import TASKS
-
-    folder = TASKS / "meshes" / "hang"
-    mug, hook = folder / "mug_square_handle.stl", folder / "hook_square_rod.stl"
-    return MeshMug(read_mesh(mug), mug), MeshHook(read_mesh(hook), hook)
-
-
 def test_mesh_bodies_are_their_sdfs_and_a_threaded_mesh_mug_hangs(mesh_parts, rng):
     """A mesh hook is its mesh in pybullet, a mesh mug its skin's pieces, in the frames of
     their SDF lattices (within the lattice's 3 mm step and the skin's sagitta); the mug
@@ -87,12 +76,17 @@ def test_mesh_bodies_are_their_sdfs_and_a_threaded_mesh_mug_hangs(mesh_parts, rn
     mug, hook = mesh_parts
     with HangWorld(hook, mug) as w:
         assert_bodies_are_the_shapes(w, mug, hook, rng, 2.5e-3)
-        x0, z0, _, _ = mug.opening()
-        arm = hook.arm_points()
-        along = 0.07
-        arm_z = np.interp(along, arm[:, 0], arm[:, 2])
-        result = w.drop((along, -x0, arm_z - z0, *quarter_turn()))
+        result = w.drop(threaded_mesh_pose(mug, hook))
         assert result.hangs, result
+
+
+def threaded_mesh_pose(mug, hook, along: float = 0.07) -> tuple[float, ...]:
+    """The mesh mug upright, turned a quarter, the hook's arm through the middle of its
+    handle's opening ``along`` m out from the post: ``X_WM (7,)``."""
+    x0, z0, _, _ = mug.opening()
+    arm = hook.arm_points()
+    arm_z = np.interp(along, arm[:, 0], arm[:, 2])
+    return (along, -x0, arm_z - z0, *quarter_turn())
 
 
 def assert_bodies_are_the_shapes(world, mug, hook, rng, tolerance: float) -> None:
