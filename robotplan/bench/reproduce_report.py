@@ -150,8 +150,9 @@ def _ablation_rows(results: dict, out: Path, scenes: int) -> list:
     import numpy as np
 
     def rows_of(step: dict) -> list[dict]:
-        path = out / step["folder"] / "bench" / "rows.jsonl"
-        rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+        path = out / step["folder"] / "bench" / "rows.jsonl"  # steps kept without their rows
+        rows = step["result"].get("rows") or [
+            json.loads(line) for line in path.read_text().splitlines() if line.strip()]
         return [r for r in rows if r["shape"] == "box"][:scenes]
 
     variants = [("every row (Fig. 3's run)", results["fig3"]),

@@ -1,9 +1,18 @@
 """The steps of ``robotplan reproduce``: each item of the report is a step (data,
-training, evaluation, benchmark) with its parameters; a step's result is kept in
-``OUT/steps/<name>-<key>/result.json``, where the key hashes the step's name, its parameters
-and the content of the code, skeleton tables, robot descriptions and learned models
-(:func:`inputs_digest`), so a second run reuses every step whose inputs did not change and
-reruns the rest."""
+training, evaluation, benchmark) with its parameters.
+
+A step's key hashes its name, its parameters, what it reads (:mod:`robotplan.bench.step_keys`:
+the modules it runs, the files it reads by content, the skeleton tables and robot
+descriptions) and the keys of the steps whose outputs it uses (``needs``). Its result is kept
+in ``OUT/steps/<name>-<key>/result.json`` beside its outputs, and, with a ledger, as
+``LEDGER/<name>.json`` (the result alone: small JSON, committed with the code). A step runs
+only when neither has its key: a later run, on a new machine too, reuses every step whose
+inputs did not change. A step reused from the ledger has no outputs on this machine; it runs
+again only if a step that needs them has to run.
+
+``dry=True`` runs nothing: each step is reported as ``done`` (its key in the folder or the
+ledger), ``stale`` (the ledger holds an older key: something it reads changed) or ``missing``.
+"""
 
 from __future__ import annotations
 
@@ -11,69 +20,134 @@ import hashlib
 import json
 import shutil
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from robotplan.base.files import write_atomically
-from robotplan.base.resources import data_root, robots_dir, skeletons_dir
+from robotplan.base.resources import robots_dir, skeletons_dir
+from robotplan.bench.step_keys import files_digest, modules_digest, package_modules
 
-__all__ = ["REPORT_ONLY", "Steps", "inputs_digest"]
+__all__ = ["Steps", "step_key"]
 
-# how the report is written, not what its steps compute: left out of the steps' key
-REPORT_ONLY = frozenset({"bench/paper.py", "bench/report.py", "bench/reproduce_report.py",
-                         "hanging/bench/report.py"})
+EVERYTHING = ("robotplan",)  # a step that does not say what it runs: the whole package
 
 
-def inputs_digest() -> str:
-    """SHA-256 of the package's code (but the report's formatting, ``REPORT_ONLY``) and of
-    the skeleton tables, robot descriptions and learned models it reads: what every step's
-    result depends on beside its parameters."""
-    h = hashlib.sha256()
-    package = Path(__file__).resolve().parents[1]
-    roots = [(package, ("*.py", "*.c")), (skeletons_dir(), ("*",)), (robots_dir(), ("*",)),
-             (data_root() / "learned", ("*",))]
-    for root, patterns in roots:
-        files = sorted({p for pat in patterns for p in root.rglob(pat) if p.is_file()
-                        and "__pycache__" not in p.parts
-                        and not (root == package
-                                 and p.relative_to(root).as_posix() in REPORT_ONLY)})
-        for p in files:
-            h.update(str(p.relative_to(root)).encode())
-            h.update(p.read_bytes())
-    return h.hexdigest()
+def step_key(name: str, params: dict, runs: Iterable[str], reads: Iterable[Path],
+             needs: Iterable[str]) -> str:
+    """The key of a step (module docstring): 12 hex digits."""
+    runs = tuple(runs)
+    code = modules_digest(package_modules() if runs == EVERYTHING else runs)
+    tables = files_digest([skeletons_dir(), robots_dir(), *reads])
+    doc = {"name": name, "params": params, "code": code, "files": tables,
+           "needs": sorted(needs)}
+    return hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode()
+                          ).hexdigest()[:12]
+
+
+@dataclass
+class _Pending:
+    """A step reused from the ledger whose outputs are not on this machine yet."""
+
+    name: str
+    fn: Callable[[Path], dict]
+    needs: tuple[dict, ...]
+    command: str
+    params: dict = field(default_factory=dict)
 
 
 class Steps:
     """Runs steps, or reuses their kept results (see the module docstring)."""
 
-    def __init__(self, out: Path, digest: str, progress: bool) -> None:
-        self.out, self.digest, self.progress = out, digest, progress
+    def __init__(self, out: Path, progress: bool = True, ledger: Path | None = None,
+                 dry: bool = False) -> None:
+        self.out, self.progress, self.ledger, self.dry = out, progress, ledger, dry
+        if ledger is not None and not dry:
+            ledger.mkdir(parents=True, exist_ok=True)
         self.log: list[dict] = []
+        self._pending: dict[str, _Pending] = {}
+        self._results: dict[str, dict] = {}  # each step's result by its folder
+        self.params_log: list[dict] = []  # each logged step's parameters
 
-    def run(self, name: str, params: dict, fn: Callable[[Path], dict], command: str) -> dict:
-        key = hashlib.sha256(json.dumps({"name": name, "params": params,
-                                         "inputs": self.digest}, sort_keys=True,
-                                        default=str).encode()).hexdigest()[:12]
+    def run(self, name: str, params: dict, fn: Callable[[Path], dict], command: str, *,
+            runs: Iterable[str] = EVERYTHING, reads: Iterable[Path] = (),
+            needs: Iterable[dict] = ()) -> dict:
+        """Run ``fn(folder)`` as step ``name`` or reuse its result. ``runs``: the entry
+        modules it runs; ``reads``: files or folders it reads; ``needs``: the results (as
+        returned here) of the steps whose outputs it uses."""
+        needs = tuple(needs)
+        key = step_key(name, params, runs, reads, [n["key"] for n in needs])
         folder = self.out / "steps" / f"{name}-{key}"
-        done = folder / "result.json"
-        if done.is_file():
-            result = json.loads(done.read_text())
-            self._say(f"{name}: reused ({folder.relative_to(self.out)})")
-        else:
-            if folder.exists():  # an interrupted run of this step: start it over
-                shutil.rmtree(folder)
-            folder.mkdir(parents=True)
-            self._say(f"{name}: running `{command}` …")
-            t0 = time.time()
-            result = {"result": fn(folder), "seconds": round(time.time() - t0, 1),
+        rel = str(folder.relative_to(self.out))
+        kept, entry = folder / "result.json", self._ledger_entry(name)
+        if kept.is_file():
+            result, state = json.loads(kept.read_text()), "done"
+            self._say(f"{name}: reused ({rel})")
+        elif entry is not None and entry.get("key") == key:
+            result, state = dict(entry), "done"
+            self._pending[rel] = _Pending(name, fn, needs, command, params)
+            self._say(f"{name}: reused from the ledger")
+        elif self.dry:
+            state = "stale" if entry is not None else "missing"
+            result = {"result": {}, "seconds": (entry or {}).get("seconds"),
                       "command": command, "params": params}
-            write_atomically(done, lambda tmp: tmp.write_text(json.dumps(result, indent=1,
-                                                                          default=str)))
-            self._say(f"{name}: {result['seconds']} s")
-        result["folder"] = str(folder.relative_to(self.out))
-        self.log.append({"name": name, "folder": result["folder"],
-                         "seconds": result["seconds"], "command": result["command"]})
+        else:
+            result, state = self._execute(name, key, folder, fn, needs, command, params), "ran"
+        result.update(folder=rel, key=key, state=state)
+        self._results[rel] = result
+        self.log.append({"name": name, "folder": rel, "key": key, "state": state,
+                         "seconds": result.get("seconds"), "command": result["command"]})
+        self.params_log.append(params)
         return result
+
+    def uses(self, *paths: Path) -> dict:
+        """``needs`` and ``reads`` of a step that reads ``paths``: a path inside a step's
+        folder is that step's output (its key stands for its content), any other is read
+        by content."""
+        needs, reads = [], []
+        for path in paths:
+            parts = Path(path).resolve().relative_to(self.out.resolve()).parts if (
+                Path(path).resolve().is_relative_to(self.out.resolve())) else ()
+            step = (self._results.get(f"{parts[0]}/{parts[1]}")
+                    if len(parts) > 1 and parts[0] == "steps" else None)
+            if step is not None:
+                needs.append(step)
+            else:
+                reads.append(Path(path))
+        return {"needs": tuple(needs), "reads": tuple(reads)}
+
+    def materialize(self, step: dict) -> None:
+        """Make sure the outputs of ``step`` (a result of :meth:`run`) are on this machine:
+        run it if it was reused from the ledger alone."""
+        pending = self._pending.pop(step["folder"], None)
+        if pending is None or (self.out / step["folder"] / "result.json").is_file():
+            return
+        self._execute(pending.name, step["key"], self.out / step["folder"], pending.fn,
+                      pending.needs, pending.command, pending.params)
+
+    def _execute(self, name: str, key: str, folder: Path, fn: Callable[[Path], dict],
+                 needs: tuple[dict, ...], command: str, params: dict) -> dict:
+        for step in needs:
+            self.materialize(step)
+        if folder.exists():  # an interrupted run of this step: start it over
+            shutil.rmtree(folder)
+        folder.mkdir(parents=True)
+        self._say(f"{name}: running `{command}` …")
+        t0 = time.time()
+        result = {"result": fn(folder), "seconds": round(time.time() - t0, 1),
+                  "command": command, "params": params}
+        text = json.dumps(result, indent=1, default=str)
+        write_atomically(folder / "result.json", lambda tmp: tmp.write_text(text))
+        if self.ledger is not None:
+            entry = json.dumps({"key": key, **json.loads(text)}, indent=1)
+            write_atomically(self.ledger / f"{name}.json", lambda tmp: tmp.write_text(entry))
+        self._say(f"{name}: {result['seconds']} s")
+        return json.loads(text)
+
+    def _ledger_entry(self, name: str) -> dict | None:
+        if self.ledger is None or not (self.ledger / f"{name}.json").is_file():
+            return None
+        return json.loads((self.ledger / f"{name}.json").read_text())
 
     def _say(self, text: str) -> None:
         if self.progress:

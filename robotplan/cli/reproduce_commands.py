@@ -17,26 +17,49 @@ def add_reproduce_parser(sub) -> None:
     rp = sub.add_parser("reproduce", help="the paper's tables and figures beside its numbers: "
                         "data, evaluations and benchmarks run (or reused) and one report")
     rp.add_argument("--out", required=True, metavar="DIR",
-                    help="report.md, report.html and every step's result (kept and reused "
-                         "while the code and models are unchanged)")
+                    help="report.md, report.html and every step's result and outputs (kept "
+                         "and reused while what the step reads is unchanged)")
     rp.add_argument("--quick", action="store_true",
                     help="small sets, within 30 minutes on 2 cores (the report says so)")
+    rp.add_argument("--ledger", default=None, metavar="DIR|none",
+                    help="finished steps' results kept with the code and reused from there "
+                         "(default docs/reproduce/ledger/SIZE; none: only --out's)")
+    rp.add_argument("--status", action="store_true",
+                    help="run nothing: list each step as done, stale (something it reads "
+                         "changed) or missing, with the seconds it last took")
     rp.add_argument("--workers", type=int, default=2)
     add_ray_option(rp)
     rp.set_defaults(run=cmd_reproduce)
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
-    from robotplan.bench.reproduce import FULL, QUICK, reproduce
+    from robotplan.bench.reproduce import FULL, QUICK, ledger_dir, reproduce, reproduce_status
 
     out = Path(args.out)
-    if out.exists() and any(out.iterdir()) and not (out / "run.json").is_file():
+    if out.exists() and any(out.iterdir()) and not (out / "run.json").is_file() and not (
+            out / "steps").is_dir():
         print(f"error: {out}: --out: a folder with other files in it (reproduce keeps its "
               "steps in a folder of its own and reuses them)", file=sys.stderr)
         return EXIT_BAD_INPUT
     if args.workers < 1:
         print("error: --workers must be ≥ 1", file=sys.stderr)
         return EXIT_BAD_INPUT
-    report = reproduce(out, QUICK if args.quick else FULL, workers=args.workers, ray=args.ray)
+    sizes = QUICK if args.quick else FULL
+    ledger = (None if args.ledger == "none"
+              else Path(args.ledger) if args.ledger else ledger_dir(sizes))
+    if args.status:
+        log = reproduce_status(out, sizes, args.workers, ledger)
+        for step in log:
+            seconds = ("" if step["seconds"] is None else
+                       f" ({'~' if step.get('estimated') else ''}{step['seconds']:.0f} s)")
+            print(f"{step['state']:>8}  {step['name']}{seconds}")
+        todo = [s for s in log if s["state"] != "done"]
+        known = sum(s["seconds"] or 0.0 for s in todo)
+        unknown = sum(s["seconds"] is None for s in todo)
+        print(f"{sizes.name}: {len(log) - len(todo)} of {len(log)} steps done; to run: "
+              f"{len(todo)}, {known / 3600:.1f} CPU hours as last measured or scaled (~)"
+              + (f", {unknown} never run" if unknown else ""))
+        return 0
+    report = reproduce(out, sizes, workers=args.workers, ray=args.ray, ledger=ledger)
     print(f"report: {report} (and {report.with_suffix('.html')})")
     return 0

@@ -90,7 +90,7 @@ def test_each_representation_is_trained_alike_and_set_beside_the_paper(
     paper's own rows for ψ_s (b = 100), PointNet and PointNet++ are no longer marked "paper
     only" once ours sit beside them."""
     sizes = replace(QUICK, per_scene=2, representation_scenes=12, representation_steps=2)
-    steps = Steps(tmp_path, "digest", progress=False)
+    steps = Steps(tmp_path, progress=False)
     sets = {"test": tiny_push_data, "ood": tiny_ood_push_data}
     reps, models = _representations(steps, sizes, tiny_push_data, sets)
     assert set(reps) == {"reps_test", "reps_ood"}
@@ -119,7 +119,7 @@ def test_each_representation_is_trained_alike_and_set_beside_the_paper(
 def test_tab4_trains_a_flow_on_each_representation_and_scores_it_in_what_it_reads(
         tiny_push_data, tmp_path):
     sizes = replace(QUICK, per_scene=2, flow_steps=2)
-    steps = Steps(tmp_path, "digest", progress=False)
+    steps = Steps(tmp_path, progress=False)
     results = _flow_representations(steps, sizes, tiny_push_data, tiny_push_data)
     assert list(results) == list(FLOW_REPRESENTATIONS)
     assert [r["result"]["representation"] for r in results.values()] == [
@@ -142,7 +142,8 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
                    hang_test_scenes=1,
                    hang_train_steps=2, hang_representation_scenes=1,
                    hang_representation_methods=("sampling_k1",), hang_evaluations=64)
-    md = reproduce(tmp_path, tiny, workers=1, progress=False)
+    ledger = tmp_path / "ledger"
+    md = reproduce(tmp_path, tiny, workers=1, progress=False, ledger=ledger)
     text = md.read_text()
     for item in ("Tab. 2", "Tab. 4", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 5", "Fig. 6",
                  "Fig. 8", "Fig. 11", "Tab. 3", "without H_PoC", "| analytic |"):
@@ -157,10 +158,17 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     # Tab. 4's four F_flow: 4 + 4; Tab. 3's two H_hang: 2 data, 2 trainings, 2 benches;
     # Tab. 2's object-frame F_flow and F on both sets: 4
     assert len(run["steps"]) == 54 and run["sizes"]["test_scenes"] == 3
-    reproduce(tmp_path, tiny, workers=1, progress=False)
+    reproduce(tmp_path, tiny, workers=1, progress=False, ledger=ledger)
     again = json.loads((tmp_path / "run.json").read_text())
     assert [s["folder"] for s in again["steps"]] == [s["folder"] for s in run["steps"]]
     assert (tmp_path / "report.html").stat().st_size > 1000
+    # a fresh clone: a new output folder and the committed ledger; nothing runs again
+    elsewhere = tmp_path / "elsewhere"
+    md = reproduce(elsewhere, tiny, workers=1, progress=False, ledger=ledger)
+    fresh = json.loads((elsewhere / "run.json").read_text())
+    assert {s["state"] for s in fresh["steps"]} == {"done"}
+    assert not (elsewhere / "steps").exists()
+    assert md.read_text() == text and (elsewhere / "fig3_coverage.png").is_file()
 
 
 @pytest.mark.slow
@@ -173,7 +181,7 @@ def test_h_hang_on_each_representation_is_trained_alike_and_planned_with(tmp_pat
                     hang_train_scenes=2, hang_test_scenes=1, hang_train_steps=2,
                     hang_representation_scenes=1, hang_representation_methods=("sampling_k1",),
                     hang_evaluations=64, hang_every_collision_row=True)
-    steps = Steps(tmp_path, "digest", progress=False)
+    steps = Steps(tmp_path, progress=False)
     results = hang_representations(steps, sizes, workers=1, ray=None)
     assert list(results) == list(HANG_REPRESENTATIONS)
     specs = {key: json.loads(next(tmp_path.glob(f"steps/train_hang_{key}-*/model/spec.json"))
@@ -211,3 +219,14 @@ def test_h_hang_on_each_representation_is_trained_alike_and_planned_with(tmp_pat
     held = tables[2][2]
     assert [r[0] for r in held] == labels
     assert all(len(r[2].split(" / ")) == 3 for r in held)
+
+
+def test_a_missing_steps_time_is_scaled_from_another_sizes_ledger(tmp_path):
+    from robotplan.bench.reproduce import scaled_seconds
+
+    quick = tmp_path / "quick"
+    quick.mkdir()
+    (quick / "bench_push.json").write_text(json.dumps(
+        {"key": "k", "seconds": 30.0, "params": {"scenes": 2, "seed": 0}}))
+    assert scaled_seconds("bench_push", {"scenes": 20, "seed": 0}, [quick]) == 300.0
+    assert scaled_seconds("bench_hang", {"scenes": 20}, [quick]) is None

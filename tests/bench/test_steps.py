@@ -1,26 +1,98 @@
-"""The steps of ``robotplan reproduce``: kept and reused by their parameters and inputs."""
+"""The steps of ``robotplan reproduce``: kept and reused by what they read (their parameters,
+the modules they run, the files they read, the steps they need), from their folder or from
+a ledger kept with the code."""
 
-from robotplan.bench.steps import Steps, inputs_digest
+import json
+
+from robotplan.bench.step_keys import files_digest, module_closure, modules_digest
+from robotplan.bench.steps import Steps
+
+DATA = ("robotplan.pushing.training.push_data",)
 
 
-def test_a_step_is_reused_until_its_parameters_or_inputs_change(tmp_path):
+def _counting():
     calls = []
 
     def step(folder):
         calls.append(folder)
-        (folder / "made.txt").write_text("x")
+        (folder / "made.txt").write_text(str(len(calls)))
         return {"value": len(calls)}
 
-    steps = Steps(tmp_path, "digest-a", progress=False)
-    first = steps.run("s", {"n": 1}, step, "cmd")
-    again = steps.run("s", {"n": 1}, step, "cmd")
+    return step, calls
+
+
+def test_a_step_is_reused_until_its_parameters_or_reads_change(tmp_path):
+    step, calls = _counting()
+    steps = Steps(tmp_path / "out", progress=False)
+    first = steps.run("s", {"n": 1}, step, "cmd", runs=DATA)
+    again = steps.run("s", {"n": 1}, step, "cmd", runs=DATA)
     assert first["result"] == again["result"] == {"value": 1} and len(calls) == 1
-    assert steps.run("s", {"n": 2}, step, "cmd")["result"] == {"value": 2}
-    other_code = Steps(tmp_path, "digest-b", progress=False)
-    assert other_code.run("s", {"n": 1}, step, "cmd")["result"] == {"value": 3}
-    assert len({c.name for c in calls}) == 3  # each in a folder of its own
-    assert [s["name"] for s in steps.log] == ["s", "s", "s"]
+    assert steps.run("s", {"n": 2}, step, "cmd", runs=DATA)["result"] == {"value": 2}
+    model = tmp_path / "model.txt"
+    model.write_text("a")
+    assert steps.run("s", {"n": 1}, step, "cmd", runs=DATA, reads=(model,))["result"] == {
+        "value": 3}
+    model.write_text("b")  # the file it reads changed: it runs again
+    assert steps.run("s", {"n": 1}, step, "cmd", runs=DATA, reads=(model,))["result"] == {
+        "value": 4}
+    assert len({c.name for c in calls}) == 4  # each in a folder of its own
+    assert [s["state"] for s in steps.log] == ["ran", "done", "ran", "ran", "ran"]
 
 
-def test_the_inputs_digest_is_stable():
-    assert inputs_digest() == inputs_digest() and len(inputs_digest()) == 64
+def test_a_step_keys_on_the_modules_it_runs_not_the_whole_package():
+    closure = module_closure(DATA)
+    assert "robotplan.pushing.training.push_data" in closure
+    # the simulators it opens by name from a registry are read
+    assert {"robotplan.execution.pybullet_world", "robotplan.execution.mujoco_world"} <= set(
+        closure)
+    assert not any(m.startswith(("robotplan.hanging", "robotplan.cli", "robotplan.api"))
+                   for m in closure)
+    assert modules_digest(DATA) == modules_digest(DATA)
+    assert modules_digest(DATA) != modules_digest(("robotplan.hanging.bench.bench",))
+
+
+def test_the_ledger_stands_in_for_a_step_until_one_that_needs_it_must_run(tmp_path):
+    """A second machine (a fresh output folder, the same ledger) reuses both steps without
+    running them; a consumer with new parameters needs the data step's outputs, so that one
+    runs there first; status lists done, stale and missing without running anything."""
+    ledger = tmp_path / "ledger"
+    make, made = _counting()
+    use, used = _counting()
+
+    def chain(steps, n: int):
+        data = steps.run("data", {"scenes": 2}, make, "data", runs=DATA)
+
+        def consume(folder):
+            assert (steps.out / data["folder"] / "made.txt").is_file()
+            return use(folder)
+
+        return data, steps.run("eval", {"n": n}, consume, "eval", runs=DATA, needs=(data,))
+
+    first = Steps(tmp_path / "a", progress=False, ledger=ledger)
+    chain(first, 1)
+    assert json.loads((ledger / "eval.json").read_text())["key"] == first.log[1]["key"]
+    fresh = Steps(tmp_path / "b", progress=False, ledger=ledger)
+    chain(fresh, 1)
+    assert len(made) == len(used) == 1 and [s["state"] for s in fresh.log] == ["done"] * 2
+    assert not (tmp_path / "b" / "steps").exists()  # nothing ran there
+    status = Steps(tmp_path / "c", progress=False, ledger=ledger, dry=True)
+    chain(status, 2)
+    assert [s["state"] for s in status.log] == ["done", "stale"]
+    chain(fresh, 2)  # the consumer runs, so the data it needs is made here first
+    assert len(made) == 2 and len(used) == 2
+    assert fresh.log[-1]["state"] == "ran"
+    other = Steps(tmp_path / "d", progress=False, ledger=tmp_path / "empty", dry=True)
+    chain(other, 1)
+    assert [s["state"] for s in other.log] == ["missing", "missing"]
+
+
+def test_uses_tells_a_steps_outputs_from_files_read_by_content(tmp_path):
+    step, _ = _counting()
+    steps = Steps(tmp_path / "out", progress=False)
+    data = steps.run("data", {}, step, "data", runs=DATA)
+    outside = tmp_path / "learned"
+    outside.mkdir()
+    uses = steps.uses(tmp_path / "out" / data["folder"] / "made.txt", outside)
+    assert [n["key"] for n in uses["needs"]] == [data["key"]]
+    assert uses["reads"] == (outside,)
+    assert files_digest([outside]) == files_digest([outside])

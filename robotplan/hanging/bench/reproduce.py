@@ -40,14 +40,15 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
     from robotplan.hanging.training.data import generate_hang
     from robotplan.hanging.training.train import HangTrainConfig, train_hang
 
-    def data(name: str, scenes: int, seed: int) -> tuple[str, Path]:
+    def data(name: str, scenes: int, seed: int) -> tuple[dict, Path]:
         res = steps.run(name, {"scenes": scenes, "seed": seed}, lambda f: generate_hang(
             f / "data", scenes, seed, workers=workers, progress=False, ray=ray),
-            f"robotplan data hang --scenes {scenes} --seed {seed}")
-        return res["folder"], steps.out / res["folder"] / "data"
+            f"robotplan data hang --scenes {scenes} --seed {seed}",
+            runs=("robotplan.hanging.training.data",))
+        return res, steps.out / res["folder"] / "data"
 
-    train_folder, train_dir = data("data_hang", sizes.hang_train_scenes, 0)
-    test_folder, test_dir = data("data_hang_test", sizes.hang_test_scenes, 1)
+    train_step, train_dir = data("data_hang", sizes.hang_train_scenes, 0)
+    test_step, test_dir = data("data_hang_test", sizes.hang_test_scenes, 1)
     n = sizes.hang_train_steps
     settings = replace(PAPER_HANG, evaluations=sizes.hang_evaluations)
     methods = ",".join(sizes.hang_representation_methods)
@@ -57,11 +58,12 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
         _label, fields, collisions = HANG_REPRESENTATIONS[key]
         cfg = {"steps": n, "warmup": min(200, n // 10), "val_every": n, "spec": fields}
         trained = steps.run(
-            f"train_hang_{key}", {**cfg, "data": train_folder, "test": test_folder},
+            f"train_hang_{key}", {**cfg, "data": "data_hang", "test": "data_hang_test"},
             lambda f, c=cfg: train_hang(HangTrainConfig(
                 data=str(train_dir), test=str(test_dir), out=str(f / "model"), **c),
                 progress=False),
-            f"robotplan train hang --data DATA --test TEST --steps {n}{spec_flags(fields)}")
+            f"robotplan train hang --data DATA --test TEST --steps {n}{spec_flags(fields)}",
+            runs=("robotplan.hanging.training.train",), needs=(train_step, test_step))
         model = steps.out / trained["folder"] / "model"
         out[key] = {"train": trained}
         for i, collision in enumerate(collisions if sizes.hang_every_collision_row
@@ -71,11 +73,12 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
             out[key][name] = steps.run(
                 f"{name}_hang_{key}", {"scenes": bench_scenes, "seed": 2, "methods": methods,
                                        "evaluations": sizes.hang_evaluations,
-                                       "model": trained["folder"], "collision": collision},
+                                       "model": f"train_hang_{key}", "collision": collision},
                 lambda f, m=model, c=chosen: run_bench_hang(
                     bench_scenes, 2, f / "bench", m, workers=workers, progress=False,
                     methods=sizes.hang_representation_methods, settings=c, ray=ray),
                 f"robotplan bench hang --scenes {bench_scenes} --seed 2 --model MODEL "
                 f"--methods {methods} --evaluations {sizes.hang_evaluations} "
-                f"--collision {collision} --check none --no-threading")
+                f"--collision {collision} --check none --no-threading",
+                runs=("robotplan.hanging.bench.bench",), needs=(trained,))
     return out
