@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from robotplan.execution.mujoco_model import sliding
 from robotplan.execution.physics import damped_step
 from robotplan.execution.pybullet_arms import JOINT_FORCE
 from robotplan.scene.robots import load_robot_model
@@ -115,10 +116,10 @@ def attach_arm(world: MujocoPushWorld, spec: RobotSpec, index: int) -> MujocoArm
             continue
         for geom in body.geoms:
             geom.contype, geom.conaffinity = own, others
-            geom.friction = [link_mu, 0.005, 0.0001]
+            geom.friction = sliding(link_mu)
     flange = world.spec.body(prefix + model.tip.link)
     flange.add_geom(name=prefix + "tip", type=mj.mjtGeom.mjGEOM_SPHERE,
                     size=[spec.tip_radius, 0, 0], pos=list(model.tip.offset), mass=0.1,
                     contype=own, conaffinity=others, priority=2,
-                    friction=[ph.friction("pusher", "object"), 0.005, 0.0001])
+                    friction=sliding(ph.friction("pusher", "object")))
     return MujocoArm(world, prefix, q0, model.tip.link, np.asarray(model.tip.offset))

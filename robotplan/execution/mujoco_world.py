@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from robotplan.execution.mujoco_model import mujoco_spec, sliding
 from robotplan.execution.physics import PHYSICS, Physics
 from robotplan.execution.solids import (
     Solid,
@@ -39,32 +40,15 @@ from robotplan.sdf.footprint import footprint_centroid
 if TYPE_CHECKING:
     from robotplan.execution.mujoco_arms import MujocoArm
 
-__all__ = ["OBJECT", "SERVO_RATE", "MujocoPushWorld", "mujoco_spec"]
+__all__ = ["OBJECT", "SERVO_RATE", "MujocoPushWorld"]
 
 # contype / conaffinity bits: two geoms collide when one's type meets the other's affinity
 OBJECT, TABLE, PUSHER = 1, 2, 4
 # rad/s: the pusher servo's natural frequency, critically damped: it lags a 0.36 m/s push by
 # under 1 mm and is stable at 240 Hz (docs/experiments.md#mujoco-servo)
 SERVO_RATE = 80.0
-IMPRATIO = 10.0  # frictional to normal impedance (docs/experiments.md#mujoco-contacts)
 NEAR = 0.002  # m: object–obstacle pairs closer than this are reported (not pushed apart)
 SETTLE_STEPS = 10
-
-
-def mujoco_spec(timestep: float, gravity: float):
-    """An empty ``mujoco.MjSpec`` with the options every robotplan world has: the time step,
-    gravity along −z, the implicit-in-velocity integrator and Coulomb's elliptic friction
-    cone, stiffened in friction (``IMPRATIO``): on MuJoCo's default pyramid a pushed box
-    slips off the pusher (docs/experiments.md#mujoco-contacts)."""
-    import mujoco
-
-    spec = mujoco.MjSpec()
-    spec.option.timestep = timestep
-    spec.option.gravity = [0.0, 0.0, -gravity]
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    spec.option.impratio = IMPRATIO
-    return spec
 
 
 class MujocoPushWorld:
@@ -102,10 +86,9 @@ class MujocoPushWorld:
         half = ph.table_size / 2
         spec.worldbody.add_geom(type=mj.mjtGeom.mjGEOM_BOX, size=[half, half, 0.05],
                                 pos=[0, 0, -0.05], contype=TABLE, conaffinity=0, priority=1,
-                                friction=[ph.friction("table", "object"), 0.005, 0.0001])
+                                friction=sliding(ph.friction("table", "object")))
         self._bodies = [self._footprint_body("object", shape, height, pose, True)]
         self._coms = [footprint_centroid(shape)]
-        self._obstacle_geoms = set()
         for k, (o_shape, o_height, o_pose) in enumerate(obstacles):
             body = self._footprint_body(f"obstacle{k}", o_shape, o_height, o_pose, False)
             for geom in body.geoms:
@@ -123,7 +106,7 @@ class MujocoPushWorld:
                                axis=axis, ref=0.0)
             body.add_geom(type=mj.mjtGeom.mjGEOM_SPHERE, size=[pusher_radius, 0, 0],
                           mass=1.0, contype=PUSHER, conaffinity=OBJECT, priority=2,
-                          friction=[ph.friction("pusher", "object"), 0.005, 0.0001])
+                          friction=sliding(ph.friction("pusher", "object")))
             self._start = np.asarray(pusher_xy, dtype=float)[:2]
         self._has_pusher = pusher_radius is not None
 
@@ -138,7 +121,7 @@ class MujocoPushWorld:
         if free:
             body.add_freejoint()
         mu = ph.friction("object", "object")
-        common = dict(contype=OBJECT, conaffinity=OBJECT | TABLE, friction=[mu, 0.005, 0.0001])
+        common = dict(contype=OBJECT, conaffinity=OBJECT | TABLE, friction=sliding(mu))
         for solid in footprint_solids(shape, height):
             self._add_solid(name, body, solid, common)
         return body

@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from robotplan.execution.convex_pieces import convex_pieces_file
-from robotplan.execution.mujoco_world import mujoco_spec
+from robotplan.execution.mujoco_model import mujoco_spec, sliding
 from robotplan.execution.solids import read_pieces
 from robotplan.hanging.execution.drop import HANG_PHYSICS, DropTest, HangPhysics
 from robotplan.hanging.execution.parts import hook_parts, mug_parts
@@ -50,7 +50,7 @@ class MujocoHangWorld(DropTest):
         self.mug_height = mug.height
         spec = mujoco_spec(physics.timestep, physics.gravity)
         mu = physics.friction * physics.friction
-        common = dict(friction=[mu, 0.005, 0.0001], priority=0)
+        common = dict(friction=sliding(mu), priority=0)
         spec.worldbody.add_geom(name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE,
                                 size=[0.0, 0.0, 1.0], **common)
         self._add_solid(spec, spec.worldbody.add_body(name="hook"), hook, "hook", common)
