@@ -9,7 +9,7 @@ from robotplan.bench.paper import REPRESENTATIONS
 from robotplan.hanging.bench.bench import METHODS
 from robotplan.hanging.bench.reproduce import HANG_REPRESENTATIONS
 
-__all__ = ["FULL", "QUICK", "ReproduceSizes"]
+__all__ = ["FULL", "QUICK", "SIZES", "STANDARD", "ReproduceSizes"]
 
 
 @dataclass(frozen=True)
@@ -59,6 +59,19 @@ QUICK = ReproduceSizes("quick", test_scenes=40, ood_scenes=40, per_scene=10, pos
                        hang_representation_methods=("opt_sampling", "sampling_k1"),
                        hang_evaluations=1_000, hang_every_collision_row=False,
                        ablation_replans=2)
+# between the two: enough scenes per table that "ours vs the paper" says something on this
+# CPU (the held-out sets of the model cards, 20 + 20 push scenes, the paper's 150 mug
+# scenes), models trained 5,000 steps; `reproduce --size standard --status` gives its cost
+STANDARD = ReproduceSizes("standard", test_scenes=300, ood_scenes=300, per_scene=10,
+                          pose_fit=100, push_scenes=20, ood_push_scenes=16,
+                          ablation_scenes=10, hang_scenes=150, hang_methods=METHODS,
+                          time_budget=30.0, representation_scenes=3_000,
+                          representation_steps=5_000, contact_push=tuple(REPRESENTATIONS),
+                          flow_steps=5_000, hang_representations=tuple(HANG_REPRESENTATIONS),
+                          hang_train_scenes=800, hang_test_scenes=100, hang_train_steps=5_000,
+                          hang_representation_scenes=30,
+                          hang_representation_methods=("opt_sampling", "sampling_k1"),
+                          hang_evaluations=20_000, hang_every_collision_row=False)
 FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pose_fit=100,
                       push_scenes=50, ood_push_scenes=24, ablation_scenes=20,
                       hang_scenes=150,
@@ -70,3 +83,4 @@ FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pos
                       hang_train_steps=20_000,
                       hang_representation_scenes=150, hang_representation_methods=METHODS,
                       hang_evaluations=20_000, hang_every_collision_row=True)
+SIZES = {size.name: size for size in (QUICK, STANDARD, FULL)}

@@ -39,8 +39,29 @@ def _imported(module: str) -> set[str]:
     """The package's modules that ``module`` imports by name (a package's ``__init__`` when
     it is imported from; not the packages above an imported module, whose re-exports for
     users do not change what the module computes)."""
+    path = _module_files()[module]
+    return _imports_of(module, path, _stamp(path))
+
+
+def _stamp(path: Path) -> tuple[int, int]:
+    """What tells a file's versions apart without reading it: its size and change time."""
+    stat = path.stat()
+    return stat.st_size, stat.st_mtime_ns
+
+
+def _file_sha256(path: Path) -> bytes:
+    return _sha256_of(path, _stamp(path))
+
+
+@cache
+def _sha256_of(path: Path, stamp: tuple[int, int]) -> bytes:
+    """The file's SHA-256, read once per version (``stamp``)."""
+    return hashlib.sha256(path.read_bytes()).digest()
+
+
+@cache
+def _imports_of(module: str, path: Path, stamp: tuple[int, int]) -> set[str]:
     files = _module_files()
-    path = files[module]
     tree = ast.parse(path.read_text())
     skip: set[int] = set()
     for node in ast.walk(tree):
@@ -92,9 +113,9 @@ def modules_digest(entries: Iterable[str]) -> str:
     files = _module_files()
     for module in module_closure(entries):
         h.update(module.encode())
-        h.update(files[module].read_bytes())
+        h.update(_file_sha256(files[module]))
     for kernel in sorted(PACKAGE.rglob("*.c")):
-        h.update(kernel.read_bytes())
+        h.update(_file_sha256(kernel))
     return h.hexdigest()
 
 
@@ -110,5 +131,5 @@ def files_digest(paths: Iterable[Path]) -> str:
             if "__pycache__" in p.parts:
                 continue
             h.update(str(p.relative_to(root) if root.is_dir() else p.name).encode())
-            h.update(p.read_bytes())
+            h.update(_file_sha256(p))
     return h.hexdigest()

@@ -19,8 +19,11 @@ def add_reproduce_parser(sub) -> None:
     rp.add_argument("--out", required=True, metavar="DIR",
                     help="report.md, report.html and every step's result and outputs (kept "
                          "and reused while what the step reads is unchanged)")
-    rp.add_argument("--quick", action="store_true",
-                    help="small sets, within 30 minutes on 2 cores (the report says so)")
+    rp.add_argument("--size", choices=["quick", "standard", "full"], default="full",
+                    help="how much runs: quick (small sets, within 30 minutes on 2 cores), "
+                         "standard (the tables at a size that says something on this CPU) "
+                         "or full (the paper's; default)")
+    rp.add_argument("--quick", action="store_true", help="the same as --size quick")
     rp.add_argument("--ledger", default=None, metavar="DIR|none",
                     help="finished steps' results kept with the code and reused from there "
                          "(default docs/reproduce/ledger/SIZE; none: only --out's)")
@@ -33,7 +36,8 @@ def add_reproduce_parser(sub) -> None:
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
-    from robotplan.bench.reproduce import FULL, QUICK, ledger_dir, reproduce, reproduce_status
+    from robotplan.bench.reproduce import ledger_dir, reproduce, reproduce_status
+    from robotplan.bench.reproduce_sizes import SIZES
 
     out = Path(args.out)
     if out.exists() and any(out.iterdir()) and not (out / "run.json").is_file() and not (
@@ -44,7 +48,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     if args.workers < 1:
         print("error: --workers must be ≥ 1", file=sys.stderr)
         return EXIT_BAD_INPUT
-    sizes = QUICK if args.quick else FULL
+    sizes = SIZES["quick" if args.quick else args.size]
     ledger = (None if args.ledger == "none"
               else Path(args.ledger) if args.ledger else ledger_dir(sizes))
     if args.status:

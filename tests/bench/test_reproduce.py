@@ -230,3 +230,16 @@ def test_a_missing_steps_time_is_scaled_from_another_sizes_ledger(tmp_path):
         {"key": "k", "seconds": 30.0, "params": {"scenes": 2, "seed": 0}}))
     assert scaled_seconds("bench_push", {"scenes": 20, "seed": 0}, [quick]) == 300.0
     assert scaled_seconds("bench_hang", {"scenes": 20}, [quick]) is None
+
+
+def test_status_lists_every_step_without_running_any(tmp_path, capsys):
+    from tests.cli.test_app import call
+
+    res = call(capsys, "reproduce", "--out", str(tmp_path / "r"), "--quick", "--status",
+               "--ledger", "none")
+    assert res.returncode == 0, res.stderr
+    lines = res.stdout.splitlines()
+    assert lines[-1].startswith("quick: 0 of ") and "never run" in lines[-1]
+    assert all(line.split()[0] == "missing" for line in lines[:-1])
+    assert {"data_test", "bench_push", "bench_hang"} <= {line.split()[1] for line in lines[:-1]}
+    assert not (tmp_path / "r" / "steps").exists()

@@ -32,7 +32,7 @@ def test_a_step_is_reused_until_its_parameters_or_reads_change(tmp_path):
     model.write_text("a")
     assert steps.run("s", {"n": 1}, step, "cmd", runs=DATA, reads=(model,))["result"] == {
         "value": 3}
-    model.write_text("b")  # the file it reads changed: it runs again
+    model.write_text("changed")  # the file it reads changed: it runs again
     assert steps.run("s", {"n": 1}, step, "cmd", runs=DATA, reads=(model,))["result"] == {
         "value": 4}
     assert len({c.name for c in calls}) == 4  # each in a folder of its own
