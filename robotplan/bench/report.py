@@ -74,9 +74,10 @@ def _html(blocks: list[Block], folder: Path, title: str) -> str:
             f"</title><style>{style}</style></head><body>{''.join(body)}</body></html>\n")
 
 
-def write_report(blocks: list[Block], folder: Path, title: str) -> tuple[Path, Path]:
-    """``folder/report.md`` and ``folder/report.html``, each written whole."""
-    md, page = folder / "report.md", folder / "report.html"
+def write_report(blocks: list[Block], folder: Path, title: str, name: str = "report"
+                 ) -> tuple[Path, Path]:
+    """``folder/NAME.md`` and ``folder/NAME.html``, each written whole."""
+    md, page = folder / f"{name}.md", folder / f"{name}.html"
     text = _markdown(blocks)
     write_atomically(md, lambda tmp: tmp.write_text(text))
     page_text = _html(blocks, folder, title)

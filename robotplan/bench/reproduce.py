@@ -1,21 +1,31 @@
 """``robotplan reproduce``: the paper's tables and figures from our code, beside its numbers.
 
 Each item is a step (data, training, evaluation, benchmark: :mod:`robotplan.bench.steps`),
-kept and reused while its inputs do not change. The report (``OUT/report.md``,
-``OUT/report.html``) is written from the step results.
+kept and reused while its inputs do not change. The report (``OUT/report.md`` and
+``.html`` at the standard and full sizes, ``OUT/quick.md`` at the quick size) is written
+from the step results.
 """
 
 from __future__ import annotations
 
 import json
+import re
 import shutil
+import time
+from collections.abc import Callable
 from dataclasses import asdict
+from fnmatch import fnmatch
 from pathlib import Path
 
 from robotplan.base.files import write_atomically
 from robotplan.base.resources import DYNAMICS_FOLDERS, OBJECT_FRAME_FOLDERS, learned_dir
-from robotplan.bench.paper import FLOW_REPRESENTATIONS, REPRESENTATIONS, spec_flags
+from robotplan.bench.paper import REPRESENTATIONS
 from robotplan.bench.report import write_report
+from robotplan.bench.reproduce_models import (
+    PUSH_TRAINING,
+    flow_representations,
+    rigid_representations,
+)
 from robotplan.bench.reproduce_report import report_blocks
 from robotplan.bench.reproduce_sizes import FULL, QUICK, ReproduceSizes
 from robotplan.bench.steps import Steps
@@ -23,9 +33,7 @@ from robotplan.hanging.bench.bench import PAPER_HANG
 from robotplan.hanging.bench.reproduce import hang_representations
 
 __all__ = ["ABLATIONS", "ANALYTIC", "FULL", "QUICK", "ReproduceSizes", "ledger_dir",
-           "reproduce", "reproduce_status"]
-
-PUSH_TRAINING = "robotplan.pushing.training"
+           "reproduce", "reproduce_status", "step_filter"]
 
 # the paper's Fig. 11: the push program without H_coll, without H_PoC, without both
 ABLATIONS = {"no_collision": {"with_collision": False}, "no_contact": {"with_contact": False},
@@ -35,101 +43,57 @@ ABLATIONS = {"no_collision": {"with_collision": False}, "no_contact": {"with_con
 ANALYTIC = {"learned_stage": False}
 
 
-def _trained(steps: Steps, kind: str, key: str, cfg: dict, data: Path) -> str:
-    """Train (or reuse) one ``kind`` model (``"rigid"``: F_q, ``"flow"``: F_flow) of
-    representation ``key`` on ``data`` with the TrainConfig fields ``cfg``: the step's
-    folder (under the output folder)."""
-    from robotplan.pushing.training.rigid import train_rigid
-    from robotplan.pushing.training.train import TrainConfig, train
-
-    fit = train_rigid if kind == "rigid" else train
-    spec = dict(cfg["spec"])
-    encoder = f" --encoder {spec.pop('encoder')}" if "encoder" in spec else ""
-    return steps.run(
-        f"train_{kind}_{key}", cfg,
-        lambda f: fit(TrainConfig(data=str(data), out=str(f / "model"), kind=kind, **cfg),
-                      progress=False),
-        f"robotplan train push --model {kind}{encoder} --data DATA --steps {cfg['steps']} "
-        f"--warmup {cfg['warmup']}{spec_flags(spec)}",
-        runs=(f"{PUSH_TRAINING}.{'rigid' if kind == 'rigid' else 'train'}",),
-        **steps.uses(data))["folder"]
-
-
-def _representations(steps: Steps, sizes: ReproduceSizes, train: Path,
-                     sets: dict[str, Path]) -> tuple[dict[str, dict], dict[str, Path]]:
-    """F_q trained alike on each of :data:`REPRESENTATIONS` (the shipped F_q's architecture,
-    the same ``train`` data, seed and steps) and evaluated on each set: ``reps_<set>`` →
-    key → the step result, and each key's model folder."""
-    from robotplan.pushing.training.rigid_evaluation import evaluate_rigid
-
-    n, per = sizes.representation_steps, sizes.per_scene
-    results: dict[str, dict] = {f"reps_{name}": {} for name in sets}
-    models: dict[str, Path] = {}
-    for key, (_label, fields) in REPRESENTATIONS.items():
-        cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n,
-               "spec": {"encoder": "joint", **fields}}
-        trained = _trained(steps, "rigid", key, cfg, train)
-        model = models[key] = steps.out / trained / "model"
-        for name, folder in sets.items():
-            results[f"reps_{name}"][key] = steps.run(
-                f"eval_rigid_{key}_{name}", {"per_scene": per},
-                lambda f, m=model, d=folder: evaluate_rigid(m, d, per_scene=per),
-                f"robotplan eval push --model MODEL --data DATA --per-scene {per}",
-                runs=(f"{PUSH_TRAINING}.rigid_evaluation",), **steps.uses(model, folder))
-    return results, models
-
-
-def _flow_representations(steps: Steps, sizes: ReproduceSizes, data: Path, test: Path
-                          ) -> dict[str, dict]:
-    """Tab. 4: F_flow trained alike on the SDFs and on each occupancy measure (the same data,
-    seed and steps), scored on the held-out set in what it reads (φ in mm, ψ × 1000): key →
-    the evaluation step's result."""
-    from robotplan.pushing.training.evaluation import evaluate_push
-
-    n, per = sizes.flow_steps, sizes.per_scene
-    results: dict[str, dict] = {}
-    for key in FLOW_REPRESENTATIONS:
-        cfg = {"steps": n, "warmup": min(500, n // 10), "val_every": n,
-               "val_samples": min(128, n), "spec": dict(REPRESENTATIONS[key][1])}
-        trained = _trained(steps, "flow", key, cfg, data)
-        model = steps.out / trained / "model"
-        results[key] = steps.run(
-            f"eval_flow_{key}", {"per_scene": per},
-            lambda f, m=model: evaluate_push(m, test, per_scene=per, progress=False),
-            f"robotplan eval push --model MODEL --data DATA --per-scene {per}",
-            runs=(f"{PUSH_TRAINING}.evaluation",), **steps.uses(model, test))
-    return results
-
-
 def ledger_dir(sizes: ReproduceSizes) -> Path:
     """Where the finished steps of a run at ``sizes`` are kept with the code:
     ``docs/reproduce/ledger/<sizes.name>/``."""
     return learned_dir("x").parents[1] / "docs" / "reproduce" / "ledger" / sizes.name
 
 
+def step_filter(patterns: tuple[str, ...] = (), hours: float | None = None
+                ) -> Callable[[str], bool] | None:
+    """Which steps a run in parts may start: those whose name matches one of ``patterns``
+    (shell patterns; none: every step), while fewer than ``hours`` have passed since this
+    call (None: no limit). None where neither limits anything."""
+    if not patterns and hours is None:
+        return None
+    start = time.monotonic()
+
+    def allow(name: str) -> bool:
+        within = hours is None or time.monotonic() - start < 3600 * hours
+        return within and (not patterns or any(fnmatch(name, p) for p in patterns))
+
+    return allow
+
+
 def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
               ray: str | None = None, progress: bool = True,
-              ledger: Path | None = None) -> Path:
+              ledger: Path | None = None, allow: Callable[[str], bool] | None = None
+              ) -> Path | None:
     """Run (or reuse, from ``out`` or the ``ledger``) every item at ``sizes`` and write
-    ``out/report.md`` and ``out/report.html``; returns the Markdown report's path.
-    ``workers`` and ``ray`` as for ``data push`` and ``bench push``."""
+    ``out/R.md`` and ``out/R.html`` (R: ``sizes.report``); returns the Markdown report's
+    path. ``allow`` (:func:`step_filter`): run only the steps it allows; where it leaves
+    some for a later run, no report is written and None is returned. ``workers`` and
+    ``ray`` as for ``data push`` and ``bench push``."""
     out.mkdir(parents=True, exist_ok=True)
-    steps = Steps(out, progress, ledger)
+    steps = Steps(out, progress, ledger, allow=allow)
     results = _run_steps(steps, sizes, workers, ray)
+    run = {"sizes": asdict(sizes), "workers": workers, "ray": ray, "steps": steps.log}
+    write_atomically(out / "run.json", lambda tmp: tmp.write_text(json.dumps(run, indent=1)))
+    if not steps.complete:
+        return None
     if results["fig5"]:
-        plot_contact_pushes_of(results["fig5"], out)
+        plot_contact_pushes_of(results["fig5"], out / sizes.figure("fig5_contact_push.png"))
     for key in ("fig3", "fig8"):  # the box plots sit beside the report
         plot = out / results[key]["folder"] / "bench" / "coverage.png"
         if plot.is_file():
-            shutil.copyfile(plot, out / f"{key}_coverage.png")
+            shutil.copyfile(plot, out / sizes.figure(f"{key}_coverage.png"))
         elif results[key]["result"].get("rows"):  # a step kept in the ledger alone
             from robotplan.pushing.bench.push_summary import box_plot
 
-            box_plot(results[key]["result"]["rows"], out / f"{key}_coverage.png", "auto")
-    run = {"sizes": asdict(sizes), "workers": workers, "ray": ray, "steps": steps.log}
-    write_atomically(out / "run.json", lambda tmp: tmp.write_text(json.dumps(run, indent=1)))
+            box_plot(results[key]["result"]["rows"], out / sizes.figure(f"{key}_coverage.png"),
+                     "auto")
     md, _ = write_report(report_blocks(results, sizes, steps.log, out), out,
-                         "robotplan: the paper reproduced")
+                         "robotplan: the paper reproduced", sizes.report)
     return md
 
 
@@ -151,19 +115,36 @@ def reproduce_status(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
 
 
 SIZE_PARAMS = ("steps", "scenes", "samples")  # what a step's time grows with
+DEFAULT_BATCH = 32  # TrainConfig's batch, where a step's parameters name none
+
+
+def _measured_like(name: str, folder: Path) -> Path | None:
+    """The ledger entry of step ``name`` in ``folder``, else of the same step for seed 0
+    (``NAME_seedK``), else of a step of the same kind (its name up to the last ``_``, two
+    words at least: the same training or evaluation on another representation)."""
+    base = re.sub(r"_seed\d+$", "", name)
+    for candidate in dict.fromkeys((name, base)):
+        if (folder / f"{candidate}.json").is_file():
+            return folder / f"{candidate}.json"
+    kind = base.rsplit("_", 1)[0]
+    if "_" not in kind:  # a kind is two words at least: "train_rigid", "bench_hang"
+        return None
+    return next(iter(sorted(folder.glob(f"{kind}_*.json"))), None)
 
 
 def scaled_seconds(name: str, params: dict, ledgers: list[Path]) -> float | None:
-    """The seconds step ``name`` took in one of ``ledgers``, times the ratio of its first
-    size parameter (:data:`SIZE_PARAMS`) here and there; None where no ledger has it."""
+    """The seconds step ``name`` (or the nearest like it, :func:`_measured_like`) took in one
+    of ``ledgers``, times the ratio of its first size parameter (:data:`SIZE_PARAMS`) here
+    and there, and of its batch; None where no ledger has one like it."""
     for folder in ledgers:
-        path = folder / f"{name}.json"
-        if not path.is_file():
+        path = _measured_like(name, folder)
+        if path is None:
             continue
         entry = json.loads(path.read_text())
         there = entry.get("params", {})
         size = next((k for k in SIZE_PARAMS if k in params and there.get(k)), None)
         ratio = params[size] / there[size] if size else 1.0
+        ratio *= params.get("batch", DEFAULT_BATCH) / there.get("batch", DEFAULT_BATCH)
         return float(entry["seconds"]) * ratio
     return None
 
@@ -179,12 +160,12 @@ def with_rows(summary: dict, bench: Path) -> dict:
     return {**summary, "rows": [{k: r.get(k) for k in ROW_FIELDS} for r in rows]}
 
 
-def plot_contact_pushes_of(fig5: dict, out: Path) -> None:
-    """Fig. 5's picture from its steps' results."""
+def plot_contact_pushes_of(fig5: dict, path: Path) -> None:
+    """Fig. 5's picture from its steps' results, written to ``path``."""
     from robotplan.pushing.bench.contact_push import plot_contact_pushes
 
     plot_contact_pushes({k: v["result"] for k, v in fig5.items()},
-                        {k: REPRESENTATIONS[k][0] for k in fig5}, out / "fig5_contact_push.png")
+                        {k: REPRESENTATIONS[k][0] for k in fig5}, path)
 
 
 def _run_steps(steps: Steps, sizes: ReproduceSizes, workers: int, ray: str | None) -> dict:
@@ -236,9 +217,9 @@ def _run_steps(steps: Steps, sizes: ReproduceSizes, workers: int, ray: str | Non
             f"robotplan eval push --model learned/push_rigid --data DATA --per-scene {per}",
             runs=(f"{PUSH_TRAINING}.rigid_evaluation",), **steps.uses(models["rigid"], folder))
     train = data("data_train_representations", sizes.representation_scenes, 4, "train")
-    reps, rep_models = _representations(steps, sizes, train, {"test": test, "ood": ood})
+    reps, rep_models = rigid_representations(steps, sizes, train, {"test": test, "ood": ood})
     results.update(reps)
-    results["tab4"] = _flow_representations(steps, sizes, train, test)
+    results["tab4"] = flow_representations(steps, sizes, train, test)
     results["fig5"] = {key: steps.run(
         f"contact_push_{key}", {}, lambda f, m=rep_models[key]: plan_from_contact(m),
         "robotplan bench contact-push --model MODEL",

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from robotplan.base.intervals import LEVEL, RESAMPLES, median_interval
 from robotplan.bench.paper import (
     FIG3,
     FIG5,
@@ -19,118 +20,51 @@ from robotplan.bench.paper import (
     TAB6,
 )
 from robotplan.bench.report import Block
+from robotplan.bench.reproduce_tables import (
+    SHAPE_NAMES,
+    interval_text,
+    tab2_rows,
+    tab4_rows,
+    tab56_rows,
+    training_text,
+)
 from robotplan.hanging.bench.report import tab3_blocks
 
 __all__ = ["report_blocks"]
 
-SHAPE_NAMES = {"box": "boxes", "lshape": "L-shapes", "ood": "unseen footprints",
-               "other": "unseen footprints"}
 ABLATION_NAMES = {"no_collision": "without H_coll", "no_contact": "without H_PoC",
                   "dynamics_and_goal_only": "without both (dynamics and goal only)"}
-
-
-def _ms(pair) -> str:
-    """``(mean, std)`` → ``"m ± s"``."""
-    return f"{pair[0]:.2f} ± {pair[1]:.2f}"
-
-
-def _tab2(results: dict, set_name: str) -> list:
-    rows = []
-    for label, kind in (("F_flow", "flow"), ("F", "direct")):
-        paper = TAB2[label]
-        for name, key in ((label, f"rmse_{kind}_{set_name}"),
-                          (f"{label}, object frame", f"rmse_{kind}_object_{set_name}")):
-            if key not in results:  # no object-frame model shipped
-                continue
-            r = results[key]["result"]
-            rows.append([name, _ms((r["rmse_mm"]["contact"], r["rmse_std_mm"]["contact"])),
-                         _ms((r["rmse_mm"]["free"], r["rmse_std_mm"]["free"])),
-                         _ms(paper["contact"]), _ms(paper["free"])])
-    r = results[f"rigid_{set_name}"]["result"]
-    if "rmse_mm" in r:  # F_q's φ1_t = T(Δq)[φ1_{t−1}]; the paper gives no Tab. 2 row for it
-        rows.append(["F_q, T(Δq)[φ1_{t−1}]",
-                     _ms((r["rmse_mm"]["contact"], r["rmse_std_mm"]["contact"])),
-                     _ms((r["rmse_mm"]["free"], r["rmse_std_mm"]["free"])), "–", "–"])
-    r = results[f"rmse_flow_{set_name}"]["result"]
-    paper = TAB2["no motion"]
-    rows.append(["no motion", _ms((r["baseline_rmse_mm"]["contact"],
-                                   r["baseline_std_mm"]["contact"])),
-                 _ms((r["baseline_rmse_mm"]["free"], r["baseline_std_mm"]["free"])),
-                 _ms(paper["contact"]), _ms(paper["free"])])
-    return rows
-
-
-def _tab4(results: dict, sizes) -> list:
-    """Tab. 4: per representation, our F_flow and no-motion rows beside the paper's."""
-    rows = []
-    for key, step in results["tab4"].items():
-        r, label = step["result"], REPRESENTATIONS[key][0]
-        for name, ours, spread in (
-                (f"F_flow on {label}, {sizes.flow_steps} steps", "rmse_mm", "rmse_std_mm"),
-                (f"no motion, {label}", "baseline_rmse_mm", "baseline_std_mm")):
-            paper = TAB4[key]["F_flow" if ours == "rmse_mm" else "no motion"]
-            rows.append([name, _ms((r[ours]["contact"], r[spread]["contact"])),
-                         _ms((r[ours]["free"], r[spread]["free"])),
-                         _ms(paper[0]), _ms(paper[1])])
-    return rows
-
-
-def _dq(err: dict) -> list[str]:
-    return [_ms(err["x_mm"]), _ms(err["y_mm"]), _ms(err["alpha_deg"])]
-
-
-def _paper_dq(values) -> list[str]:
-    return [str(v) for v in values]
-
-
-def _gains(evaluation: dict) -> str:
-    return ", ".join(f"{SHAPE_NAMES.get(k, k)} {v:.2f}"
-                     for k, v in evaluation["turn_gain"].items())
-
-
-def _tab56(results: dict, set_name: str, paper: dict, sizes) -> list:
-    rigid = results[f"rigid_{set_name}"]["result"]
-    rows = [["F_q on SDFs (ours, shipped)", *_dq(rigid["delta_q_error"]), _gains(rigid),
-             *_paper_dq(paper["SDF"])]]
-    trained = results.get(f"reps_{set_name}", {})
-    for key, run in trained.items():
-        label = REPRESENTATIONS[key][0]
-        rows.append([f"F_q on {label}, {sizes.representation_steps} steps",
-                     *_dq(run["result"]["delta_q_error"]), _gains(run["result"]),
-                     *(_paper_dq(paper[label]) if label in paper else ["", "", ""])])
-    fit = results.get("pose_fit_flow", {}).get("result", {})
-    if set_name == "test" and "delta_q_error" in fit:
-        fit_gains = ", ".join(f"{SHAPE_NAMES.get(k, k)} {fit[k]['turn_gain']:.2f}"
-                              for k in ("box", "lshape") if k in fit)
-        rows.append([f"F_flow read through the pose fit ({fit['samples']} samples)",
-                     *_dq(fit["delta_q_error"]), fit_gains, "", "", ""])
-    rows.append(["no motion (Δq = 0)", *_dq(rigid["baseline_delta_q_error"]), "", "", "", ""])
-    ours = {REPRESENTATIONS[key][0] for key in trained}
-    rows.extend([f"{name} (paper only)", "", "", "", "", *_paper_dq(v)]
-                for name, v in paper.items() if name != "SDF" and name not in ours)
-    return rows
 
 
 def _representations_note(results: dict, sizes) -> str:
     """How the representation rows of Tabs. 5 and 6 were trained."""
     if not results.get("reps_test"):
         return ""
+    how = training_text(sizes, sizes.representation_steps, sizes.representation_training)
     return (f"The rows with a step count are F_q models of the shipped architecture trained "
-            f"alike ({sizes.representation_steps} steps of batch 32 on "
-            f"{sizes.representation_scenes} scenes of seed 4, training seed 0), one per "
+            f"alike ({how}), one per "
             "object representation (app. A.1: ψ = sign(φ), eq. 10; ψ_s = tanh(b φ), eq. 11), "
-            "so they compare the representations at one budget; the shipped F_q trained far "
-            "longer on 15,000 scenes. Longer runs on a GPU (all but the PointNet++, two "
+            "so they compare the representations at one budget (a row of several seeds pools "
+            "them: its mean over the seeds, its interval resampling scenes with every seed's "
+            "evaluation of them); the shipped F_q trained far longer on 15,000 scenes. Longer "
+            "runs on a GPU (all but the PointNet++, two "
             "training seeds each): the repository's docs/experiments.md, section 'F_q on "
             "other object representations'.")
 
 
 def _coverage_cells(summary: dict, kind: str) -> tuple:
     """A benchmark summary's cells for one shape: scenes, open and closed loop coverage
-    as "median (q1)", plan seconds' median."""
-    q, ol = summary["coverage"][kind], summary["open_loop_coverage"][kind]
-    return (q["n"], f"{ol['median']:.3f} ({ol['q1']:.3f})",
-            f"{q['median']:.3f} ({q['q1']:.3f})",
+    as "median [95 % interval] (q1)" (the interval where the summary kept its scenes' rows),
+    plan seconds' median."""
+    rows = [r for r in summary.get("rows") or () if r["shape"] == kind]
+
+    def cell(field: str) -> str:
+        q = summary[field][kind]
+        values = [r[field] for r in rows if r.get(field) is not None]
+        interval = median_interval(values) if len(values) == q["n"] else None
+        return f"{q['median']:.3f}{interval_text(interval, 3)} ({q['q1']:.3f})"
+
+    return (summary["coverage"][kind]["n"], cell("open_loop_coverage"), cell("coverage"),
             f"{summary['plan_seconds'][kind]['median']:.1f}")
 
 
@@ -164,8 +98,10 @@ def _ablation_rows(results: dict, out: Path, scenes: int) -> list:
             continue
         ol = [r["open_loop_coverage"] for r in rows]
         cl = [r["coverage"] for r in rows]
-        table.append([label, len(rows), f"{np.median(ol):.3f} (min {min(ol):.3f})",
-                      f"{np.median(cl):.3f} (min {min(cl):.3f})",
+        table.append([label, len(rows), f"{np.median(ol):.3f}"
+                      f"{interval_text(median_interval(ol), 3)} (min {min(ol):.3f})",
+                      f"{np.median(cl):.3f}{interval_text(median_interval(cl), 3)} "
+                      f"(min {min(cl):.3f})",
                       sum(r["status"] == "solved" for r in rows)])
     return table
 
@@ -199,59 +135,65 @@ def report_blocks(results: dict, sizes, log: list[dict], out: Path) -> list[Bloc
     (kept under ``out``)."""
     quick = sizes.name == "quick"
     b: list[Block] = [("h1", "robotplan: the paper reproduced")]
-    b.append(("p", ("**Quick run**: small sets (" if quick else "Full run (")
+    b.append(("p", ("**Quick run**: small sets (" if quick else f"**{sizes.name.title()} run** (")
               + f"{sizes.test_scenes} held-out and {sizes.ood_scenes} unseen-footprint data "
               f"scenes, {sizes.push_scenes} + {sizes.push_scenes} push scenes, "
               f"{sizes.ood_push_scenes} unseen-footprint push scenes, {sizes.hang_scenes} "
               "mug scenes). "
               + ("Its numbers are noisy; `robotplan reproduce --out DIR` runs the paper's "
-                 "sizes." if quick else "")))
+                 "sizes." if quick else "")
+              + " A mean reads \"m ± s [lo, hi]\": the mean over samples, their spread, and "
+              f"the {100 * LEVEL:.0f} % interval of the mean; a median \"m [lo, hi]\"; "
+              f"the intervals are percentile bootstraps over scenes ({RESAMPLES:,} "
+              "resamples, seeded), so a paper number outside one differs from ours beyond "
+              "the scenes' chance."))
     f3, f8 = results["fig3"]["result"], results["fig8"]["result"]
     b += [("h2", "Tab. 2: one-step error of the pushing dynamics (RMSE of φ1_t over X_h, mm)"),
           ("table", ["model", "ours, contact", "ours, free", "paper, contact", "paper, free"],
-           _tab2(results, "test")),
+           tab2_rows(results, "test", TAB2)),
           ("p", "Held-out scenes of seed 2; the same models on the unseen footprints of "
                 "seed 3: " + "; ".join(f"{row[0]} {row[1]} / {row[2]}"
-                                       for row in _tab2(results, "ood")) + " mm."),
+                                       for row in tab2_rows(results, "ood", TAB2)) + " mm."),
           ("h2", "Tab. 4: F_flow on SDFs and on occupancy measures (RMSE over X_h of what "
                  "each reads: φ in mm, ψ × 1000)"),
           ("table", ["model", "ours, contact", "ours, free", "paper, contact",
-                     "paper, free"], _tab4(results, sizes)),
-          ("p", f"Each F_flow trained alike ({sizes.flow_steps} steps of batch 32 on "
-                f"{sizes.representation_scenes} scenes of seed 4, training seed 0) and "
+                     "paper, free"], tab4_rows(results, sizes, TAB4)),
+          ("p", f"Each F_flow trained alike ({training_text(sizes, sizes.flow_steps)}) and "
                 "scored on the held-out scenes above; a model on ψ predicts ψ1_t = ψ1_{t−1} "
                 "+ F_flow. ψ's numbers are not comparable with φ's; each beside its own "
                 "no-motion row, as in the paper."),
           ("h2", "Tab. 5: one-step rigid motion |Δq| (mean ± std over contact samples)"),
           ("table", ["model", "x mm", "y mm", "α °", "turn gain", "paper x", "paper y",
-                     "paper α"], _tab56(results, "test", TAB5, sizes)),
+                     "paper α"], tab56_rows(results, "test", TAB5, sizes)),
           ("p", _representations_note(results, sizes)),
           ("h2", "Tab. 6: the same on unseen footprints"),
           ("table", ["model", "x mm", "y mm", "α °", "turn gain", "paper x", "paper y",
-                     "paper α"], _tab56(results, "ood", TAB6, sizes)),
+                     "paper α"], tab56_rows(results, "ood", TAB6, sizes)),
           ("h2", "Fig. 3: pushing into the goal region (share of the object inside)"),
-          ("table", ["shape", "scenes", "ours open loop, median (q1)",
-                     "ours closed loop, median (q1)", "paper open loop, median",
+          ("table", ["shape", "scenes", "ours open loop, median [95 %] (q1)",
+                     "ours closed loop, median [95 %] (q1)", "paper open loop, median",
                      "plan s, median"], _coverage_rows(f3, FIG3)),
-          ("image", "fig3_coverage.png", "Fig. 3: every scene's share inside the goal"),
+          ("image", sizes.figure("fig3_coverage.png"),
+           "Fig. 3: every scene's share inside the goal"),
           ("p", "We plan with each scene class's default learned model "
                 "(`skeletons/dynamics.yaml`); the paper's rows are F_flow and F. Our open "
                 "loop runs each F_q plan rehearsed first: run closed loop in F_q, re-planned "
                 "where F_q's object leaves it, its pusher's states then run in pybullet "
                 "without feedback; the paper runs its plan as optimised."),
           ("h2", "Fig. 8: pushing unseen footprints"),
-          ("table", ["shape", "scenes", "ours open loop, median (q1)",
-                     "ours closed loop, median (q1)", "paper open loop, median",
+          ("table", ["shape", "scenes", "ours open loop, median [95 %] (q1)",
+                     "ours closed loop, median [95 %] (q1)", "paper open loop, median",
                      "plan s, median"], _coverage_rows(f8, {"all": FIG8})),
-          ("image", "fig8_coverage.png", "Fig. 8: unseen footprints")]
+          ("image", sizes.figure("fig8_coverage.png"), "Fig. 8: unseen footprints")]
     if results.get("fig5"):
         b += [("h2", "Fig. 5: one push from contact with each representation's F_q"),
               ("table", ["model", "pusher moved in the plan, cm", "box moved in the plan, cm",
                          "box moved in pybullet, cm", "box off the goal, cm",
                          "goal coverage", "H_q residual, mm RMS", "paper"],
                _contact_push_rows(results, sizes)),
-              ("image", "fig5_contact_push.png", "Fig. 5: the box at its start (grey), the "
-               "goal (dashed), where pybullet left it (blue), the pusher's path (red)"),
+              ("image", sizes.figure("fig5_contact_push.png"),
+               "Fig. 5: the box at its start (grey), the goal (dashed), where pybullet left "
+               "it (blue), the pusher's path (red)"),
               ("p", "The pusher starts touching the middle of a 20 × 12 cm box's face; the "
                     "box should end 20 cm straight ahead (a pose goal). The program holds "
                     "the F_q row of Tabs. 5–6's model (as a cost, weight 1 per mm²) and the "
@@ -273,7 +215,8 @@ def report_blocks(results: dict, sizes, log: list[dict], out: Path) -> list[Bloc
                 "rehearsed in F_q (Fig. 3's run), the analytic rows' the plan as searched: "
                 "there is no learned model to rehearse it in.")]
     b += [("h2", "Fig. 11: the ablation (box scenes without H_coll, H_PoC or both)"),
-          ("table", ["program", "scenes", "open loop, median", "closed loop, median",
+          ("table", ["program", "scenes", "open loop, median [95 %]",
+                     "closed loop, median [95 %]",
                      "searches solved"], _ablation_rows(results, out, sizes.ablation_scenes)),
           ("p", "The paper (20 box scenes, F and F_flow) reports no numbers in the text: "
                 "without H_PoC the optimiser sometimes leaves the pusher where it is, "

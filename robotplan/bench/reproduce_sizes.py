@@ -44,6 +44,16 @@ class ReproduceSizes:
     # re-plans of the ablation's closed loops (None: the scene class's): re-planning plans
     # through the object dominates a quick run's time (docs/experiments.md#reproduce-quick)
     ablation_replans: int | None = None
+    # the training seeds of each representation model of Tabs. 4–6 (one model per seed)
+    training_seeds: tuple[int, ...] = (0,)
+    # TrainConfig fields of those models beyond the steps (batch, lr, augment), as pairs
+    representation_training: tuple[tuple[str, object], ...] = ()
+    # the report's file name (NAME.md, NAME.html); its figures are SIZE_fig….png
+    report: str = "report"
+
+    def figure(self, name: str) -> str:
+        """The file name of figure ``name`` (e.g. ``fig3_coverage.png``) at this size."""
+        return f"{self.name}_{name}"
 
 
 # one scene per shape: the next scenes' searches alone took 9 of a 45-minute quick run
@@ -58,20 +68,24 @@ QUICK = ReproduceSizes("quick", test_scenes=40, ood_scenes=40, per_scene=10, pos
                        hang_representation_scenes=1,
                        hang_representation_methods=("opt_sampling", "sampling_k1"),
                        hang_evaluations=1_000, hang_every_collision_row=False,
-                       ablation_replans=2)
+                       ablation_replans=2, report="quick")
 # between the two: enough scenes per table that "ours vs the paper" says something on this
 # CPU (the held-out sets of the model cards, 20 + 20 push scenes, the paper's 150 mug
-# scenes), models trained 5,000 steps; `reproduce --size standard --status` gives its cost
+# scenes); the F_q of Tabs. 5–6 trained as the GPU runs that learned to turn, two seeds
+# each (docs/experiments.md#reproduce-standard); `reproduce --size standard --status` gives
+# its cost
+TURNING = (("batch", 128), ("lr", 1e-3), ("augment", "turns"))
 STANDARD = ReproduceSizes("standard", test_scenes=300, ood_scenes=300, per_scene=10,
                           pose_fit=100, push_scenes=20, ood_push_scenes=16,
                           ablation_scenes=10, hang_scenes=150, hang_methods=METHODS,
-                          time_budget=30.0, representation_scenes=3_000,
-                          representation_steps=5_000, contact_push=tuple(REPRESENTATIONS),
+                          time_budget=30.0, representation_scenes=15_000,
+                          representation_steps=10_000, contact_push=tuple(REPRESENTATIONS),
                           flow_steps=5_000, hang_representations=tuple(HANG_REPRESENTATIONS),
                           hang_train_scenes=800, hang_test_scenes=100, hang_train_steps=5_000,
                           hang_representation_scenes=30,
                           hang_representation_methods=("opt_sampling", "sampling_k1"),
-                          hang_evaluations=20_000, hang_every_collision_row=False)
+                          hang_evaluations=20_000, hang_every_collision_row=False,
+                          training_seeds=(0, 1), representation_training=TURNING)
 FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pose_fit=100,
                       push_scenes=50, ood_push_scenes=24, ablation_scenes=20,
                       hang_scenes=150,
@@ -82,5 +96,6 @@ FULL = ReproduceSizes("full", test_scenes=300, ood_scenes=300, per_scene=10, pos
                       hang_train_scenes=1_600, hang_test_scenes=400,
                       hang_train_steps=20_000,
                       hang_representation_scenes=150, hang_representation_methods=METHODS,
-                      hang_evaluations=20_000, hang_every_collision_row=True)
+                      hang_evaluations=20_000, hang_every_collision_row=True,
+                      training_seeds=(0, 1), representation_training=TURNING, report="full")
 SIZES = {size.name: size for size in (QUICK, STANDARD, FULL)}

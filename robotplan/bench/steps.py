@@ -12,12 +12,15 @@ again only if a step that needs them has to run.
 
 ``dry=True`` runs nothing: each step is reported as ``done`` (its key in the folder or the
 ledger), ``stale`` (the ledger holds an older key: something it reads changed) or ``missing``.
+``allow(name)`` false leaves a step that would run ``skipped`` (a run in parts: some steps,
+or as many as fit a time budget), and every step that needs it with it.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import re
 import shutil
 import time
 from collections.abc import Callable, Iterable
@@ -28,7 +31,7 @@ from robotplan.base.files import write_atomically
 from robotplan.base.resources import robots_dir, skeletons_dir
 from robotplan.bench.step_keys import files_digest, modules_digest, package_modules
 
-__all__ = ["Steps", "step_key"]
+__all__ = ["Steps", "ledger_json", "step_key"]
 
 EVERYTHING = ("robotplan",)  # a step that does not say what it runs: the whole package
 
@@ -56,12 +59,22 @@ class _Pending:
     params: dict = field(default_factory=dict)
 
 
+def ledger_json(entry: dict) -> str:
+    """``entry`` as indented JSON with each list of numbers or strings on one line (a
+    ledger entry's per-scene sums stay a few lines, not one per number). Only structural
+    line breaks are joined: JSON strings hold none."""
+    text = json.dumps(entry, indent=1)
+    return re.sub(r"\[\n([^\[\]{}]*?)\n *\]",
+                  lambda m: "[" + re.sub(r"\n *", " ", m.group(1)).strip() + "]", text)
+
+
 class Steps:
     """Runs steps, or reuses their kept results (see the module docstring)."""
 
     def __init__(self, out: Path, progress: bool = True, ledger: Path | None = None,
-                 dry: bool = False) -> None:
+                 dry: bool = False, allow: Callable[[str], bool] | None = None) -> None:
         self.out, self.progress, self.ledger, self.dry = out, progress, ledger, dry
+        self.allow = allow
         if ledger is not None and not dry:
             ledger.mkdir(parents=True, exist_ok=True)
         self.log: list[dict] = []
@@ -87,10 +100,13 @@ class Steps:
             result, state = dict(entry), "done"
             self._pending[rel] = _Pending(name, fn, needs, command, params)
             self._say(f"{name}: reused from the ledger")
-        elif self.dry:
-            state = "stale" if entry is not None else "missing"
+        elif self.dry or not self._may_run(name, needs):
+            state = ("skipped" if not self.dry else "stale" if entry is not None
+                     else "missing")
             result = {"result": {}, "seconds": (entry or {}).get("seconds"),
                       "command": command, "params": params}
+            if state == "skipped":
+                self._say(f"{name}: left for a later run")
         else:
             result, state = self._execute(name, key, folder, fn, needs, command, params), "ran"
         result.update(folder=rel, key=key, state=state)
@@ -99,6 +115,15 @@ class Steps:
                          "seconds": result.get("seconds"), "command": result["command"]})
         self.params_log.append(params)
         return result
+
+    @property
+    def complete(self) -> bool:
+        """Whether every step so far is done or ran (none skipped)."""
+        return all(step["state"] in ("done", "ran") for step in self.log)
+
+    def _may_run(self, name: str, needs: tuple[dict, ...]) -> bool:
+        return (all(n["state"] in ("done", "ran") for n in needs)
+                and (self.allow is None or self.allow(name)))
 
     def uses(self, *paths: Path) -> dict:
         """``needs`` and ``reads`` of a step that reads ``paths``: a path inside a step's
@@ -139,7 +164,7 @@ class Steps:
         text = json.dumps(result, indent=1, default=str)
         write_atomically(folder / "result.json", lambda tmp: tmp.write_text(text))
         if self.ledger is not None:
-            entry = json.dumps({"key": key, **json.loads(text)}, indent=1)
+            entry = ledger_json({"key": key, **json.loads(text)})
             write_atomically(self.ledger / f"{name}.json", lambda tmp: tmp.write_text(entry))
         self._say(f"{name}: {result['seconds']} s")
         return json.loads(text)

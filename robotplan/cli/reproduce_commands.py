@@ -17,7 +17,8 @@ def add_reproduce_parser(sub) -> None:
     rp = sub.add_parser("reproduce", help="the paper's tables and figures beside its numbers: "
                         "data, evaluations and benchmarks run (or reused) and one report")
     rp.add_argument("--out", required=True, metavar="DIR",
-                    help="report.md, report.html and every step's result and outputs (kept "
+                    help="the report (report.md and .html; quick.md at --quick) and every "
+                         "step's result and outputs (kept "
                          "and reused while what the step reads is unchanged)")
     rp.add_argument("--size", choices=["quick", "standard", "full"], default="full",
                     help="how much runs: quick (small sets, within 30 minutes on 2 cores), "
@@ -30,13 +31,20 @@ def add_reproduce_parser(sub) -> None:
     rp.add_argument("--status", action="store_true",
                     help="run nothing: list each step as done, stale (something it reads "
                          "changed) or missing, with the seconds it last took")
+    rp.add_argument("--steps", default="", metavar="PATTERN[,PATTERN]",
+                    help="run only the steps whose names match (shell patterns, e.g. "
+                         "'bench_*'); the others are reused where done, else left for a later "
+                         "run, and the report waits until every step is done")
+    rp.add_argument("--hours", type=float, default=None, metavar="H",
+                    help="start no step after H hours: a long run in parts, each part's "
+                         "finished steps kept in the ledger")
     rp.add_argument("--workers", type=int, default=2)
     add_ray_option(rp)
     rp.set_defaults(run=cmd_reproduce)
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
-    from robotplan.bench.reproduce import ledger_dir, reproduce, reproduce_status
+    from robotplan.bench.reproduce import ledger_dir, reproduce, reproduce_status, step_filter
     from robotplan.bench.reproduce_sizes import SIZES
 
     out = Path(args.out)
@@ -47,6 +55,9 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     if args.workers < 1:
         print("error: --workers must be ≥ 1", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.hours is not None and args.hours <= 0:
+        print("error: --hours must be > 0", file=sys.stderr)
         return EXIT_BAD_INPUT
     sizes = SIZES["quick" if args.quick else args.size]
     ledger = (None if args.ledger == "none"
@@ -64,6 +75,13 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
               f"{len(todo)}, {known / 3600:.1f} CPU hours as last measured or scaled (~)"
               + (f", {unknown} never run" if unknown else ""))
         return 0
-    report = reproduce(out, sizes, workers=args.workers, ray=args.ray, ledger=ledger)
+    patterns = tuple(p for p in args.steps.split(",") if p)
+    report = reproduce(out, sizes, workers=args.workers, ray=args.ray, ledger=ledger,
+                       allow=step_filter(patterns, args.hours))
+    if report is None:
+        print(f"{sizes.name}: steps left for a later run (`robotplan reproduce --out {out} "
+              f"--size {sizes.name} --status` lists them); finished steps are in "
+              f"{ledger or out}")
+        return 0
     print(f"report: {report} (and {report.with_suffix('.html')})")
     return 0

@@ -9,15 +9,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from robotplan.bench.paper import FLOW_REPRESENTATIONS, TAB5
+from robotplan.bench.paper import FLOW_REPRESENTATIONS, TAB2, TAB4, TAB5
 from robotplan.bench.report import write_report
-from robotplan.bench.reproduce import (
-    QUICK,
-    _flow_representations,
-    _representations,
-    reproduce,
-)
-from robotplan.bench.reproduce_report import _analytic_rows, _tab2, _tab4, _tab56
+from robotplan.bench.reproduce import QUICK, reproduce
+from robotplan.bench.reproduce_models import flow_representations, rigid_representations
+from robotplan.bench.reproduce_report import _analytic_rows
+from robotplan.bench.reproduce_tables import tab2_rows, tab4_rows, tab56_rows
 from robotplan.bench.steps import Steps
 from robotplan.cli.app import main
 from robotplan.hanging.bench.report import tab3_blocks
@@ -68,11 +65,11 @@ def test_tab2_sets_each_object_frame_model_below_its_table_frame_one():
 
     results = {"rmse_flow_test": scored(3.9, 1.3), "rmse_direct_test": scored(7.0, 8.9),
                "rmse_flow_object_test": scored(2.1, 0.9), "rigid_test": {"result": {}}}
-    rows = _tab2(results, "test")
+    rows = tab2_rows(results, "test", TAB2)
     assert [r[0] for r in rows] == ["F_flow", "F_flow, object frame", "F", "no motion"]
     assert rows[1][1:] == ["2.10 ± 1.00", "0.90 ± 2.00", "3.40 ± 1.60", "1.40 ± 1.80"]
     del results["rmse_flow_object_test"]
-    assert [r[0] for r in _tab2(results, "test")] == ["F_flow", "F", "no motion"]
+    assert [r[0] for r in tab2_rows(results, "test", TAB2)] == ["F_flow", "F", "no motion"]
 
 
 def test_reproduce_refuses_a_folder_of_other_files(tmp_path, capsys):
@@ -92,7 +89,7 @@ def test_each_representation_is_trained_alike_and_set_beside_the_paper(
     sizes = replace(QUICK, per_scene=2, representation_scenes=12, representation_steps=2)
     steps = Steps(tmp_path, progress=False)
     sets = {"test": tiny_push_data, "ood": tiny_ood_push_data}
-    reps, models = _representations(steps, sizes, tiny_push_data, sets)
+    reps, models = rigid_representations(steps, sizes, tiny_push_data, sets)
     assert set(reps) == {"reps_test", "reps_ood"}
     assert list(models) == list(reps["reps_test"])
     assert all((folder / "weights.pt").is_file() for folder in models.values())
@@ -105,8 +102,8 @@ def test_each_representation_is_trained_alike_and_set_beside_the_paper(
         ("occupancy", 100.0, "pointnet"), ("pointcloud", 100.0, "pointnet"),
         ("pointcloud", 100.0, "pointnet2"), ("sdf", 100.0, "pointnet"),
         ("smooth_occupancy", 100.0, "pointnet"), ("smooth_occupancy", 1000.0, "pointnet")]
-    shipped = reps["reps_test"]["sdf"]  # any evaluation has the fields a row reads
-    rows = _tab56({"rigid_test": shipped, **reps}, "test", TAB5, sizes)
+    shipped = reps["reps_test"]["sdf"][0]  # any evaluation has the fields a row reads
+    rows = tab56_rows({"rigid_test": shipped, **reps}, "test", TAB5, sizes)
     labels = [row[0] for row in rows]
     assert "F_q on occupancy ψ_s (b = 100), 2 steps" in labels
     assert "occupancy ψ_s (b = 100) (paper only)" not in labels
@@ -120,11 +117,11 @@ def test_tab4_trains_a_flow_on_each_representation_and_scores_it_in_what_it_read
         tiny_push_data, tmp_path):
     sizes = replace(QUICK, per_scene=2, flow_steps=2)
     steps = Steps(tmp_path, progress=False)
-    results = _flow_representations(steps, sizes, tiny_push_data, tiny_push_data)
+    results = flow_representations(steps, sizes, tiny_push_data, tiny_push_data)
     assert list(results) == list(FLOW_REPRESENTATIONS)
-    assert [r["result"]["representation"] for r in results.values()] == [
+    assert [r[0]["result"]["representation"] for r in results.values()] == [
         "sdf", "occupancy", "smooth_occupancy", "smooth_occupancy"]
-    rows = _tab4({"tab4": results}, sizes)
+    rows = tab4_rows({"tab4": results}, sizes, TAB4)
     assert [row[0] for row in rows[:2]] == ["F_flow on SDF, 2 steps", "no motion, SDF"]
     assert rows[1][-2:] == ["10.80 ± 3.40", "0.00 ± 0.00"]
     psi = rows[rows.index(next(r for r in rows if r[0] == "no motion, occupancy ψ = sign(φ)"))]
@@ -161,14 +158,14 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     reproduce(tmp_path, tiny, workers=1, progress=False, ledger=ledger)
     again = json.loads((tmp_path / "run.json").read_text())
     assert [s["folder"] for s in again["steps"]] == [s["folder"] for s in run["steps"]]
-    assert (tmp_path / "report.html").stat().st_size > 1000
+    assert (tmp_path / "quick.html").stat().st_size > 1000
     # a fresh clone: a new output folder and the committed ledger; nothing runs again
     elsewhere = tmp_path / "elsewhere"
     md = reproduce(elsewhere, tiny, workers=1, progress=False, ledger=ledger)
     fresh = json.loads((elsewhere / "run.json").read_text())
     assert {s["state"] for s in fresh["steps"]} == {"done"}
     assert not (elsewhere / "steps").exists()
-    assert md.read_text() == text and (elsewhere / "fig3_coverage.png").is_file()
+    assert md.read_text() == text and (elsewhere / "quick_fig3_coverage.png").is_file()
 
 
 @pytest.mark.slow
@@ -230,6 +227,13 @@ def test_a_missing_steps_time_is_scaled_from_another_sizes_ledger(tmp_path):
         {"key": "k", "seconds": 30.0, "params": {"scenes": 2, "seed": 0}}))
     assert scaled_seconds("bench_push", {"scenes": 20, "seed": 0}, [quick]) == 300.0
     assert scaled_seconds("bench_hang", {"scenes": 20}, [quick]) is None
+    (quick / "train_rigid_sdf.json").write_text(json.dumps(
+        {"key": "k", "seconds": 20.0, "params": {"steps": 250, "spec": {}}}))
+    # another seed, another representation, a larger batch: the nearest measured step
+    assert scaled_seconds("train_rigid_sdf_seed1", {"steps": 500}, [quick]) == 40.0
+    assert scaled_seconds("train_rigid_pointnet2", {"steps": 500, "batch": 128},
+                          [quick]) == 160.0
+    assert scaled_seconds("train_flow_sdf", {"steps": 500}, [quick]) is None
 
 
 def test_status_lists_every_step_without_running_any(tmp_path, capsys):
@@ -243,3 +247,54 @@ def test_status_lists_every_step_without_running_any(tmp_path, capsys):
     assert all(line.split()[0] == "missing" for line in lines[:-1])
     assert {"data_test", "bench_push", "bench_hang"} <= {line.split()[1] for line in lines[:-1]}
     assert not (tmp_path / "r" / "steps").exists()
+
+
+def test_a_row_of_two_seeds_pools_their_scenes_and_shows_an_interval():
+    """Two seeds' evaluations of the same scenes: the row's mean is the seeds' mean, its
+    interval holds it, and the turn gain is pooled per shape."""
+    from robotplan.bench.reproduce_models import seeded, training_config
+
+    def evaluation(err: float) -> dict:
+        n = [4.0, 4.0, 4.0]
+        sums = {"scene": [0, 1, 2], "contact": n, "shape": ["box", "lshape", "box"],
+                **{k: [err * 4 * (1 + 0.1 * i) for i in range(3)]
+                   for k in ("x_mm", "y_mm", "alpha_deg")},
+                **{f"baseline_{k}": [40.0] * 3 for k in ("x_mm", "y_mm", "alpha_deg")},
+                "turn_product": [2.0, 1.0, 2.0], "turn_square": [4.0, 4.0, 4.0]}
+        mean = sum(sums["x_mm"]) / 12
+        dq = {k: [mean, 1.0] for k in ("x_mm", "y_mm", "alpha_deg")}
+        return {"result": {"delta_q_error": dq, "baseline_delta_q_error": dq,
+                           "turn_gain": {"box": 0.5, "lshape": 0.25}, "by_scene": sums}}
+
+    sizes = replace(QUICK, training_seeds=(0, 1))
+    rows = tab56_rows({"rigid_test": evaluation(2.0),
+                       "reps_test": {"sdf": [evaluation(2.0), evaluation(4.0)]}},
+                      "test", TAB5, sizes)
+    row = rows[1]
+    assert row[0] == f"F_q on SDF, {sizes.representation_steps} steps, 2 seeds"
+    mean = float(row[1].split(" ± ")[0])
+    lo, hi = (float(v) for v in row[1].split("[")[1].rstrip("]").split(", "))
+    assert mean == pytest.approx(3.3, abs=0.01) and lo <= mean <= hi
+    assert row[4].startswith("boxes 0.50 [") and "L-shapes 0.25" in row[4]
+    assert seeded("train_rigid_sdf", 0) == "train_rigid_sdf"
+    assert seeded("train_rigid_sdf", 1) == "train_rigid_sdf_seed1"
+    cfg = training_config(100, 1, {"encoder": "joint"}, (("batch", 128),))
+    assert cfg["seed"] == 1 and cfg["batch"] == 128 and "seed" not in training_config(
+        100, 0, {})
+
+
+def test_tab3_shares_carry_intervals_over_the_scenes_they_are_of():
+    from robotplan.hanging.bench.report import _cells
+
+    summary = {"scenes": 150, "opt_sampling": {"found": 1.0, "sim_success": 0.5,
+                                               "collision_free": 1.0, "total": 0.5}}
+    found, sim, free, total = _cells(summary, "opt_sampling")
+    assert found == "100.0 [100.0, 100.0]" and free == "100.0 [100.0, 100.0]"
+    lo, hi = (float(v) for v in total.split("[")[1].rstrip("]").split(", "))
+    assert total.startswith("50.0 [") and 40 < lo < 50 < hi < 60 and sim == total
+
+
+def test_reproduce_refuses_a_time_budget_of_nothing(tmp_path, capsys):
+    assert main(["reproduce", "--out", str(tmp_path / "r"), "--quick", "--hours", "0"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--hours" in err

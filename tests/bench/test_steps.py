@@ -96,3 +96,39 @@ def test_uses_tells_a_steps_outputs_from_files_read_by_content(tmp_path):
     assert [n["key"] for n in uses["needs"]] == [data["key"]]
     assert uses["reads"] == (outside,)
     assert files_digest([outside]) == files_digest([outside])
+
+
+def test_a_run_in_parts_leaves_the_steps_it_may_not_start_and_those_that_need_them(
+        tmp_path):
+    from robotplan.bench.reproduce import step_filter
+
+    ledger = tmp_path / "ledger"
+    step, calls = _counting()
+    allow = step_filter(("data_*", "eval_*"))
+    steps = Steps(tmp_path / "out", progress=False, ledger=ledger, allow=allow)
+    data = steps.run("data_a", {}, step, "cmd", runs=DATA)
+    model = steps.run("train_a", {}, step, "cmd", runs=DATA, needs=(data,))
+    scored = steps.run("eval_a", {}, step, "cmd", runs=DATA, needs=(model,))
+    assert [s["state"] for s in steps.log] == ["ran", "skipped", "skipped"]
+    assert scored["result"] == {} and len(calls) == 1 and not steps.complete
+    assert sorted(p.name for p in ledger.iterdir()) == ["data_a.json"]
+    # the next part, without limits, runs the rest and reuses the first part's step
+    steps = Steps(tmp_path / "out", progress=False, ledger=ledger)
+    data = steps.run("data_a", {}, step, "cmd", runs=DATA)
+    model = steps.run("train_a", {}, step, "cmd", runs=DATA, needs=(data,))
+    steps.run("eval_a", {}, step, "cmd", runs=DATA, needs=(model,))
+    assert [s["state"] for s in steps.log] == ["done", "ran", "ran"] and steps.complete
+    assert step_filter() is None
+    assert step_filter(hours=0.0)("anything") is False  # no time left: nothing starts
+    assert step_filter(hours=1.0)("anything") is True
+
+
+def test_a_ledger_entry_keeps_lists_on_one_line_and_reads_back_the_same():
+    from robotplan.bench.steps import ledger_json
+
+    entry = {"key": "k", "result": {"by_scene": {"scene": [0, 1, 2], "x_mm": [1.5, 2.0, 0.25]},
+                                    "rows": [{"shape": "box"}], "nested": [[1, 2], [3]],
+                                    "text": ["two  spaces", "a [bracket", "]"], "empty": []}}
+    text = ledger_json(entry)
+    assert json.loads(text) == entry
+    assert '"scene": [0, 1, 2]' in text and '"x_mm": [1.5, 2.0, 0.25]' in text

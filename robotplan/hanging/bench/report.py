@@ -4,6 +4,7 @@ best row of it."""
 
 from __future__ import annotations
 
+from robotplan.base.intervals import share_interval
 from robotplan.bench.paper import PAPER_TAB3_BASELINES
 from robotplan.bench.report import Block
 from robotplan.hanging.bench.bench import METHODS, PAPER_TAB3
@@ -12,9 +13,21 @@ from robotplan.hanging.bench.reproduce import COLLISION_ROWS, HANG_REPRESENTATIO
 __all__ = ["tab3_blocks"]
 
 
+def _share(share: float, scenes: int) -> str:
+    """A share in % with its 95 % interval (a bootstrap over the ``scenes`` it is of)."""
+    interval = share_interval(round(share * scenes), scenes)
+    ends = f" [{100 * interval[0]:.1f}, {100 * interval[1]:.1f}]" if interval else ""
+    return f"{100 * share:.1f}{ends}"
+
+
 def _cells(summary: dict, method: str) -> list[str]:
-    r = summary[method]
-    return [f"{100 * r[k]:.1f}" for k in ("found", "sim_success", "collision_free", "total")]
+    """found and total are shares of the scenes, sim success of the scenes where a pose was
+    found, collision free of those where it hung (the paper's Tab. 3)."""
+    r, scenes = summary[method], summary["scenes"]
+    found = round(r["found"] * scenes)
+    hung = round(r["sim_success"] * found)
+    return [_share(r["found"], scenes), _share(r["sim_success"], found),
+            _share(r["collision_free"], hung), _share(r["total"], scenes)]
 
 
 def tab3_blocks(results: dict, sizes) -> list[Block]:
@@ -26,7 +39,7 @@ def tab3_blocks(results: dict, sizes) -> list[Block]:
     header = ["found", "sim success", "collision free", "total"]
     b: list[Block] = [
         ("h2", "Tab. 3: mug hanging (% of scenes: found / sim success / collision free / "
-               "total)"),
+               "total, each [95 % interval])"),
         ("table", ["method", *header, "paper"], rows),
         ("p", f"The shipped H_hang (`learned/hang`) with the paper's protocol: uniform "
               f"random starts, one network (`--no-threading --check none`; robotplan's "

@@ -8,13 +8,14 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from robotplan.base.scene_sums import scene_sums
 from robotplan.pushing.models.dynamics import load_model
 from robotplan.pushing.models.symmetry import symmetric_field
 from robotplan.pushing.training.push_data import data_simulator
 from robotplan.pushing.training.samples import PushSamples, SampleBatch
 from robotplan.pushing.training.train import framed, scored_workspace
 
-__all__ = ["evaluate_push", "pick_samples"]
+__all__ = ["evaluate_push", "pick_samples", "rmse_sums"]
 
 
 def pick_samples(samples: PushSamples, per_scene: int | None, seed: int) -> np.ndarray:
@@ -27,6 +28,17 @@ def pick_samples(samples: PushSamples, per_scene: int | None, seed: int) -> np.n
         idx = np.flatnonzero(samples.scene == s)
         picked.append(rng.choice(idx, min(per_scene, len(idx)), replace=False))
     return np.sort(np.concatenate(picked))
+
+
+def rmse_sums(scene: np.ndarray, contact: np.ndarray, err: np.ndarray, base: np.ndarray
+              ) -> dict[str, list]:
+    """Per-scene sums of the samples' RMSE (``err``) and the no-motion RMSE (``base``), with
+    and without contact, and the samples counted: each mean of the result is a ratio of
+    these sums, so a report can resample scenes (:func:`robotplan.base.scene_sums`)."""
+    c = np.asarray(contact, dtype=float)
+    return scene_sums(scene, {"contact": c, "free": 1 - c, "rmse_contact": err * c,
+                              "rmse_free": err * (1 - c), "baseline_contact": base * c,
+                              "baseline_free": base * (1 - c)})
 
 
 @torch.no_grad()
@@ -91,5 +103,6 @@ def evaluate_push(model_dir: str | Path, data_dir: str | Path, scenes: int | Non
         "samples": {"contact": int(contact.sum()), "free": int((~contact).sum())},
         "rmse_mm": stats(err), "rmse_std_mm": spread(err),
         "baseline_rmse_mm": stats(base), "baseline_std_mm": spread(base),
+        "by_scene": rmse_sums(samples.scene[idx], contact, err, base),
         "views": views, "seconds": round(time.time() - t0, 1), "device": str(device),
     }

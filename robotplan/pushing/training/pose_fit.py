@@ -32,6 +32,7 @@ from robotplan.pushing.models.rigid import moved_pivot_delta
 from robotplan.pushing.training.footprints import BOX, LSHAPE
 from robotplan.pushing.training.push_data import scene_footprint
 from robotplan.pushing.training.rigid import table5_errors
+from robotplan.pushing.training.rigid_evaluation import delta_q_sums
 from robotplan.pushing.training.samples import PushSamples
 from robotplan.scene.bodies import Body
 from robotplan.sdf import Circle
@@ -124,5 +125,9 @@ def evaluate_pose_fit(model_dir: str | Path, data_dir: str | Path, samples: int 
     if deltas:
         D = np.array(deltas)
         out["delta_q_error"] = table5_errors(D[:, 1], D[:, 0])
+        names = {BOX: "box", LSHAPE: "lshape"}
+        first = np.unique(data.scene[picked], return_index=True)[1]
+        out["by_scene"] = {**delta_q_sums(data.scene[picked], np.ones(len(D)), D[:, 1], D[:, 0]),
+                           "shape": [names.get(int(R[i, 0]), "other") for i in first]}
     out["seconds"] = round(time.time() - t0, 1)
     return out

@@ -17,15 +17,16 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from robotplan.base.scene_sums import scene_sums
 from robotplan.models.spec import DynamicsSpec
 from robotplan.pushing.models.rigid import load_rigid, moved_pose
-from robotplan.pushing.training.evaluation import pick_samples
+from robotplan.pushing.training.evaluation import pick_samples, rmse_sums
 from robotplan.pushing.training.footprints import BOX, LSHAPE
 from robotplan.pushing.training.push_data import data_simulator, scene_families
 from robotplan.pushing.training.rigid import delta_q_predictions, table5_errors, turn_gain
 from robotplan.pushing.training.samples import PushSamples, SampleBatch
 
-__all__ = ["evaluate_rigid", "moved_sdf_rmse"]
+__all__ = ["delta_q_sums", "evaluate_rigid", "moved_sdf_rmse"]
 
 
 @torch.no_grad()
@@ -43,6 +44,25 @@ def moved_sdf_rmse(batch: SampleBatch, delta: Tensor, pivot: Tensor, grid: Tenso
         errs.append((moved.phi1_now(grid[None]) - now).pow(2).mean(1).sqrt())
         bases.append((sub.phi1_prev(grid[None]) - now).pow(2).mean(1).sqrt())
     return torch.cat(errs), torch.cat(bases)
+
+
+def delta_q_sums(scene: np.ndarray, contact: np.ndarray, pred: np.ndarray, true: np.ndarray
+                 ) -> dict[str, list]:
+    """Per-scene sums over the contact samples (counted: ``contact``) of |Δq error| (x, y
+    mm; α °), of the no-motion error |Δq|, and of the turn products pred_α·true_α and
+    true_α² (°²): Tab. 5's means and the turn gain as ratios of sums
+    (:func:`robotplan.base.scene_sums`).
+    ``pred``, ``true``: (N, 3) Δq in m, m, rad."""
+    c = np.asarray(contact, dtype=float)[:, None]
+    scale = np.array([1e3, 1e3, 180 / np.pi])
+    err, base = np.abs(pred - true) * scale * c, np.abs(true) * scale * c
+    p_a, t_a = pred[:, 2] * scale[2], true[:, 2] * scale[2]
+    return scene_sums(scene, {"contact": c[:, 0],
+                              "x_mm": err[:, 0], "y_mm": err[:, 1], "alpha_deg": err[:, 2],
+                              "baseline_x_mm": base[:, 0], "baseline_y_mm": base[:, 1],
+                              "baseline_alpha_deg": base[:, 2],
+                              "turn_product": p_a * t_a * c[:, 0],
+                              "turn_square": t_a * t_a * c[:, 0]})
 
 
 @torch.no_grad()
@@ -91,5 +111,9 @@ def evaluate_rigid(model_dir: str | Path, data_dir: str | Path, scenes: int | No
         "by_footprint": by_footprint,
         "rmse_mm": split(err, np.mean), "rmse_std_mm": split(err, np.std),
         "baseline_rmse_mm": split(base, np.mean), "baseline_std_mm": split(base, np.std),
+        "by_scene": {**rmse_sums(samples.scene[idx], c, err, base),
+                     **delta_q_sums(samples.scene[idx], c, pred, true),
+                     "shape": [next(k for k, m in kinds.items() if m[i])
+                               for i in np.unique(samples.scene[idx], return_index=True)[1]]},
         "views": views, "seconds": round(time.time() - t0, 1), "device": str(device),
     }

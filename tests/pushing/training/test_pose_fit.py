@@ -1,6 +1,7 @@
 """The pose fit that reads a push model as the planner does (argmin of H_t)."""
 
 import numpy as np
+import pytest
 import torch
 
 from robotplan.functionals.base import Quadrature
@@ -65,6 +66,10 @@ def test_evaluate_pose_fit_reports_both_shapes():
     assert set(table) == {"x_mm", "y_mm", "alpha_deg"}
     for mean, std in table.values():
         assert 0 <= mean < 30 and std >= 0
+    sums = out["by_scene"]  # per-scene sums: a report's bootstrap gives back each mean
+    assert sum(sums["contact"]) == 8 and len(sums["shape"]) == len(sums["scene"])
+    for k, (mean, _std) in table.items():
+        assert sum(sums[k]) / 8 == pytest.approx(mean, abs=2e-3)
 
 
 def test_an_object_frame_model_is_fitted_through_its_own_h_f():

@@ -105,6 +105,23 @@ def test_f_q_is_scored_in_tab_2_terms_beside_f_flow(tiny_push_data, tiny_ood_pus
             flow["baseline_rmse_mm"][side], abs=2e-3)
         assert rigid["rmse_mm"][side] >= 0
     assert rigid["views"] == 1
+    # the per-scene sums give back every mean the evaluations report
+    for result in (rigid, flow):
+        sums = result["by_scene"]
+        for side in ("contact", "free"):
+            assert sum(sums[side]) == result["samples"][side]
+            assert sum(sums[f"rmse_{side}"]) / sum(sums[side]) == pytest.approx(
+                result["rmse_mm"][side], abs=2e-3)
+            assert sum(sums[f"baseline_{side}"]) / sum(sums[side]) == pytest.approx(
+                result["baseline_rmse_mm"][side], abs=2e-3)
+    sums = rigid["by_scene"]
+    for k in ("x_mm", "y_mm", "alpha_deg"):
+        assert sum(sums[k]) / sum(sums["contact"]) == pytest.approx(
+            rigid["delta_q_error"][k][0], abs=2e-3)
+    for shape, gain in rigid["turn_gain"].items():
+        mine = [i for i, s in enumerate(sums["shape"]) if s == shape]
+        assert sum(sums["turn_product"][i] for i in mine) / sum(
+            sums["turn_square"][i] for i in mine) == pytest.approx(gain, abs=2e-3)
 
 
 def test_the_sdf_space_loss_has_the_gradient_of_its_finite_differences():
