@@ -113,6 +113,10 @@ def _parser() -> argparse.ArgumentParser:
     add_loop_option(bp)
     add_rehearse_option(bp)
     add_program_option(bp)
+    bp.add_argument("--candidates", default=None, metavar="KIND[,KIND]",
+                    help="the kinds of candidates each search may try (skeletons/tiers.yaml: "
+                    "pose_fits, region_fits, plain, routes; default every kind); plain: the "
+                    "paper's optimiser alone, without pushes fitted in closed form")
     bp.set_defaults(run=cmd_bench_push)
     add_bench_plan_parser(bsub)
     add_bench_hang_parser(bsub)

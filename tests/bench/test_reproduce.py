@@ -143,7 +143,8 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     md = reproduce(tmp_path, tiny, workers=1, progress=False, ledger=ledger)
     text = md.read_text()
     for item in ("Tab. 2", "Tab. 4", "Tab. 5", "Tab. 6", "Fig. 3", "Fig. 5", "Fig. 6",
-                 "Fig. 8", "Fig. 11", "Tab. 3", "without H_PoC", "| analytic |"):
+                 "Fig. 8", "Fig. 11", "Tab. 3", "| every row |", "without H_PoC",
+                 "| analytic |", "--candidates plain"):
         assert item in text, item
     assert "Not run yet" not in text, "every item of the paper has its code"
     assert "| F_flow | " in text and "| 3.40 ± 1.60 | 1.40 ± 1.80 |" in text
@@ -154,7 +155,7 @@ def test_a_tiny_reproduction_end_to_end_and_again_from_its_steps(tmp_path):
     # data, training and evaluation of six representations: 1 + 6 + 12 steps; Figs. 5, 6: 1;
     # Tab. 4's four F_flow: 4 + 4; Tab. 3's two H_hang: 2 data, 2 trainings, 2 benches;
     # Tab. 2's object-frame F_flow and F on both sets: 4
-    assert len(run["steps"]) == 54 and run["sizes"]["test_scenes"] == 3
+    assert len(run["steps"]) == 55 and run["sizes"]["test_scenes"] == 3
     reproduce(tmp_path, tiny, workers=1, progress=False, ledger=ledger)
     again = json.loads((tmp_path / "run.json").read_text())
     assert [s["folder"] for s in again["steps"]] == [s["folder"] for s in run["steps"]]

@@ -242,12 +242,15 @@ def test_footprint_commands_refuse_a_hang_scene(tmp_path, capsys):
 
 
 def test_a_bad_loop_or_program_setting_is_refused_before_any_work(tmp_path, capsys):
-    """``--loop`` and ``--program`` of solve and bench push: one line naming the option and
-    the item, exit 2, nothing written."""
+    """``--loop`` and ``--program`` of solve and bench push, ``--candidates`` of bench push:
+    one line naming the option and the item, exit 2, nothing written."""
     for option, item in (("--loop", "no_such=1"), ("--loop", "max_replans=x"),
-                         ("--program", "with_contact=maybe"), ("--program", "no_such=1")):
+                         ("--program", "with_contact=maybe"), ("--program", "no_such=1"),
+                         ("--candidates", "plain,fitted")):
         for argv in (["solve", str(TASKS / "box_push.yaml"), "--out", str(tmp_path / "s")],
                      ["bench", "push", "--out", str(tmp_path / "b")]):
+            if option == "--candidates" and argv[0] == "solve":
+                continue  # a benchmark's option
             first = option == "--loop" and item == "no_such=1" and argv[0] == "solve"
             res = run(*argv, option, item) if first else call(capsys, *argv, option, item)
             err = res.stderr.strip()

@@ -113,7 +113,8 @@ class PushPlanner:
         class, :func:`~robotplan.pushing.search.default_dynamics.default_dynamics`). ``search``: the
         fields of :class:`~robotplan.pushing.search.request.SearchRequest` (``solver``, ``workers``,
         ``skeleton``, ``max_pushes``, ``time_budget``, ``program``, ``replan``,
-        ``last_resort``, ``exhaustive``, ``progress``, ``quiet``). ``warm_start``: an
+        ``last_resort``, ``exhaustive``, ``progress``, ``quiet``, ``candidate_kinds``; the
+        re-plans of its execution search with the same). ``warm_start``: an
         earlier plan of this task (at other poses): its skeleton is tried first, from its
         trajectories; a fresh search follows when that does not solve (unless ``fallback``
         is False; for a free pusher's pose goal the two run side by side,
@@ -152,7 +153,8 @@ class PushPlanner:
                            spaces.get(id(best)) if best is not None else None,
                            {"model": model_dir, "solver": request.solver,
                             "workers": request.workers, "max_pushes": request.max_pushes,
-                            "program": dict(request.program or {})})
+                            "program": dict(request.program or {}),
+                            "candidate_kinds": request.candidate_kinds})
         learned = (request.program or {}).get("learned_stage", True)  # F_q behind the plan
         if (rehearse_plan and learned and not request.replan and best is not None
                 and dynamics_kind(model_dir) == "rigid" and rehearsable(task)):

@@ -66,14 +66,14 @@ def bench_scene(job: tuple) -> dict:
     """Plan one benchmark scene and execute the plan in each simulator (a unit of
     :func:`run_bench_push`): its row, the first simulator's outcome at the top and every
     one's under ``sims``. ``job = (i, kind, seed, out, model_dir, workers, exhaustive,
-    time_budget, perturb, loop, program, rehearse, sims)``; the scene file and the solution
-    (one folder per simulator when there are several) are written under ``out``."""
+    time_budget, perturb, loop, program, rehearse, sims, kinds)``; the scene file and the
+    solution (one folder per simulator when there are several) are written under ``out``."""
     from robotplan.api import planner_for
     from robotplan.pushing.execution.perturb import Perturbation
     from robotplan.scene.task import make_task
 
     (i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb, loop, program,
-     rehearse, sims) = job
+     rehearse, sims, kinds) = job
     doc = draw_scene(i, seed, kind, out / "scenes")
     name = doc["name"]
     scene_path = out / "scenes" / f"{name}.yaml"
@@ -86,7 +86,7 @@ def bench_scene(job: tuple) -> dict:
     planner = planner_for(task)
     planned = planner.plan(task, model_dir, workers=workers, progress=False,
                            exhaustive=exhaustive, quiet=True, time_budget=time_budget,
-                           program=program, rehearse_plan=rehearse)
+                           program=program, rehearse_plan=rehearse, candidate_kinds=kinds)
     executed = {}
     for sim in sims:
         folder = out / "solutions" / name / (sim if len(sims) > 1 else "")
@@ -112,7 +112,8 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
                    time_budget: float | None = None, perturb: int | None = None,
                    loop: dict | None = None, ray: str | None = None,
                    program: dict | None = None, rehearse: bool = True,
-                   sims: tuple[str, ...] = ("pybullet",)) -> dict:
+                   sims: tuple[str, ...] = ("pybullet",),
+                   candidate_kinds: tuple[str, ...] | None = None) -> dict:
     """Solve ``scenes`` scenes per shape type and execute each plan in every simulator of
     ``sims``; returns the summary (the first simulator's at the top, every one's and their
     disagreement per scene under ``simulators``, :func:`compare_simulators`).
@@ -121,6 +122,8 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
     ``loop``: closed-loop settings in place of each scene class's (``LoopSettings`` fields),
     ``program`` its program settings (``ProgramSettings`` fields, e.g. the ablations).
     ``rehearse``: rehearse F_q's plans before the open loop (``robotplan.api.plan``).
+    ``candidate_kinds``: the kinds of candidates each search may try (``("plain",)``: the
+    paper's optimiser alone, :class:`~robotplan.pushing.search.request.SearchRequest`).
     ``workers``: processes of each scene's skeleton search. The scenes run one after the
     other here, or as Ray tasks of ``workers`` CPUs each (``ray``:
     :func:`robotplan.base.units.run_units`; the solutions are written under ``out``, so a
@@ -135,7 +138,7 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
             if list(row.get("sims", {"pybullet": None})) == list(sims)}
     todo = [(i, kind) for i in range(scenes) for kind in shapes]
     jobs = [(i, kind, seed, out, model_dir, workers, exhaustive, time_budget, perturb, loop,
-             program, rehearse, tuple(sims))
+             program, rehearse, tuple(sims), candidate_kinds)
             for i, kind in todo if scene_name(i, kind) not in done]
     report = UnitsReport()
     for row in run_units(bench_scene, jobs, 1, ray, report, cpus_per_unit=workers):
@@ -156,6 +159,7 @@ def run_bench_push(scenes: int, seed: int, out: Path, model_dir: str | Path | No
                     "exhaustive": exhaustive,
                     "time_budget_s": time_budget, "perturb": perturb,
                     "loop_settings": loop or {}, "program_settings": program or {},
+                    "candidate_kinds": list(candidate_kinds or ()),
                     "rehearse": rehearse,
                     "units": report.as_dict()})
     buf = io.StringIO()

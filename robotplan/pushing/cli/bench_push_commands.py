@@ -61,8 +61,23 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
         print(f"error: --shapes: unknown shape type {sorted(bad)[0]!r} "
               f"({', '.join(SHAPES)})", file=sys.stderr)
         return EXIT_BAD_INPUT
+    candidate_kinds = None
+    if args.candidates is not None:
+        from robotplan.pushing.search.tiers import load_tiers
+
+        candidate_kinds = tuple(k for k in args.candidates.split(",") if k)
+        known = sorted({t.candidates for t in load_tiers()})
+        bad = sorted(set(candidate_kinds) - set(known))
+        if bad or not candidate_kinds:
+            print(f"error: --candidates: {bad[0] if bad else 'none given'!r} is not a kind "
+                  f"of candidates ({', '.join(known)})", file=sys.stderr)
+            return EXIT_BAD_INPUT
     out = Path(args.out)
     if len(kinds) > 1:
+        if candidate_kinds is not None:
+            print("error: --candidates: several --dynamics are compared with every kind",
+                  file=sys.stderr)
+            return EXIT_BAD_INPUT
         return _bench_compare(args, kinds, out)
     summary_path = out / "summary.json"
     if summary_path.exists() and not args.overwrite:
@@ -76,7 +91,8 @@ def cmd_bench_push(args: argparse.Namespace) -> int:
     summary = run_bench_push(args.scenes, args.seed, out, args.model, args.workers,
                              tuple(args.shapes.split(",")), args.exhaustive, args.time_budget,
                              args.perturb, args.loop, args.ray, args.program,
-                             rehearse=not args.no_rehearse, sims=tuple(sims))
+                             rehearse=not args.no_rehearse, sims=tuple(sims),
+                             candidate_kinds=candidate_kinds)
     if args.json:
         print(json.dumps(summary))
         return 0

@@ -31,7 +31,10 @@ class SearchRequest:
     plan that meets the constraints. ``exhaustive``: solve every candidate. ``deadline``: the
     instant (``time.monotonic()``, one clock for every process) after which no tier and no
     program starts, the best plan so far (or none) being the search's result; a program
-    running then runs to its end."""
+    running then runs to its end. ``candidate_kinds``: the kinds of candidates the search
+    may try (``skeletons/tiers.yaml``: pose_fits, region_fits, plain, routes; None: every
+    kind); ``("plain",)`` is the paper's search, the optimiser from the skeleton space's
+    initializations, without pushes fitted in closed form."""
 
     task: PushTask
     model_dir: Path
@@ -48,6 +51,7 @@ class SearchRequest:
     deadline: float | None = None
     progress: bool = True
     quiet: bool = False
+    candidate_kinds: tuple[str, ...] | None = None
 
     def but(self, **changes: object) -> SearchRequest:
         """This request with ``changes``."""

@@ -239,7 +239,15 @@ def search_scene(request: SearchRequest) -> tuple[SearchResult, dict[int, Skelet
     named["own"] = named["quick"] if request.guesses else own  # a warm start: a re-plan
     space = space_for(task)
     apart, charged, spaces = SearchResult(None), SearchResult(None), {}
-    for tier in load_tiers():
+    tiers = load_tiers()
+    kinds = request.candidate_kinds
+    if kinds is not None:
+        unknown = set(kinds) - {t.candidates for t in tiers}
+        if unknown:
+            raise ValueError(f"candidate kinds {sorted(unknown)}: not in the tier table; one "
+                             f"of {sorted({t.candidates for t in tiers})}")
+        tiers = tuple(t for t in tiers if t.candidates in kinds)
+    for tier in tiers:
         if request.past_deadline():
             request.say(f"past the deadline: tier {tier.name!r} and those after it do not start")
             break

@@ -315,3 +315,31 @@ def test_past_its_deadline_a_search_starts_no_tier_and_no_program(monkeypatch):
     sk = parse_skeleton("push@0", task.actors[0], task.obj)
     assert not planner.search_push(late, [sk]).candidates and not solved
     assert not request.past_deadline() and late.past_deadline()
+
+
+def test_a_search_limited_to_plain_candidates_never_fits_pushes(monkeypatch):
+    """The paper's search (``candidate_kinds=("plain",)``): the optimiser from the skeleton
+    space's initializations, no pushes fitted in closed form, even where nothing solves;
+    an unknown kind is refused naming the known ones."""
+    import pytest
+
+    import robotplan.pushing.search.pose_search as pose_search
+
+    calls = []
+
+    def record(request, skeletons, settings=None, space=None, ordered=False):
+        calls.append(request.guesses)
+        return SearchResult(None, [], 1.0)
+
+    monkeypatch.setattr(search_module, "search_push", record)
+    monkeypatch.setattr(pose_search, "search_push", record)
+    task = load_task(TASKS / "box_push.yaml")
+    request = SearchRequest(task, TASKS.parent / "learned" / "push_rigid", quiet=True,
+                            progress=False)
+    search_module.search_scene(request.but(candidate_kinds=("plain",)))
+    assert calls == [None]  # one plain tier, no fitted guesses
+    calls.clear()
+    search_module.search_scene(request)
+    assert len(calls) > 1 and any(g is not None for g in calls)  # the default fits first
+    with pytest.raises(ValueError, match="region_fits"):
+        search_module.search_scene(request.but(candidate_kinds=("nope",)))
