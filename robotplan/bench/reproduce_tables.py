@@ -97,7 +97,6 @@ def tab4_rows(results: dict, sizes, paper: dict) -> list:
     ``paper`` (the paper's Tab. 4)."""
     rows = []
     for key, steps in results["tab4"].items():
-        steps = steps if isinstance(steps, list) else [steps]
         label = REPRESENTATIONS[key][0]
         for name, ours, spread, prefix in (
                 (f"F_flow on {label}, {sizes.flow_steps} steps{_seed_note(steps)}", "rmse_mm",
@@ -146,7 +145,6 @@ def tab56_rows(results: dict, set_name: str, paper: dict, sizes) -> list:
              *map(str, paper["SDF"])]]
     trained = results.get(f"reps_{set_name}", {})
     for key, steps in trained.items():
-        steps = steps if isinstance(steps, list) else [steps]
         label = REPRESENTATIONS[key][0]
         rows.append([f"F_q on {label}, {sizes.representation_steps} steps{_seed_note(steps)}",
                      *_dq_cells(steps), _gains(steps),

@@ -34,6 +34,7 @@ from robotplan.bench.step_keys import files_digest, modules_digest, package_modu
 __all__ = ["Steps", "ledger_json", "step_key"]
 
 EVERYTHING = ("robotplan",)  # a step that does not say what it runs: the whole package
+FINISHED = ("done", "ran")  # the states of a step whose result is in hand
 
 
 def step_key(name: str, params: dict, runs: Iterable[str], reads: Iterable[Path],
@@ -119,10 +120,10 @@ class Steps:
     @property
     def complete(self) -> bool:
         """Whether every step so far is done or ran (none skipped)."""
-        return all(step["state"] in ("done", "ran") for step in self.log)
+        return all(step["state"] in FINISHED for step in self.log)
 
     def _may_run(self, name: str, needs: tuple[dict, ...]) -> bool:
-        return (all(n["state"] in ("done", "ran") for n in needs)
+        return (all(n["state"] in FINISHED for n in needs)
                 and (self.allow is None or self.allow(name)))
 
     def uses(self, *paths: Path) -> dict:

@@ -7,6 +7,7 @@ from __future__ import annotations
 from robotplan.base.intervals import share_interval
 from robotplan.bench.paper import PAPER_TAB3_BASELINES
 from robotplan.bench.report import Block
+from robotplan.bench.reproduce_tables import interval_text
 from robotplan.hanging.bench.bench import METHODS, PAPER_TAB3
 from robotplan.hanging.bench.reproduce import COLLISION_ROWS, HANG_REPRESENTATIONS
 
@@ -16,8 +17,8 @@ __all__ = ["tab3_blocks"]
 def _share(share: float, scenes: int) -> str:
     """A share in % with its 95 % interval (a bootstrap over the ``scenes`` it is of)."""
     interval = share_interval(round(share * scenes), scenes)
-    ends = f" [{100 * interval[0]:.1f}, {100 * interval[1]:.1f}]" if interval else ""
-    return f"{100 * share:.1f}{ends}"
+    percent = interval and (100 * interval[0], 100 * interval[1])
+    return f"{100 * share:.1f}{interval_text(percent, 1)}"
 
 
 def _cells(summary: dict, method: str) -> list[str]:
