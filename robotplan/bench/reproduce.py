@@ -105,9 +105,9 @@ def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
 def reproduce_status(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
                      ledger: Path | None = None) -> list[dict]:
     """Every step of a run at ``sizes`` without running any: its ``state`` (``done``,
-    ``stale``, ``missing``; :class:`~robotplan.bench.steps.Steps`), the seconds it last took
-    where the ledger knows them, else (``estimated``) those of the same step in another
-    size's ledger scaled by its size (:func:`scaled_seconds`)."""
+    ``stale``, ``missing``, ``running``; :class:`~robotplan.bench.steps.Steps`), the seconds
+    it last took where the ledger knows them, else (``estimated``) those of the same step in
+    another size's ledger scaled by its size (:func:`scaled_seconds`)."""
     steps = Steps(out, False, ledger, dry=True)
     _run_steps(steps, sizes, workers, None)
     others = [p for p in (ledger.parent.glob("*") if ledger is not None else ())

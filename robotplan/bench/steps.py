@@ -14,12 +14,18 @@ again only if a step that needs them has to run.
 ledger), ``stale`` (the ledger holds an older key: something it reads changed) or ``missing``.
 ``allow(name)`` false leaves a step that would run ``skipped`` (a run in parts: some steps,
 or as many as fit a time budget), and every step that needs it with it.
+
+Several runs may share ``OUT`` (each on its own steps, ``reproduce --steps``): a step being
+made holds ``OUT/steps/<name>-<key>.lock`` (its process id), and another run leaves that
+step ``running`` (``skipped`` for what it would have run) instead of starting it over. A
+lock whose process has ended is taken over.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import os
 import re
 import shutil
 import time
@@ -60,6 +66,24 @@ class _Pending:
     params: dict = field(default_factory=dict)
 
 
+def lock_owner(lock: Path) -> int | None:
+    """The id of the live process (not this one) that holds ``lock``; None where there is no
+    lock, it cannot be read, or its process has ended."""
+    try:
+        pid = int(lock.read_text())
+    except (OSError, ValueError):
+        return None
+    if pid == os.getpid() or pid <= 0:
+        return None
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return None
+    except PermissionError:  # alive, another user's
+        return pid
+    return pid
+
+
 def ledger_json(entry: dict) -> str:
     """``entry`` as indented JSON with each list of numbers or strings on one line (a
     ledger entry's per-scene sums stay a few lines, not one per number). Only structural
@@ -94,6 +118,7 @@ class Steps:
         folder = self.out / "steps" / f"{name}-{key}"
         rel = str(folder.relative_to(self.out))
         kept, entry = folder / "result.json", self._ledger_entry(name)
+        owner = lock_owner(folder.with_suffix(".lock"))
         if kept.is_file():
             result, state = json.loads(kept.read_text()), "done"
             self._say(f"{name}: reused ({rel})")
@@ -101,13 +126,14 @@ class Steps:
             result, state = dict(entry), "done"
             self._pending[rel] = _Pending(name, fn, needs, command, params)
             self._say(f"{name}: reused from the ledger")
-        elif self.dry or not self._may_run(name, needs):
-            state = ("skipped" if not self.dry else "stale" if entry is not None
-                     else "missing")
+        elif self.dry or owner is not None or not self._may_run(name, needs):
+            state = ("running" if owner is not None and self.dry else "skipped"
+                     if not self.dry else "stale" if entry is not None else "missing")
             result = {"result": {}, "seconds": (entry or {}).get("seconds"),
                       "command": command, "params": params}
             if state == "skipped":
-                self._say(f"{name}: left for a later run")
+                self._say(f"{name}: left for a later run" if owner is None else
+                          f"{name}: being run by process {owner}; left for a later run")
         else:
             result, state = self._execute(name, key, folder, fn, needs, command, params), "ran"
         result.update(folder=rel, key=key, state=state)
@@ -155,13 +181,23 @@ class Steps:
                  needs: tuple[dict, ...], command: str, params: dict) -> dict:
         for step in needs:
             self.materialize(step)
-        if folder.exists():  # an interrupted run of this step: start it over
-            shutil.rmtree(folder)
-        folder.mkdir(parents=True)
-        self._say(f"{name}: running `{command}` …")
-        t0 = time.time()
-        result = {"result": fn(folder), "seconds": round(time.time() - t0, 1),
-                  "command": command, "params": params}
+        lock = folder.with_suffix(".lock")
+        owner = lock_owner(lock)
+        if owner is not None:
+            raise RuntimeError(f"{name}: its outputs are being made by process {owner}; "
+                               "run again when it ends")
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        lock.write_text(str(os.getpid()))
+        try:
+            if folder.exists():  # an interrupted run of this step: start it over
+                shutil.rmtree(folder)
+            folder.mkdir(parents=True)
+            self._say(f"{name}: running `{command}` …")
+            t0 = time.time()
+            result = {"result": fn(folder), "seconds": round(time.time() - t0, 1),
+                      "command": command, "params": params}
+        finally:
+            lock.unlink(missing_ok=True)
         text = json.dumps(result, indent=1, default=str)
         write_atomically(folder / "result.json", lambda tmp: tmp.write_text(text))
         if self.ledger is not None:

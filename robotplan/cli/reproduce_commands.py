@@ -30,11 +30,13 @@ def add_reproduce_parser(sub) -> None:
                          "(default docs/reproduce/ledger/SIZE; none: only --out's)")
     rp.add_argument("--status", action="store_true",
                     help="run nothing: list each step as done, stale (something it reads "
-                         "changed) or missing, with the seconds it last took")
+                         "changed), missing or running (in another run on --out), with the "
+                         "seconds it last took")
     rp.add_argument("--steps", default="", metavar="PATTERN[,PATTERN]",
                     help="run only the steps whose names match (shell patterns, e.g. "
                          "'bench_*'); the others are reused where done, else left for a later "
-                         "run, and the report waits until every step is done")
+                         "run, and the report waits until every step is done; runs on other "
+                         "steps may share --out side by side (one a core)")
     rp.add_argument("--hours", type=float, default=None, metavar="H",
                     help="start no step after H hours: a long run in parts, each part's "
                          "finished steps kept in the ledger")

@@ -3,6 +3,8 @@ the modules they run, the files they read, the steps they need), from their fold
 a ledger kept with the code."""
 
 import json
+import subprocess
+import sys
 
 from robotplan.bench.step_keys import files_digest, module_closure, modules_digest
 from robotplan.bench.steps import Steps
@@ -121,6 +123,34 @@ def test_a_run_in_parts_leaves_the_steps_it_may_not_start_and_those_that_need_th
     assert step_filter() is None
     assert step_filter(hours=0.0)("anything") is False  # no time left: nothing starts
     assert step_filter(hours=1.0)("anything") is True
+
+
+def test_a_step_another_run_is_making_is_left_to_it(tmp_path):
+    """Two runs on one output folder: the step whose lock a live process holds is neither
+    started over nor run twice; its lock taken over once that process has ended."""
+    step, calls = _counting()
+    out = tmp_path / "out"
+    ran = Steps(out, progress=False).run("train_a", {}, step, "cmd", runs=DATA)
+    folder = out / ran["folder"]
+    (folder / "result.json").unlink()  # as while it is being made
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        folder.with_suffix(".lock").write_text(str(other.pid))
+        steps = Steps(out, progress=False)
+        left = steps.run("train_a", {}, step, "cmd", runs=DATA)
+        after = steps.run("eval_a", {}, step, "cmd", runs=DATA, needs=(left,))
+        assert [s["state"] for s in steps.log] == ["skipped", "skipped"]
+        assert after["result"] == {} and len(calls) == 1
+        assert (folder / "made.txt").read_text() == "1"  # its outputs untouched
+        status = Steps(out, progress=False, dry=True)
+        status.run("train_a", {}, step, "cmd", runs=DATA)
+        assert status.log[0]["state"] == "running"
+    finally:
+        other.kill()
+        other.wait()
+    steps = Steps(out, progress=False)
+    assert steps.run("train_a", {}, step, "cmd", runs=DATA)["state"] == "ran"
+    assert len(calls) == 2 and not folder.with_suffix(".lock").exists()
 
 
 def test_a_ledger_entry_keeps_lists_on_one_line_and_reads_back_the_same():
