@@ -36,11 +36,15 @@ def add_reproduce_parser(sub) -> None:
                     help="run only the steps whose names match (shell patterns, e.g. "
                          "'bench_*'); the others are reused where done, else left for a later "
                          "run, and the report waits until every step is done; runs on other "
-                         "steps may share --out side by side (one a core)")
+                         "steps may share --out side by side (see --threads)")
     rp.add_argument("--hours", type=float, default=None, metavar="H",
                     help="start no step after H hours: a long run in parts, each part's "
                          "finished steps kept in the ledger")
     rp.add_argument("--workers", type=int, default=2)
+    rp.add_argument("--threads", type=int, default=None, metavar="N",
+                    help="torch threads of this run's training steps (default: torch's, one a "
+                         "core); runs side by side on one machine: the cores shared out, e.g. "
+                         "--threads 1 each on two cores")
     add_ray_option(rp)
     rp.set_defaults(run=cmd_reproduce)
 
@@ -61,6 +65,9 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     if args.hours is not None and args.hours <= 0:
         print("error: --hours must be > 0", file=sys.stderr)
         return EXIT_BAD_INPUT
+    if args.threads is not None and args.threads < 1:
+        print("error: --threads must be ≥ 1", file=sys.stderr)
+        return EXIT_BAD_INPUT
     sizes = SIZES["quick" if args.quick else args.size]
     ledger = (None if args.ledger == "none"
               else Path(args.ledger) if args.ledger else ledger_dir(sizes))
@@ -77,6 +84,10 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
               f"{len(todo)}, {known / 3600:.1f} CPU hours as last measured or scaled (~)"
               + (f", {unknown} never run" if unknown else ""))
         return 0
+    if args.threads is not None:
+        import torch
+
+        torch.set_num_threads(args.threads)
     patterns = tuple(p for p in args.steps.split(",") if p)
     report = reproduce(out, sizes, workers=args.workers, ray=args.ray, ledger=ledger,
                        allow=step_filter(patterns, args.hours))

@@ -295,7 +295,8 @@ def test_tab3_shares_carry_intervals_over_the_scenes_they_are_of():
     assert total.startswith("50.0 [") and 40 < lo < 50 < hi < 60 and sim == total
 
 
-def test_reproduce_refuses_a_time_budget_of_nothing(tmp_path, capsys):
-    assert main(["reproduce", "--out", str(tmp_path / "r"), "--quick", "--hours", "0"]) == 2
-    err = capsys.readouterr().err.strip()
-    assert "\n" not in err and "--hours" in err
+def test_reproduce_refuses_a_time_budget_of_nothing_and_no_threads(tmp_path, capsys):
+    for flag, value in (("--hours", "0"), ("--threads", "0")):
+        assert main(["reproduce", "--out", str(tmp_path / "r"), "--quick", flag, value]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and flag in err
