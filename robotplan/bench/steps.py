@@ -127,13 +127,15 @@ class Steps:
             self._pending[rel] = _Pending(name, fn, needs, command, params)
             self._say(f"{name}: reused from the ledger")
         elif self.dry or owner is not None or not self._may_run(name, needs):
-            state = ("running" if owner is not None and self.dry else "skipped"
-                     if not self.dry else "stale" if entry is not None else "missing")
-            result = {"result": {}, "seconds": (entry or {}).get("seconds"),
-                      "command": command, "params": params}
-            if state == "skipped":
+            if self.dry:
+                state = ("running" if owner is not None else "stale" if entry is not None
+                         else "missing")
+            else:
+                state = "skipped"
                 self._say(f"{name}: left for a later run" if owner is None else
                           f"{name}: being run by process {owner}; left for a later run")
+            result = {"result": {}, "seconds": (entry or {}).get("seconds"),
+                      "command": command, "params": params}
         else:
             result, state = self._execute(name, key, folder, fn, needs, command, params), "ran"
         result.update(folder=rel, key=key, state=state)
