@@ -72,15 +72,16 @@ def step_filter(patterns: tuple[str, ...] = (), hours: float | None = None
 
 def reproduce(out: Path, sizes: ReproduceSizes = QUICK, workers: int = 2,
               ray: str | None = None, progress: bool = True,
-              ledger: Path | None = None, allow: Callable[[str], bool] | None = None
-              ) -> Path | None:
+              ledger: Path | None = None, allow: Callable[[str], bool] | None = None,
+              device: str = "cpu") -> Path | None:
     """Run (or reuse, from ``out`` or the ``ledger``) every item at ``sizes`` and write
     ``out/R.md`` and ``out/R.html`` (R: ``sizes.report``); returns the Markdown report's
     path. ``allow`` (:func:`step_filter`): run only the steps it allows; where it leaves
     some for a later run, no report is written and None is returned. ``workers`` and
-    ``ray`` as for ``data push`` and ``bench push``."""
+    ``ray`` as for ``data push`` and ``bench push``; ``device``: the training steps'
+    (``cpu`` or ``cuda``)."""
     out.mkdir(parents=True, exist_ok=True)
-    steps = Steps(out, progress, ledger, allow=allow)
+    steps = Steps(out, progress, ledger, allow=allow, device=device)
     results = _run_steps(steps, sizes, workers, ray)
     run = {"sizes": asdict(sizes), "workers": workers, "ray": ray, "steps": steps.log}
     write_atomically(out / "run.json", lambda tmp: tmp.write_text(json.dumps(run, indent=1)))

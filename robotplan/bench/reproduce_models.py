@@ -47,8 +47,8 @@ def _trained(steps: Steps, kind: str, key: str, cfg: dict, data: Path) -> Path:
     flags += f" --seed {cfg['seed']}" if "seed" in cfg else ""
     res = steps.run(
         seeded(f"train_{kind}_{key}", cfg.get("seed", 0)), cfg,
-        lambda f: fit(TrainConfig(data=str(data), out=str(f / "model"), kind=kind, **cfg),
-                      progress=False),
+        lambda f: fit(TrainConfig(data=str(data), out=str(f / "model"), kind=kind,
+                                  device=steps.device, **cfg), progress=False),
         f"robotplan train push --model {kind}{flags} --data DATA --steps {cfg['steps']} "
         f"--warmup {cfg['warmup']}{spec_flags(spec)}",
         runs=(f"{PUSH_TRAINING}.{'rigid' if kind == 'rigid' else 'train'}",),

@@ -97,9 +97,13 @@ class Steps:
     """Runs steps, or reuses their kept results (see the module docstring)."""
 
     def __init__(self, out: Path, progress: bool = True, ledger: Path | None = None,
-                 dry: bool = False, allow: Callable[[str], bool] | None = None) -> None:
+                 dry: bool = False, allow: Callable[[str], bool] | None = None,
+                 device: str = "cpu") -> None:
         self.out, self.progress, self.ledger, self.dry = out, progress, ledger, dry
         self.allow = allow
+        # where training steps put their networks; not in any key: what a step reads is the
+        # same on either, so a model trained on an accelerator is reused on a CPU
+        self.device = device
         if ledger is not None and not dry:
             ledger.mkdir(parents=True, exist_ok=True)
         self.log: list[dict] = []

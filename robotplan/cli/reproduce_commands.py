@@ -45,6 +45,9 @@ def add_reproduce_parser(sub) -> None:
                     help="torch threads of this run's training steps (default: torch's, one a "
                          "core); runs side by side on one machine: the cores shared out, e.g. "
                          "--threads 1 each on two cores")
+    rp.add_argument("--device", choices=("cpu", "cuda"), default="cpu",
+                    help="where the training steps run their networks (default cpu); a step "
+                         "made on either is reused on the other")
     add_ray_option(rp)
     rp.set_defaults(run=cmd_reproduce)
 
@@ -68,6 +71,12 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     if args.threads is not None and args.threads < 1:
         print("error: --threads must be ≥ 1", file=sys.stderr)
         return EXIT_BAD_INPUT
+    if args.device == "cuda" and not args.status:
+        import torch
+
+        if not torch.cuda.is_available():
+            print("error: --device cuda: this torch sees no CUDA device", file=sys.stderr)
+            return EXIT_BAD_INPUT
     sizes = SIZES["quick" if args.quick else args.size]
     ledger = (None if args.ledger == "none"
               else Path(args.ledger) if args.ledger else ledger_dir(sizes))
@@ -90,7 +99,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         torch.set_num_threads(args.threads)
     patterns = tuple(p for p in args.steps.split(",") if p)
     report = reproduce(out, sizes, workers=args.workers, ray=args.ray, ledger=ledger,
-                       allow=step_filter(patterns, args.hours))
+                       allow=step_filter(patterns, args.hours), device=args.device)
     if report is None:
         print(f"{sizes.name}: steps left for a later run (`robotplan reproduce --out {out} "
               f"--size {sizes.name} --status` lists them); finished steps are in "

@@ -295,8 +295,13 @@ def test_tab3_shares_carry_intervals_over_the_scenes_they_are_of():
     assert total.startswith("50.0 [") and 40 < lo < 50 < hi < 60 and sim == total
 
 
-def test_reproduce_refuses_a_time_budget_of_nothing_and_no_threads(tmp_path, capsys):
-    for flag, value in (("--hours", "0"), ("--threads", "0")):
+def test_reproduce_refuses_no_time_budget_no_threads_and_an_absent_device(tmp_path, capsys):
+    import torch
+
+    bad = [("--hours", "0"), ("--threads", "0")]
+    if not torch.cuda.is_available():
+        bad.append(("--device", "cuda"))
+    for flag, value in bad:
         assert main(["reproduce", "--out", str(tmp_path / "r"), "--quick", flag, value]) == 2
         err = capsys.readouterr().err.strip()
         assert "\n" not in err and flag in err

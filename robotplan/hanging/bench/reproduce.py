@@ -60,7 +60,8 @@ def hang_representations(steps: Steps, sizes, workers: int, ray: str | None) -> 
         trained = steps.run(
             f"train_hang_{key}", {**cfg, "data": "data_hang", "test": "data_hang_test"},
             lambda f, c=cfg: train_hang(HangTrainConfig(
-                data=str(train_dir), test=str(test_dir), out=str(f / "model"), **c),
+                data=str(train_dir), test=str(test_dir), out=str(f / "model"),
+                device=steps.device, **c),
                 progress=False),
             f"robotplan train hang --data DATA --test TEST --steps {n}{spec_flags(fields)}",
             runs=("robotplan.hanging.training.train",), needs=(train_step, test_step))
